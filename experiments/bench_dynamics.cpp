@@ -1,0 +1,88 @@
+// Dynamics back-end benchmark: forward dynamics and the mass matrix, per
+// back-end, for the PUMA 560 (6 joints, and 3 joints with the wrist held) and
+// random chains n = 3, 6, 12, 24, 48. Inputs are deterministic; every call
+// goes through the DynamicsBackend interface (one virtual call per call, as in
+// the ODE right-hand side). Each benchmark also carries the operation counts
+// of one call (Counted scalar) as user counters, so that one JSON file holds
+// both; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
+//
+//   bench_dynamics --benchmark_out=results/bench/dynamics.json --benchmark_out_format=json
+#include <benchmark/benchmark.h>
+
+#include <string>
+#include <vector>
+
+#include "models/backend.hpp"
+#include "models/random_chain.hpp"
+#include "models/robot_file.hpp"
+
+namespace {
+
+using pumasim::Quantity;
+
+struct Robot {
+  std::string label;
+  pumasim::RobotModel model;
+};
+
+std::vector<Robot> robots() {
+  const pumasim::RobotModel puma = pumasim::load_robot("puma560");
+  std::vector<Robot> r;
+  r.push_back({"puma560", puma});
+  // The paper's experiment: joints 1-3 move, the wrist is held at zero.
+  r.push_back({"puma560-3", pumasim::lock_joints(puma, 3, Eigen::VectorXd::Zero(6))});
+  for (int n : {3, 6, 12, 24, 48}) {
+    r.push_back({"random" + std::to_string(n), pumasim::random_chain(n, 1000 + n)});
+  }
+  return r;
+}
+
+void run(benchmark::State& state, const pumasim::BackendInfo* info, const pumasim::RobotModel* model,
+         Quantity what) {
+  const int n = model->dof();
+  auto backend = info->make(*model);
+  pumasim::Rng rng(42);
+  const Eigen::VectorXd q = rng.uniform_vector(n, -1.5, 1.5);
+  const Eigen::VectorXd qd = rng.uniform_vector(n, -1.0, 1.0);
+  const Eigen::VectorXd tau = rng.uniform_vector(n, -10.0, 10.0);
+  Eigen::VectorXd qdd(n);
+  Eigen::MatrixXd H(n, n);
+  for (auto _ : state) {
+    if (what == Quantity::kForwardDynamics) {
+      backend->forward_dynamics(q, qd, tau, qdd);
+      benchmark::DoNotOptimize(qdd.data());
+    } else {
+      backend->mass_matrix(q, H);
+      benchmark::DoNotOptimize(H.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  const pumasim::OpCounts ops = info->count_ops(*model, what);
+  state.counters["n"] = n;
+  state.counters["mul"] = static_cast<double>(ops.mul);
+  state.counters["add"] = static_cast<double>(ops.add);
+  state.counters["div"] = static_cast<double>(ops.div);
+  state.counters["sqrt"] = static_cast<double>(ops.sqrt);
+  state.counters["trig"] = static_cast<double>(ops.trig);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  static const std::vector<Robot> all = robots();
+  for (const Robot& r : all) {
+    for (const auto& info : pumasim::backends()) {
+      for (const auto& [label, what] :
+           {std::pair{"fd", Quantity::kForwardDynamics}, std::pair{"H", Quantity::kMassMatrix}}) {
+        const std::string name = std::string(label) + "/" + r.label + "/" + info.name;
+        benchmark::RegisterBenchmark(name.c_str(), run, &info, &r.model, what)
+            ->Unit(benchmark::kNanosecond);
+      }
+    }
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

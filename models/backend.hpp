@@ -1,0 +1,67 @@
+// One interface for every dynamics back-end, and the registry that names them.
+//
+// A back-end computes, for the chain it was made for (rotor inertia Z^2 Im
+// included in H and tau exactly when the model has it):
+//   inverse dynamics  tau = H(q) qdd + h(q, qd)
+//   mass matrix       H(q)           (with Z^2 Im on the diagonal)
+//   bias              h(q, qd) = C(q, qd) qd + g(q)
+//   gravity           g(q)
+//   forward dynamics  qdd = H(q)^{-1} (tau - h(q, qd))
+// One virtual call per quantity; inside, the algorithm runs on fixed-size
+// types for n = 3 and n = 6 and never allocates. A back-end object owns its
+// workspace: use one object per thread.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "models/counted.hpp"
+#include "models/robot_model.hpp"
+
+namespace pumasim {
+
+using ConstVecRef = Eigen::Ref<const Eigen::VectorXd>;
+using VecRef = Eigen::Ref<Eigen::VectorXd>;
+using MatRef = Eigen::Ref<Eigen::MatrixXd>;
+
+class DynamicsBackend {
+ public:
+  virtual ~DynamicsBackend() = default;
+  virtual const char* name() const = 0;
+  virtual int dof() const = 0;
+  virtual void inverse_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef qdd, VecRef tau) = 0;
+  virtual void mass_matrix(ConstVecRef q, MatRef H) = 0;
+  virtual void bias(ConstVecRef q, ConstVecRef qd, VecRef h) = 0;
+  virtual void gravity(ConstVecRef q, VecRef g) = 0;
+  virtual void forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef tau, VecRef qdd) = 0;
+};
+
+enum class Quantity { kInverseDynamics, kMassMatrix, kBias, kGravity, kForwardDynamics };
+
+struct BackendInfo {
+  const char* name;
+  const char* summary;  // one line: algorithm, how H and qdd are obtained, cost
+  std::unique_ptr<DynamicsBackend> (*make)(const RobotModel& model);
+  // Arithmetic of one call computing `what` for `model` (Counted scalar).
+  OpCounts (*count_ops)(const RobotModel& model, Quantity what);
+};
+
+// All back-ends, sorted by name.
+std::span<const BackendInfo> backends();
+
+// The entry called `name`; std::invalid_argument listing the valid names otherwise.
+const BackendInfo& find_backend(std::string_view name);
+
+// "a, b, c": the registered names, for messages.
+std::string backend_names();
+
+inline std::unique_ptr<DynamicsBackend> make_backend(std::string_view name,
+                                                     const RobotModel& model) {
+  return find_backend(name).make(model);
+}
+
+}  // namespace pumasim

@@ -1,0 +1,85 @@
+// Strict reading of TOML configuration (robot files now, scene files later).
+//
+// Every value is read through a StrictTable, which knows the file and the key
+// path; an unknown key, a missing required key, a wrong type or an
+// out-of-range value throws ConfigError with "file:line: key: expected X, got Y".
+// Call finish() once a table is read: keys that were never asked for are
+// unknown and rejected, with the list of the keys that are understood.
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <toml++/toml.h>
+
+namespace pumasim {
+
+// Bad user input in a configuration file. main() turns it into exit status 2.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Closed or half-open interval for a number, with how to say it in a message.
+struct Bounds {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false;  // lo itself is not allowed
+  bool hi_open = false;
+
+  static Bounds any() { return {}; }
+  static Bounds non_negative() { return {0.0}; }
+  static Bounds positive() { return {0.0, std::numeric_limits<double>::infinity(), true}; }
+  bool contains(double x) const;
+  std::string describe() const;  // "a number > 0"
+};
+
+// Parse a whole file; a syntax error becomes a ConfigError naming file and line.
+toml::table parse_toml_file(const std::string& path);
+
+class StrictTable {
+ public:
+  StrictTable(const toml::table& table, std::string file, std::string path);
+
+  double number(std::string_view key, Bounds bounds = Bounds::any());
+  double number_or(std::string_view key, double fallback, Bounds bounds = Bounds::any());
+  std::string string(std::string_view key, const std::vector<std::string>& choices = {});
+  std::string string_or(std::string_view key, std::string fallback,
+                        const std::vector<std::string>& choices = {});
+  // An array of numbers; `size` < 0 accepts any length.
+  std::vector<double> numbers(std::string_view key, int size, Bounds bounds = Bounds::any());
+  std::optional<std::vector<double>> optional_numbers(std::string_view key, int size,
+                                                      Bounds bounds = Bounds::any());
+  bool has(std::string_view key) const;
+  StrictTable table(std::string_view key);
+  std::optional<StrictTable> optional_table(std::string_view key);
+  std::vector<StrictTable> array_of_tables(std::string_view key);
+  // Every key of this table, for tables whose keys are names (poses, ...).
+  std::vector<std::string> keys();
+
+  // Rejects every key that no accessor asked for.
+  void finish() const;
+
+  // "file:line: path.key: " -- the prefix of any message about `key`.
+  std::string where(std::string_view key) const;
+  std::string where() const;  // the table itself
+  [[noreturn]] void fail(std::string_view key, const std::string& expected,
+                         const std::string& got) const;
+
+ private:
+  const toml::node* lookup(std::string_view key);
+  const toml::node& require(std::string_view key);
+  std::string key_path(std::string_view key) const;
+  static std::string describe(const toml::node& node);
+
+  const toml::table* table_;
+  std::string file_;
+  std::string path_;  // "" for the root, "joint[2]" below it
+  std::vector<std::string> asked_;
+};
+
+}  // namespace pumasim
