@@ -1,4 +1,177 @@
+// Every back-end agrees with every other on H, h, g, tau and qdd, and each is
+// self-consistent (forward dynamics inverts inverse dynamics).
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "models/backend.hpp"
+#include "models/random_chain.hpp"
 #include "models/robot_file.hpp"
-TEST(Smoke, Loads) { auto m = pumasim::load_robot("puma560"); EXPECT_EQ(m.dof(), 6); }
+#include "tests/helpers.hpp"
+
+namespace pumasim {
+namespace {
+
+using testing::rel_err;
+
+// Agreement bound, relative to the norm of the quantity (the 1e-10).
+constexpr double kAgree = 1e-10;
+
+struct Quantities {
+  Eigen::MatrixXd H;
+  Eigen::VectorXd h, g, tau, qdd;
+};
+
+Quantities evaluate(DynamicsBackend& b, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                    const Eigen::VectorXd& qdd, const Eigen::VectorXd& tau) {
+  const int n = b.dof();
+  Quantities r{Eigen::MatrixXd(n, n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n),
+               Eigen::VectorXd(n)};
+  b.mass_matrix(q, r.H);
+  b.bias(q, qd, r.h);
+  b.gravity(q, r.g);
+  b.inverse_dynamics(q, qd, qdd, r.tau);
+  b.forward_dynamics(q, qd, tau, r.qdd);
+  return r;
+}
+
+void expect_all_agree(const RobotModel& model, std::uint64_t seed, int states) {
+  std::vector<std::unique_ptr<DynamicsBackend>> all;
+  for (const auto& info : backends()) all.push_back(info.make(model));
+  Rng rng(seed);
+  const int n = model.dof();
+  for (int s = 0; s < states; ++s) {
+    const Eigen::VectorXd q = rng.uniform_vector(n, -M_PI, M_PI);
+    const Eigen::VectorXd qd = rng.uniform_vector(n, -2, 2);
+    const Eigen::VectorXd qdd = rng.uniform_vector(n, -5, 5);
+    const Eigen::VectorXd tau = rng.uniform_vector(n, -20, 20);
+    const Quantities ref = evaluate(*all[0], q, qd, qdd, tau);
+    // Self-consistency of the reference: tau = H qdd + h.
+    EXPECT_LT(rel_err(ref.tau, ref.H * qdd + ref.h), kAgree) << model.name;
+    for (std::size_t b = 1; b < all.size(); ++b) {
+      const Quantities r = evaluate(*all[b], q, qd, qdd, tau);
+      const std::string who = model.name + ": " + all[b]->name() + " vs " + all[0]->name() +
+                              ", state " + std::to_string(s);
+      EXPECT_LT(rel_err(ref.H, r.H), kAgree) << who << " H";
+      EXPECT_LT(rel_err(ref.h, r.h), kAgree) << who << " h";
+      EXPECT_LT(rel_err(ref.g, r.g), kAgree) << who << " g";
+      EXPECT_LT(rel_err(ref.tau, r.tau), kAgree) << who << " tau";
+      EXPECT_LT(rel_err(ref.qdd, r.qdd), kAgree) << who << " qdd";
+    }
+    // Forward dynamics inverts inverse dynamics: ID(q, qd, FD(q, qd, tau)) = tau.
+    Eigen::VectorXd tau_back(n);
+    all[0]->inverse_dynamics(q, qd, ref.qdd, tau_back);
+    EXPECT_LT(rel_err(tau, tau_back), kAgree) << model.name;
+  }
+}
+
+TEST(BackendAgreement, Puma560) { expect_all_agree(load_robot("puma560"), 1, 20); }
+
+TEST(BackendAgreement, Puma560WithoutRotorInertia) {
+  expect_all_agree(without_rotor_inertia(load_robot("puma560")), 2, 10);
+}
+
+TEST(BackendAgreement, Puma560WristHeld) {
+  const RobotModel puma = load_robot("puma560");
+  expect_all_agree(lock_joints(puma, 3, puma.pose("qn")->q), 3, 10);
+}
+
+TEST(BackendAgreement, RandomChainsStandardDh) {
+  for (int n = 1; n <= 12; ++n) expect_all_agree(random_chain(n, 100 + n), 7 * n, 4);
+}
+
+TEST(BackendAgreement, RandomChainsModifiedDh) {
+  for (int n = 1; n <= 12; ++n) {
+    expect_all_agree(random_chain(n, 200 + n, DhConvention::kModified), 11 * n, 4);
+  }
+}
+
+// A standard-DH chain rewritten in the modified convention (same joints, link
+// data moved from distal to proximal frames) has the same dynamics.
+RobotModel to_modified(const RobotModel& s) {
+  RobotModel m = s;
+  m.convention = DhConvention::kModified;
+  for (int j = 0; j < s.dof(); ++j) {
+    const JointParams& S = s.joints[j];
+    JointParams& M = m.joints[j];
+    M.a = j > 0 ? s.joints[j - 1].a : 0.0;
+    M.alpha = j > 0 ? s.joints[j - 1].alpha : 0.0;
+    M.d = S.d;
+    // Standard frame j = modified frame j * Tz(d_j) Tx(a_j) Rx(alpha_j) * (Rz(offset) removed).
+    const double c = std::cos(S.alpha), sn = std::sin(S.alpha);
+    Eigen::Matrix3d Rx;
+    Rx << 1, 0, 0, 0, c, -sn, 0, sn, c;
+    // Modified frame j includes Rz(q + offset) and Tz(d), so only Tx(a) Rx(alpha) remain.
+    M.com = Rx * S.com + Eigen::Vector3d(S.a, 0, 0);
+    M.inertia = Rx * S.inertia * Rx.transpose();
+  }
+  return m;
+}
+
+TEST(BackendAgreement, StandardAndModifiedDhDescribeTheSameRobot) {
+  for (int n : {1, 2, 5, 9}) {
+    const RobotModel s = random_chain(n, 300 + n);
+    const RobotModel m = to_modified(s);
+    auto bs = make_backend("crba", s), bm = make_backend("crba", m);
+    Rng rng(n);
+    const Eigen::VectorXd q = rng.uniform_vector(n, -3, 3), qd = rng.uniform_vector(n, -2, 2);
+    const Eigen::VectorXd qdd = rng.uniform_vector(n, -5, 5), tau = rng.uniform_vector(n, -9, 9);
+    const Quantities a = evaluate(*bs, q, qd, qdd, tau), b = evaluate(*bm, q, qd, qdd, tau);
+    EXPECT_LT(rel_err(a.H, b.H), kAgree) << n;
+    EXPECT_LT(rel_err(a.h, b.h), kAgree) << n;
+    EXPECT_LT(rel_err(a.qdd, b.qdd), kAgree) << n;
+  }
+}
+
+// Holding joints k+1..n is the same as the full arm with those joints at rest
+// at the held angles: the reduced H is the full H's top-left block and the
+// reduced tau the full tau's head (qd = qdd = 0 on the held joints).
+TEST(LockJoints, EqualsTheFullArmWithHeldJointsAtRest) {
+  const RobotModel puma = load_robot("puma560");
+  Rng rng(5);
+  for (int k : {1, 3, 5}) {
+    const Eigen::VectorXd held = rng.uniform_vector(6, -2, 2);
+    const RobotModel reduced = lock_joints(puma, k, held);
+    auto full = make_backend("rnea-probing-shared", puma), red = make_backend("crba", reduced);
+    Eigen::VectorXd q = held, qd = Eigen::VectorXd::Zero(6), qdd = Eigen::VectorXd::Zero(6);
+    q.head(k) = rng.uniform_vector(k, -2, 2);
+    qd.head(k) = rng.uniform_vector(k, -1, 1);
+    qdd.head(k) = rng.uniform_vector(k, -3, 3);
+    Eigen::MatrixXd Hf(6, 6), Hr(k, k);
+    Eigen::VectorXd tf(6), tr(k);
+    full->mass_matrix(q, Hf);
+    red->mass_matrix(q.head(k), Hr);
+    full->inverse_dynamics(q, qd, qdd, tf);
+    red->inverse_dynamics(q.head(k), qd.head(k), qdd.head(k), tr);
+    EXPECT_LT(rel_err(Hf.topLeftCorner(k, k), Hr), kAgree) << k;
+    EXPECT_LT(rel_err(tf.head(k), tr), kAgree) << k;
+  }
+}
+
+TEST(Registry, SortedUniqueAndUnknownNameListsTheValidOnes) {
+  const auto all = backends();
+  ASSERT_GE(all.size(), 5u);
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    EXPECT_LT(std::string_view(all[i - 1].name), std::string_view(all[i].name));
+  }
+  for (const auto& b : all) EXPECT_EQ(&find_backend(b.name), &b);
+  try {
+    find_backend("lagrange");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    for (const auto& b : all) EXPECT_NE(msg.find(b.name), std::string::npos) << msg;
+  }
+}
+
+TEST(Registry, WrongArgumentSizeIsAnError) {
+  auto b = make_backend("crba", load_robot("puma560"));
+  Eigen::VectorXd q5(5), out(6);
+  EXPECT_THROW(b->gravity(q5, out), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pumasim

@@ -1,0 +1,47 @@
+// Shared helpers for the tests: random states, norms, and independent forward
+// kinematics (through dh_transform, not through the Chain the algorithms use).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "models/aba.hpp"
+#include "models/crba.hpp"
+#include "models/lagrange_euler.hpp"
+#include "models/random_chain.hpp"
+#include "models/rnea_probing.hpp"
+#include "models/robot_model.hpp"
+
+namespace pumasim::testing {
+
+// ||a - b|| / max(||a||, floor): "relative to the norm", with an absolute
+// floor (in the quantity's SI unit) for quantities that vanish by symmetry,
+// such as the gravity torque about a vertical first joint: there the bound
+// 1e-10 becomes 1e-13 absolute, about 1e-16 of the O(10..1000) terms that
+// cancel in it.
+inline double rel_err(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double floor = 1e-3) {
+  return (a - b).norm() / std::max(a.norm(), floor);
+}
+
+// Potential energy V(q) = -sum_j m_j g . p_cj(q), from the DH transforms.
+inline double potential_energy(const RobotModel& m, const Eigen::VectorXd& q) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  double V = 0;
+  for (int j = 0; j < m.dof(); ++j) {
+    T = T * dh_transform(m, j, q[j]);
+    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * m.joints[j].com + T.topRightCorner<3, 1>();
+    V -= m.joints[j].mass * m.gravity.dot(c);
+  }
+  return V;
+}
+
+// Calls f.template operator()<Algo>() for every algorithm template.
+template <class F>
+void for_each_algorithm(F&& f) {
+  f.template operator()<RneaProbing>();
+  f.template operator()<RneaProbingShared>();
+  f.template operator()<Crba>();
+  f.template operator()<Aba>();
+  f.template operator()<LagrangeEuler>();
+}
+
+}  // namespace pumasim::testing

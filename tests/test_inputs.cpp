@@ -1,0 +1,156 @@
+// Bad input to the command line and in robot files: exit status 2 and a
+// message that says where and what was expected; good input works.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "experiments/cli.hpp"
+#include "models/backend.hpp"
+#include "models/robot_file.hpp"
+
+namespace pumasim {
+namespace {
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result cli(std::vector<std::string> args) {
+  std::ostringstream out, err;
+  const int status = run_cli(args, out, err);
+  return {status, out.str(), err.str()};
+}
+
+void expect_bad(const std::vector<std::string>& args, const std::string& fragment) {
+  const Result r = cli(args);
+  EXPECT_EQ(r.status, kExitBadInput) << r.err;
+  EXPECT_TRUE(r.out.empty()) << "nothing half-written: " << r.out;
+  EXPECT_NE(r.err.find(fragment), std::string::npos) << "message: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+}
+
+TEST(Cli, DynamicsPrintsEveryKeyAndAcceptsNegativeNumbers) {
+  const Result r = cli({"dynamics", "--robot", "puma560", "--backend", "crba",
+                        "--q=-0.5,0.3,-1e-1,0,0.2,-3", "--qd=-1,0,0,0,0,0",
+                        "--qdd=0.1,0.2,0.3,0.4,0.5,0.6", "--tau=-1,-2,-3,-4,-5,-6"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  for (const char* key : {"\"backend\": \"crba\"", "\"n\": 6", "\"mass_matrix\"", "\"bias\"",
+                          "\"gravity\"", "\"tau\"", "\"qdd\"", "\"rotor_inertia_included\": true",
+                          "-0.5", "-3"}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  }
+}
+
+TEST(Cli, WithoutQddAndTauThereIsNoTauNorQdd) {
+  const Result r = cli({"dynamics", "--robot=puma560", "--backend=aba", "--q=qn", "--no-rotor-inertia"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_EQ(r.out.find("\"tau\""), std::string::npos);
+  EXPECT_EQ(r.out.find("\"qdd\""), std::string::npos);
+  EXPECT_NE(r.out.find("\"rotor_inertia_included\": false"), std::string::npos);
+}
+
+TEST(Cli, BadInputExitsWithStatus2AndSaysWhatWasExpected) {
+  const std::vector<std::string> base = {"dynamics", "--robot", "puma560", "--backend", "crba"};
+  auto with = [&](std::vector<std::string> extra) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  expect_bad(with({"--q=0,0,0"}), "expected 6 comma-separated numbers");
+  expect_bad(with({"--q=0,0,x,0,0,0"}), "expected a finite number, got 'x'");
+  expect_bad(with({"--q=0,0,0,0,0,0", "--qd=1,2"}), "--qd: expected 6");
+  expect_bad(with({"--q=0,0,0,0,0,0", "--tau=1,2,3,4,5,nan"}), "expected a finite number");
+  expect_bad(with({}), "missing --q");
+  expect_bad(with({"--q=0,0,0,0,0,0", "--speed=3"}), "unknown option '--speed'");
+  expect_bad({"dynamics", "--robot", "puma560", "--backend", "lagrange", "--q=qz"},
+             "unknown dynamics back-end 'lagrange'; expected one of: aba, crba");
+  expect_bad({"dynamics", "--robot", "/nonexistent/robot.toml", "--backend", "crba", "--q=qz"},
+             "/nonexistent/robot.toml: cannot open file");
+  expect_bad({"dynamics", "--robot", "kuka", "--backend", "crba", "--q=qz"},
+             "unknown robot 'kuka'; expected a robot file path or one of: puma560");
+  expect_bad({"fly"}, "unknown command 'fly'");
+  expect_bad({}, "missing command");
+}
+
+// Robot files: each kind of error names file, line and key.
+class RobotFile : public ::testing::Test {
+ protected:
+  std::string write(const std::string& text) {
+    const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_robot";
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / (std::string(::testing::UnitTest::GetInstance()
+                                                      ->current_test_info()
+                                                      ->name()) + ".toml")).string();
+    std::ofstream(path) << text;
+    return path;
+  }
+  void expect_error(const std::string& text, const std::vector<std::string>& fragments) {
+    const std::string path = write(text);
+    try {
+      load_robot_file(path);
+      FAIL() << "accepted: " << text;
+    } catch (const ConfigError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(path + ":"), std::string::npos) << msg;
+      for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << f << " in: " << msg;
+    }
+    const Result r = cli({"dynamics", "--robot", path, "--backend", "crba", "--q=0"});
+    EXPECT_EQ(r.status, kExitBadInput);
+    EXPECT_TRUE(r.out.empty());
+  }
+  static std::string joint(const std::string& mass = "1.0", const std::string& extra = "",
+                           const std::string& inertia = "[0.1, 0.1, 0.1, 0.0, 0.0, 0.0]") {
+    return "[[joint]]\na = 0.1\nalpha = 0.0\nd = 0.0\nmass = " + mass +
+           "\ncom = [0.0, 0.0, 0.0]\ninertia = " + inertia +
+           "\nrotor_inertia = 1e-4\ngear_ratio = 50\n" + extra;
+  }
+  static constexpr const char* kHead =
+      "[robot]\nname = \"one\"\nconvention = \"standard\"\ngravity = [0.0, 0.0, -9.81]\n";
+};
+
+TEST_F(RobotFile, AValidFileLoads) {
+  const RobotModel m = load_robot_file(write(std::string(kHead) + joint()));
+  EXPECT_EQ(m.dof(), 1);
+  EXPECT_DOUBLE_EQ(m.joints[0].gear_ratio, 50.0);
+}
+
+TEST_F(RobotFile, UnknownKeyNamesLineAndValidKeys) {
+  expect_error(std::string(kHead) + joint("1.0", "masss = 2\n"),
+               {":14: unknown key 'joint[1].masss'", "expected one of:", "mass"});
+}
+
+TEST_F(RobotFile, WrongType) {
+  expect_error(std::string(kHead) + joint("\"heavy\""),
+               {":9: joint[1].mass: expected a number >= 0, got the string \"heavy\""});
+}
+
+TEST_F(RobotFile, OutOfRange) {
+  expect_error(std::string(kHead) + joint("-2.5"), {":9: joint[1].mass: expected a number >= 0, got -2.5"});
+}
+
+TEST_F(RobotFile, MissingKey) {
+  expect_error("[robot]\nname = \"x\"\nconvention = \"standard\"\n" + joint(),
+               {"robot: missing required key 'gravity'"});
+}
+
+TEST_F(RobotFile, UnknownConvention) {
+  expect_error("[robot]\nname = \"x\"\nconvention = \"craig\"\ngravity = [0, 0, -9.81]\n" + joint(),
+               {":3: robot.convention: expected one of \"standard\", \"modified\", got \"craig\""});
+}
+
+TEST_F(RobotFile, InertiaNotPositiveSemiDefinite) {
+  expect_error(std::string(kHead) + joint("1.0", "", "[0.1, 0.1, 0.1, 0.5, 0.0, 0.0]"),
+               {":11: joint[1].inertia: expected a positive semi-definite inertia"});
+}
+
+TEST_F(RobotFile, WrongArrayLengthAndSyntaxError) {
+  expect_error(std::string(kHead) + "[[joint]]\na = 0\nalpha = 0\nd = 0\nmass = 1\ncom = [0, 0]\n",
+               {"joint[1].com: expected an array of 3 numbers, got an array of 2"});
+  expect_error(std::string(kHead) + "[[joint]\n", {"TOML syntax error"});
+}
+
+}  // namespace
+}  // namespace pumasim

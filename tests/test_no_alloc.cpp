@@ -1,0 +1,102 @@
+// The dynamics calls allocate nothing on the heap. Two independent proofs:
+//  1. Eigen's own guard: this file is compiled with EIGEN_RUNTIME_NO_MALLOC and
+//     instantiates the algorithms itself; with set_is_malloc_allowed(false) any
+//     Eigen heap allocation inside them aborts the test.
+//  2. A counting malloc: this test binary interposes malloc/calloc/realloc (glibc
+//     forwards to __libc_*), so every heap allocation of the process -- operator
+//     new, std::vector, Eigen -- is counted, including those inside the compiled
+//     library behind the DynamicsBackend interface.
+#define EIGEN_RUNTIME_NO_MALLOC
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+
+#include "models/backend.hpp"
+#include "models/robot_file.hpp"
+#include "tests/helpers.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+}
+
+namespace {
+std::atomic<long> g_allocations{0};
+}
+
+extern "C" void* malloc(std::size_t size) noexcept {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(size);
+}
+extern "C" void* calloc(std::size_t n, std::size_t size) noexcept {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_calloc(n, size);
+}
+extern "C" void* realloc(void* p, std::size_t size) noexcept {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  return __libc_realloc(p, size);
+}
+
+namespace pumasim {
+namespace {
+
+TEST(NoAllocation, CountingMallocSeesAllocationsAtAll) {
+  // The instrument works: a heap allocation is counted.
+  const long before = g_allocations.load();
+  auto* p = new std::vector<double>(100);
+  delete p;
+  EXPECT_GT(g_allocations.load(), before);
+}
+
+TEST(NoAllocation, EveryBackendThroughTheInterface) {
+  for (const RobotModel& m : {load_robot("puma560"), random_chain(9, 4)}) {
+    const int n = m.dof();
+    for (const auto& info : backends()) {
+      auto b = info.make(m);
+      Rng rng(1);
+      const Eigen::VectorXd q = rng.uniform_vector(n, -1, 1), qd = rng.uniform_vector(n, -1, 1);
+      const Eigen::VectorXd tau = rng.uniform_vector(n, -1, 1);
+      Eigen::VectorXd qdd(n), out(n);
+      Eigen::MatrixXd H(n, n);
+      const long before = g_allocations.load();
+      for (int rep = 0; rep < 3; ++rep) {
+        b->forward_dynamics(q, qd, tau, qdd);
+        b->inverse_dynamics(q, qd, qdd, out);
+        b->mass_matrix(q, H);
+        b->bias(q, qd, out);
+        b->gravity(q, out);
+      }
+      EXPECT_EQ(g_allocations.load() - before, 0) << info.name << " " << m.name;
+    }
+  }
+}
+
+struct EigenGuard {
+  const RobotModel& m;
+  template <template <class, int> class Algo>
+  void operator()() {
+    const int n = m.dof();
+    const Chain<double, Eigen::Dynamic> chain(m);
+    Algo<double, Eigen::Dynamic> algo(chain);
+    Rng rng(2);
+    const Eigen::VectorXd q = rng.uniform_vector(n, -1, 1), qd = rng.uniform_vector(n, -1, 1);
+    const Eigen::VectorXd tau = rng.uniform_vector(n, -1, 1);
+    Eigen::VectorXd qdd(n);
+    Eigen::MatrixXd H(n, n);
+    Eigen::internal::set_is_malloc_allowed(false);
+    algo.forward_dynamics(q, qd, tau, qdd);
+    algo.mass_matrix(q, H);
+    Eigen::internal::set_is_malloc_allowed(true);
+    EXPECT_TRUE(qdd.allFinite()) << Algo<double, Eigen::Dynamic>::kName;
+  }
+};
+
+TEST(NoAllocation, EigenRuntimeGuardOnTheAlgorithms) {
+  const RobotModel m = random_chain(7, 5);
+  testing::for_each_algorithm(EigenGuard{m});
+}
+
+}  // namespace
+}  // namespace pumasim
