@@ -1,4 +1,5 @@
-// Dynamics back-end benchmark: forward dynamics and the mass matrix, per
+// Dynamics back-end benchmark: forward dynamics (fd), the mass matrix (H) and
+// inverse dynamics (id, the RNEA for every RNEA-based back-end), per
 // back-end, for the PUMA 560 (6 joints, and 3 joints with the wrist held) and
 // random chains n = 3, 6, 12, 24, 48. Inputs are deterministic; every call
 // goes through the DynamicsBackend interface (one virtual call per call, as in
@@ -45,16 +46,17 @@ void run(benchmark::State& state, const pumasim::BackendInfo* info, const pumasi
   const Eigen::VectorXd q = rng.uniform_vector(n, -1.5, 1.5);
   const Eigen::VectorXd qd = rng.uniform_vector(n, -1.0, 1.0);
   const Eigen::VectorXd tau = rng.uniform_vector(n, -10.0, 10.0);
-  Eigen::VectorXd qdd(n);
+  const Eigen::VectorXd qdd_in = rng.uniform_vector(n, -5.0, 5.0);
+  Eigen::VectorXd out(n);
   Eigen::MatrixXd H(n, n);
   for (auto _ : state) {
-    if (what == Quantity::kForwardDynamics) {
-      backend->forward_dynamics(q, qd, tau, qdd);
-      benchmark::DoNotOptimize(qdd.data());
-    } else {
-      backend->mass_matrix(q, H);
-      benchmark::DoNotOptimize(H.data());
+    switch (what) {
+      case Quantity::kForwardDynamics: backend->forward_dynamics(q, qd, tau, out); break;
+      case Quantity::kInverseDynamics: backend->inverse_dynamics(q, qd, qdd_in, out); break;
+      default: backend->mass_matrix(q, H); break;
     }
+    benchmark::DoNotOptimize(out.data());
+    benchmark::DoNotOptimize(H.data());
     benchmark::ClobberMemory();
   }
   const pumasim::OpCounts ops = info->count_ops(*model, what);
@@ -73,7 +75,8 @@ int main(int argc, char** argv) {
   for (const Robot& r : all) {
     for (const auto& info : pumasim::backends()) {
       for (const auto& [label, what] :
-           {std::pair{"fd", Quantity::kForwardDynamics}, std::pair{"H", Quantity::kMassMatrix}}) {
+           {std::pair{"fd", Quantity::kForwardDynamics}, std::pair{"H", Quantity::kMassMatrix},
+            std::pair{"id", Quantity::kInverseDynamics}}) {
         const std::string name = std::string(label) + "/" + r.label + "/" + info.name;
         benchmark::RegisterBenchmark(name.c_str(), run, &info, &r.model, what)
             ->Unit(benchmark::kNanosecond);

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Runs the dynamics benchmark and regenerates results/dynamics_backends.md from its JSON.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mkdir -p results/bench
+tmp=$(mktemp results/bench/.dynamics.XXXXXX.json)
+trap 'rm -f "$tmp"' EXIT
+build/release/bin/bench_dynamics --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+  --benchmark_min_time=0.1 --benchmark_out="$tmp" --benchmark_out_format=json >/dev/null
+mv "$tmp" results/bench/dynamics.json   # complete results only: nothing half-written
+python3 scripts/dynamics_table.py results/bench/dynamics.json results/dynamics_backends.md

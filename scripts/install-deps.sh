@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs what pumasim needs from Debian 12's archive, and only what is missing.
+# Idempotent: a second run finds everything and does nothing. Uses sudo when not root.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake git            # toolchain (g++ 12, CMake 3.25)
+  libeigen3-dev                        # Eigen 3.4
+  libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
+  libboost-dev                         # Boost 1.74 headers: Odeint
+  libtomlplusplus-dev                  # toml++: robot and scene files
+  libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark
+  python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "install-deps: installing ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
