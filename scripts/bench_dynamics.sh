@@ -7,5 +7,6 @@ tmp=$(mktemp results/bench/.dynamics.XXXXXX.json)
 trap 'rm -f "$tmp"' EXIT
 build/release/bin/bench_dynamics --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
   --benchmark_min_time=0.1 --benchmark_out="$tmp" --benchmark_out_format=json >/dev/null
+chmod 644 "$tmp"
 mv "$tmp" results/bench/dynamics.json   # complete results only: nothing half-written
 python3 scripts/dynamics_table.py results/bench/dynamics.json results/dynamics_backends.md
