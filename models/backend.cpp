@@ -4,11 +4,7 @@
 #include <array>
 #include <stdexcept>
 
-#include "models/aba.hpp"
-#include "models/chain.hpp"
-#include "models/crba.hpp"
-#include "models/lagrange_euler.hpp"
-#include "models/rnea_probing.hpp"
+#include "models/algorithms.hpp"
 
 namespace pumasim {
 namespace {
@@ -93,6 +89,9 @@ class Adapter final : public DynamicsBackend {
 
 template <template <class, int> class Algo>
 std::unique_ptr<DynamicsBackend> make(const RobotModel& model) {
+  if (const std::string why = why_unsupported<Algo>(model); !why.empty()) {
+    throw std::invalid_argument(why);
+  }
   switch (model.dof()) {
     case 3: return std::make_unique<Adapter<Algo, 3>>(model);
     case 6: return std::make_unique<Adapter<Algo, 6>>(model);
@@ -130,16 +129,19 @@ OpCounts count_ops(const RobotModel& model, Quantity what) {
 
 template <template <class, int> class Algo>
 constexpr BackendInfo entry(const char* summary) {
-  return BackendInfo{Algo<double, 6>::kName, summary, &make<Algo>, &count_ops<Algo>};
+  return BackendInfo{Algo<double, 6>::kName, summary, &why_unsupported<Algo>, &make<Algo>,
+                     &count_ops<Algo>};
 }
 
 // Sorted by name (checked below). A new back-end is one line here.
-const std::array<BackendInfo, 5> kBackends{{
+const std::array<BackendInfo, 6> kBackends{{
     entry<Aba>("Featherstone's articulated body algorithm, O(n), rotor inertia as armature; "
                "H from the CRBA"),
     entry<Crba>("composite rigid body algorithm for H + one RNEA pass for h + Cholesky"),
     entry<LagrangeEuler>("textbook Lagrange-Euler with 4x4 matrices (Uicker / Fu-Gonzalez-Lee), "
                          "O(n^4) + Cholesky"),
+    entry<LagrangeSymbolic>("closed-form Lagrange model generated with SymPy for the PUMA 560's "
+                            "structure (3 or 6 joints; parameters at run time) + Cholesky"),
     entry<RneaProbing>("the paper's method: n + 2 inverse-dynamics (RNEA) calls build g, h and "
                        "H, then Cholesky"),
     entry<RneaProbingShared>("probing with the kinematics shared: one trigonometric pass, h + n "

@@ -45,6 +45,10 @@ enum class Quantity { kInverseDynamics, kMassMatrix, kBias, kGravity, kForwardDy
 struct BackendInfo {
   const char* name;
   const char* summary;  // one line: algorithm, how H and qdd are obtained, cost
+  // Empty if this back-end can describe `model`; otherwise why not (a generated
+  // closed form, for instance, exists only for the arm it was generated for).
+  std::string (*why_unsupported)(const RobotModel& model);
+  // std::invalid_argument with that reason if the model is not supported.
   std::unique_ptr<DynamicsBackend> (*make)(const RobotModel& model);
   // Arithmetic of one call computing `what` for `model` (Counted scalar).
   OpCounts (*count_ops)(const RobotModel& model, Quantity what);

@@ -4,11 +4,11 @@
 
 #include <Eigen/Core>
 
-#include "models/aba.hpp"
-#include "models/crba.hpp"
-#include "models/lagrange_euler.hpp"
+#include <vector>
+
+#include "models/algorithms.hpp"
+#include "models/backend.hpp"
 #include "models/random_chain.hpp"
-#include "models/rnea_probing.hpp"
 #include "models/robot_model.hpp"
 
 namespace pumasim::testing {
@@ -34,14 +34,29 @@ inline double potential_energy(const RobotModel& m, const Eigen::VectorXd& q) {
   return V;
 }
 
-// Calls f.template operator()<Algo>() for every algorithm template.
+// The registered back-ends that can describe `m` (all but generated ones
+// made for another arm).
+inline std::vector<BackendInfo> supported(const RobotModel& m) {
+  std::vector<BackendInfo> out;
+  for (const auto& info : backends()) {
+    if (info.why_unsupported(m).empty()) out.push_back(info);
+  }
+  return out;
+}
+
+// Calls f.template operator()<Algo>() for every algorithm template that can
+// describe the model m.
 template <class F>
-void for_each_algorithm(F&& f) {
-  f.template operator()<RneaProbing>();
-  f.template operator()<RneaProbingShared>();
-  f.template operator()<Crba>();
-  f.template operator()<Aba>();
-  f.template operator()<LagrangeEuler>();
+void for_each_algorithm(const RobotModel& m, F&& f) {
+  auto call = [&]<template <class, int> class Algo>() {
+    if (why_unsupported<Algo>(m).empty()) f.template operator()<Algo>();
+  };
+  call.template operator()<RneaProbing>();
+  call.template operator()<RneaProbingShared>();
+  call.template operator()<Crba>();
+  call.template operator()<Aba>();
+  call.template operator()<LagrangeEuler>();
+  call.template operator()<LagrangeSymbolic>();
 }
 
 }  // namespace pumasim::testing

@@ -40,7 +40,7 @@ Quantities evaluate(DynamicsBackend& b, const Eigen::VectorXd& q, const Eigen::V
 
 void expect_all_agree(const RobotModel& model, std::uint64_t seed, int states) {
   std::vector<std::unique_ptr<DynamicsBackend>> all;
-  for (const auto& info : backends()) all.push_back(info.make(model));
+  for (const auto& info : testing::supported(model)) all.push_back(info.make(model));
   Rng rng(seed);
   const int n = model.dof();
   for (int s = 0; s < states; ++s) {
@@ -148,6 +148,59 @@ TEST(LockJoints, EqualsTheFullArmWithHeldJointsAtRest) {
     red->inverse_dynamics(q.head(k), qd.head(k), qdd.head(k), tr);
     EXPECT_LT(rel_err(Hf.topLeftCorner(k, k), Hr), kAgree) << k;
     EXPECT_LT(rel_err(tf.head(k), tr), kAgree) << k;
+  }
+}
+
+// The PUMA 560's structure with other parameters: the generated closed form
+// takes a_j, d_j and every inertial parameter at run time, so it must agree
+// with the numeric back-ends for any such parameter set, not only the file's.
+RobotModel puma_with_random_parameters(std::uint64_t seed) {
+  RobotModel m = load_robot("puma560");
+  const RobotModel donor = random_chain(6, seed);  // random masses, inertias, drives
+  Rng rng(seed);
+  for (int j = 0; j < 6; ++j) {
+    JointParams& J = m.joints[j];
+    J.a = rng.uniform(-0.5, 0.5);
+    J.d = rng.uniform(-0.5, 0.5);
+    J.mass = donor.joints[j].mass;
+    J.com = donor.joints[j].com;
+    J.inertia = donor.joints[j].inertia;
+    J.rotor_inertia = donor.joints[j].rotor_inertia;
+    J.gear_ratio = donor.joints[j].gear_ratio;
+  }
+  m.gravity = Eigen::Vector3d(rng.uniform(-3, 3), rng.uniform(-3, 3), -9.81);
+  m.name = "puma560 structure, random parameters " + std::to_string(seed);
+  return m;
+}
+
+TEST(LagrangeSymbolic, TakesPartForThePuma) {
+  for (const RobotModel& m : {load_robot("puma560"), lock_joints(load_robot("puma560"), 3,
+                                                                 Eigen::VectorXd::Zero(6))}) {
+    bool found = false;
+    for (const auto& info : testing::supported(m)) found |= std::string(info.name) == "lagrange-symbolic";
+    EXPECT_TRUE(found) << m.name;
+  }
+}
+
+TEST(LagrangeSymbolic, AgreesForAnyParametersOfThePumaStructure) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const RobotModel m = puma_with_random_parameters(seed);
+    expect_all_agree(m, seed, 5);
+    Rng rng(seed);
+    expect_all_agree(lock_joints(m, 3, rng.uniform_vector(6, -2, 2)), seed + 10, 5);
+  }
+}
+
+TEST(LagrangeSymbolic, RefusesOtherArmsWithTheReason) {
+  for (const RobotModel& m : {random_chain(6, 9), random_chain(4, 9)}) {
+    EXPECT_FALSE(find_backend("lagrange-symbolic").why_unsupported(m).empty());
+    try {
+      make_backend("lagrange-symbolic", m);
+      FAIL() << "accepted " << m.name;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("generated for the PUMA 560"), std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
+#include "tests/helpers.hpp"
 
 namespace pumasim {
 namespace {
@@ -33,7 +34,7 @@ TEST(PublishedValues, Puma560GravityTorqueAtNamedPoses) {
       {"qr", (Eigen::Matrix<double, 6, 1>() << 0, -0.7752352500, 0.2489287500, 0, 0, 0).finished()},
       {"qs", (Eigen::Matrix<double, 6, 1>() << 0, 46.0069380000, 8.7722001000, 0, 0.0282528000, 0).finished()},
   };
-  for (const auto& info : backends()) {
+  for (const auto& info : testing::supported(puma)) {
     auto b = info.make(puma);
     for (const Case& c : cases) {
       Eigen::VectorXd g(6);
@@ -63,7 +64,7 @@ TEST(PublishedValues, Puma560MassMatrixAtQzAndQr) {
   Eigen::Matrix<double, 6, 1> rigid_diag_qz;
   rigid_diag_qz << 3.1770961356, 2.1318072505, 0.3617793985, 0.0016400000, 0.0006421600, 0.0000400000;
   const RobotModel rigid = without_rotor_inertia(puma);
-  for (const auto& info : backends()) {
+  for (const auto& info : testing::supported(puma)) {
     Eigen::MatrixXd H(6, 6);
     auto b = info.make(puma);
     b->mass_matrix(puma.pose("qz")->q, H);
@@ -112,7 +113,7 @@ TEST(ClosedForm, PlanarTwoLinkArm) {
   H_ref << d11, d12, d12, d22;
   const Eigen::Vector2d h_ref(b1, b2), g_ref(g1, g2);
   const Eigen::Vector2d tau_ref = H_ref * qdd + h_ref;
-  for (const auto& info : backends()) {
+  for (const auto& info : testing::supported(m)) {
     auto b = info.make(m);
     Eigen::MatrixXd H(2, 2);
     Eigen::VectorXd h(2), g(2), tau(2), acc(2);

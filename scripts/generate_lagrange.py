@@ -1,0 +1,290 @@
+#!/usr/bin/python3
+"""Generates the closed-form Lagrange model of the PUMA 560 as C++.
+
+    /usr/bin/python3 scripts/generate_lagrange.py [--out models/generated]
+
+Writes lagrange_puma560_3.hpp and lagrange_puma560_6.hpp (the arm with 3 and 6
+moving joints) and prints how long generation took and how large the code is.
+Run with Debian's interpreter and SymPy (python3-sympy 1.11): the committed
+files are what this script produces there, which CI checks by regenerating
+and diffing (scripts/check_generated.sh).
+
+Derivation (Lagrange, symbolic, no numbers but the arm's structure):
+  - Joint frames as in models/chain.hpp: joint frame j is joint frame j-1 moved
+    by Rx(alpha_{j-1}) and p_j = (a_{j-1}, 0, d_{j-1}), then turned by Rz(q_j).
+    The twists alpha are the PUMA's (pi/2, 0, -pi/2, pi/2, -pi/2, 0): they are
+    the arm's structure and are fixed here; a_j, d_j, every link's ten inertial
+    parameters (m, first moment h = m c, inertia about the joint-frame origin),
+    the rotor inertias Z^2 Im and gravity are runtime inputs.
+  - Link velocities (omega_j, v_j) in frame j, linear in qd; their columns are
+    the link Jacobians. Kinetic energy of link j with barycentric parameters:
+    T_j = 1/2 m v.v + v.(omega x h) + 1/2 omega.(Io omega), so
+    H = sum_j [m Jv^T Jv + Jw^T S(h) Jv - Jv^T S(h) Jw + Jw^T Io Jw] + diag(Z^2 Im).
+  - Coriolis and centrifugal terms from Lagrange's equation itself:
+    c = d/dt(dT/dqd) - dT/dq with dT/dqd = H qd, i.e.
+    c_i = sum_k d(H qd)_i/dq_k qd_k - 1/2 d(qd^T H qd)/dq_i  (exact; equivalent to
+    the Christoffel form, with n + 1 instead of n^3 symbolic derivatives).
+  - Gravity g = dV/dq, V = -sum_j gvec . (m_j o_j + R_j h_j) in the base frame.
+  - cos q_j and sin q_j are symbols c_j, s_j; derivatives use d c_j = -s_j dq_j,
+    d s_j = c_j dq_j. Common subexpressions are eliminated per kernel.
+"""
+import argparse
+import os
+import re
+import sys
+import time
+
+import sympy as sp
+from sympy.printing.c import C99CodePrinter
+from sympy.printing.precedence import PRECEDENCE
+
+TWIST_HALF_PI = [1, 0, -1, 1, -1, 0]  # PUMA 560 standard DH alpha_j in units of pi/2
+PARAMS_PER_LINK = ["m", "hx", "hy", "hz", "Ixx", "Iyy", "Izz", "Ixy", "Iyz", "Ixz"]
+
+
+def rot_x(k):
+    """Rx(k pi/2), exactly."""
+    c = [1, 0, -1, 0][k % 4]
+    s = [0, 1, 0, -1][k % 4]
+    return sp.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def rot_z(c, s):
+    return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def skew(v):
+    return sp.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+
+class Model:
+    def __init__(self, n):
+        self.n = n
+        self.c = sp.symbols(f"c0:{n}")
+        self.s = sp.symbols(f"s0:{n}")
+        self.qd = sp.symbols(f"qd0:{n}")
+        # Runtime parameters, in the order of the parameter vector.
+        self.param_names = []
+        self.links = []
+        for j in range(n):
+            syms = {}
+            for name in PARAMS_PER_LINK:
+                sym = sp.Symbol(f"{name}{j}")
+                syms[name] = sym
+                self.param_names.append(sym)
+            self.links.append(syms)
+        self.arm = []
+        for j in range(n):
+            sym = sp.Symbol(f"arm{j}")
+            self.arm.append(sym)
+            self.param_names.append(sym)
+        self.a, self.d = [], []
+        for j in range(n - 1):  # p_{j+1} = (a_j, 0, d_j)
+            for lst, name in ((self.a, "a"), (self.d, "d")):
+                sym = sp.Symbol(f"{name}{j}")
+                lst.append(sym)
+                self.param_names.append(sym)
+        self.grav = sp.symbols("gx gy gz")
+        self.param_names.extend(self.grav)
+
+    def p(self, j):
+        """Origin of joint frame j in joint frame j-1."""
+        if j == 0:
+            return sp.Matrix([0, 0, 0])
+        return sp.Matrix([self.a[j - 1], 0, self.d[j - 1]])
+
+    def E(self, j):
+        return rot_x(0 if j == 0 else TWIST_HALF_PI[j - 1])
+
+    def R(self, j):
+        """Rotation joint frame j -> joint frame j-1."""
+        return self.E(j) * rot_z(self.c[j], self.s[j])
+
+    def ddq(self, expr, k):
+        """d expr / d q_k through c_k and s_k."""
+        return sp.diff(expr, self.c[k]) * (-self.s[k]) + sp.diff(expr, self.s[k]) * self.c[k]
+
+    def mass_matrix(self):
+        n = self.n
+        H = sp.zeros(n, n)
+        w = [sp.zeros(3, 1) for _ in range(n)]  # Jacobian columns of omega in current frame
+        v = [sp.zeros(3, 1) for _ in range(n)]
+        for j in range(n):
+            Rt = self.R(j).T
+            pj = self.p(j)
+            w_new, v_new = [], []
+            for i in range(n):
+                wi = Rt * w[i]
+                vi = Rt * (v[i] + w[i].cross(pj))
+                if i == j:
+                    wi = wi + sp.Matrix([0, 0, 1])
+                w_new.append(wi)
+                v_new.append(vi)
+            w, v = w_new, v_new
+            L = self.links[j]
+            h = sp.Matrix([L["hx"], L["hy"], L["hz"]])
+            Io = sp.Matrix([[L["Ixx"], L["Ixy"], L["Ixz"]],
+                            [L["Ixy"], L["Iyy"], L["Iyz"]],
+                            [L["Ixz"], L["Iyz"], L["Izz"]]])
+            Sh = skew(h)
+            for i in range(j + 1):
+                for k in range(i, j + 1):
+                    term = (L["m"] * v[i].dot(v[k]) + w[i].dot(Sh * v[k]) - v[i].dot(Sh * w[k])
+                            + w[i].dot(Io * w[k]))
+                    H[i, k] += term
+        for i in range(n):
+            H[i, i] += self.arm[i]
+            for k in range(i):
+                H[i, k] = H[k, i]
+        return H
+
+    def gravity(self):
+        n = self.n
+        R = sp.eye(3)
+        o = sp.zeros(3, 1)
+        V = 0
+        g = sp.Matrix(self.grav)
+        for j in range(n):
+            o = o + R * self.p(j)
+            R = R * self.R(j)
+            L = self.links[j]
+            h = sp.Matrix([L["hx"], L["hy"], L["hz"]])
+            V -= g.dot(L["m"] * o + R * h)
+        return [self.ddq(V, i) for i in range(n)]
+
+    def coriolis(self, H):
+        n = self.n
+        qd = sp.Matrix(self.qd)
+        p = H * qd
+        T2 = qd.dot(p)  # 2 T
+        c = []
+        for i in range(n):
+            ci = sum((self.ddq(p[i], k) * self.qd[k] for k in range(n)), sp.Integer(0))
+            ci -= sp.Rational(1, 2) * self.ddq(T2, i)
+            c.append(ci)
+        return c
+
+
+class Printer(C99CodePrinter):
+    """C++ for a generic scalar S: integer powers as products, no libm calls."""
+
+    def _print_Pow(self, expr):
+        base, exp = expr.as_base_exp()
+        if exp.is_Integer and exp > 0:
+            b = self.parenthesize(base, PRECEDENCE["Mul"])
+            return "*".join([b] * int(exp))
+        if exp.is_Integer and exp < 0:
+            return "S(1)/(" + self._print(base ** (-exp)) + ")"
+        raise ValueError(f"unexpected power {expr}")
+
+    def _print_Rational(self, expr):
+        return f"S({float(expr.p) / float(expr.q)!r})"
+
+    def _print_Integer(self, expr):
+        return f"S({int(expr)})"
+
+    def _print_Float(self, expr):
+        return f"S({float(expr)!r})"
+
+
+def emit_kernel(model, name, outputs, inputs_doc, signature, out_lines):
+    """CSE over the (name, index, expr) outputs and C++ for one kernel."""
+    exprs = [e for (_, _, e) in outputs]
+    repl, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t"), order="none")
+    pr = Printer()
+    body = []
+    for sym, e in repl:
+        body.append(f"  const S {sym} = {pr.doprint(e)};")
+    for (arr, idx, _), e in zip(outputs, reduced):
+        body.append(f"  {arr}[{idx}] = {pr.doprint(e)};")
+    used = set()
+    for line in body:
+        used.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", line))
+    out_lines.append(f"  // {inputs_doc}")
+    out_lines.append(f"  template <class S>")
+    out_lines.append(f"  static void {name}({signature}) {{")
+    if any(f"c{j}" in used or f"s{j}" in used for j in range(model.n)):
+        out_lines.append("    using std::cos;")
+        out_lines.append("    using std::sin;")
+    for j in range(model.n):
+        if f"c{j}" in used:
+            out_lines.append(f"    const S c{j} = cos(q[{j}]);")
+        if f"s{j}" in used:
+            out_lines.append(f"    const S s{j} = sin(q[{j}]);")
+    for j in range(model.n):
+        if f"qd{j}" in used:
+            out_lines.append(f"    const S qd{j} = qd[{j}];")
+    for k, sym in enumerate(model.param_names):
+        if str(sym) in used:
+            out_lines.append(f"    const S& {sym} = P[{k}];")
+    out_lines.extend("  " + line for line in body)
+    out_lines.append("  }")
+    return len(repl)
+
+
+def generate(n):
+    t0 = time.time()
+    m = Model(n)
+    H = m.mass_matrix()
+    g = m.gravity()
+    c = m.coriolis(H)
+    t_derive = time.time() - t0
+    upper = [("H", i * n + k, H[i, k]) for i in range(n) for k in range(i, n)]
+    lines = []
+    stats = {}
+    stats["gravity"] = emit_kernel(m, "gravity", [("g", i, g[i]) for i in range(n)],
+                                   "g(q): gravity torques", "const S* P, const S* q, S* g", lines)
+    lines.append("")
+    stats["mass_matrix"] = emit_kernel(m, "mass_matrix_upper", upper,
+                                       "upper triangle of H(q) (row-major n x n), Z^2 Im included",
+                                       "const S* P, const S* q, S* H", lines)
+    lines.append("")
+    stats["dynamics"] = emit_kernel(
+        m, "dynamics", upper + [("h", i, c[i] + g[i]) for i in range(n)],
+        "upper triangle of H(q) and h(q, qd) = C(q, qd) qd + g(q), sharing subexpressions",
+        "const S* P, const S* q, const S* qd, S* H, S* h", lines)
+    t_total = time.time() - t0
+    twist = ", ".join(str(t) for t in TWIST_HALF_PI[:n])
+    params = ", ".join(f'"{p}"' for p in m.param_names)
+    head = [
+        "// GENERATED by scripts/generate_lagrange.py -- do not edit; regenerate instead.",
+        f"// Closed-form Lagrange model of the PUMA 560 with {n} moving joints (SymPy {sp.__version__}).",
+        "// P is the parameter vector in the order of kParamNames: per link j the mass,",
+        "// first moment h = m c and inertia about the joint-frame origin (models/chain.hpp),",
+        "// then the rotor inertias Z^2 Im, then a_j and d_j (p_{j+1} = (a_j, 0, d_j)), then gravity.",
+        "#pragma once",
+        "",
+        "#include <cmath>",
+        "",
+        "namespace pumasim::generated {",
+        "",
+        f"struct LagrangePuma560_{n} {{",
+        f"  static constexpr int kDof = {n};",
+        f"  // Twist alpha_j of each joint frame's fixed rotation Rx(alpha), in units of pi/2.",
+        f"  static constexpr int kTwistHalfPi[{n}] = {{{twist}}};",
+        f"  static constexpr int kNumParams = {len(m.param_names)};",
+        f"  static constexpr const char* kParamNames[{len(m.param_names)}] = {{{params}}};",
+        "",
+    ]
+    tail = ["};", "", "}  // namespace pumasim::generated", ""]
+    return "\n".join(head + lines + tail), stats, t_derive, t_total
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "generated"))
+    ap.add_argument("--dof", type=int, nargs="*", default=[3, 6])
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    for n in args.dof:
+        text, stats, t_derive, t_total = generate(n)
+        path = os.path.join(args.out, f"lagrange_puma560_{n}.hpp")
+        with open(path, "w") as f:
+            f.write(text)
+        print(f"n = {n}: derivation {t_derive:.1f} s, total with CSE and printing {t_total:.1f} s; "
+              f"{path}: {len(text):,} bytes, {text.count(chr(10)):,} lines; "
+              f"CSE temporaries: " + ", ".join(f"{k} {v}" for k, v in stats.items()), flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
