@@ -134,7 +134,7 @@ constexpr BackendInfo entry(const char* summary) {
 }
 
 // Sorted by name (checked below). A new back-end is one line here.
-const std::array<BackendInfo, 6> kBackends{{
+const std::array<BackendInfo, 7> kBackends{{
     entry<Aba>("Featherstone's articulated body algorithm, O(n), rotor inertia as armature; "
                "H from the CRBA"),
     entry<Crba>("composite rigid body algorithm for H + one RNEA pass for h + Cholesky"),
@@ -142,6 +142,8 @@ const std::array<BackendInfo, 6> kBackends{{
                          "O(n^4) + Cholesky"),
     entry<LagrangeSymbolic>("closed-form Lagrange model generated with SymPy for the PUMA 560's "
                             "structure (3 or 6 joints; parameters at run time) + Cholesky"),
+    entry<LagrangeSymbolicPuma560>("the same closed form with puma560.toml's numbers folded in "
+                                   "(3 joints: wrist held at zero); other parameters are refused"),
     entry<RneaProbing>("the paper's method: n + 2 inverse-dynamics (RNEA) calls build g, h and "
                        "H, then Cholesky"),
     entry<RneaProbingShared>("probing with the kinematics shared: one trigonometric pass, h + n "

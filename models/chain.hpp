@@ -81,6 +81,7 @@ Mat3<S> skew(const Vec3<S>& v) {
 
 template <class S, int N>
 struct Chain {
+  using Scalar = S;
   int n = 0;
   PerJoint<Mat3<S>, N> E;    // fixed rotation part of joint frame j in frame j-1
   PerJoint<Vec3<S>, N> p;    // origin of joint frame j in joint frame j-1 [m]

@@ -4,7 +4,11 @@
     /usr/bin/python3 scripts/generate_lagrange.py [--out models/generated]
 
 Writes lagrange_puma560_3.hpp and lagrange_puma560_6.hpp (the arm with 3 and 6
-moving joints) and prints how long generation took and how large the code is.
+moving joints, parameters at run time), and lagrange_puma560_folded_3.hpp and
+lagrange_puma560_folded_6.hpp, the same with the numbers of
+models/robots/puma560.toml folded in before CSE (the 3-joint one with the wrist
+held at q4 = q5 = q6 = 0); prints how long generation took and how large the
+code is.
 Run with Debian's interpreter and SymPy (python3-sympy 1.11): the committed
 files are what this script produces there, which CI checks by regenerating
 and diffing (scripts/check_generated.sh).
@@ -87,6 +91,18 @@ class Model:
         self.grav = sp.symbols("gx gy gz")
         self.param_names.extend(self.grav)
 
+    def fold(self, values):
+        """Replace every runtime parameter by its number (exact zero where it is 0)."""
+        num = [sp.Integer(0) if v == 0 else v for v in values]
+        it = iter(num)
+        for syms in self.links:
+            for name in PARAMS_PER_LINK:
+                syms[name] = next(it)
+        self.arm = [next(it) for _ in self.arm]
+        for j in range(len(self.a)):
+            self.a[j], self.d[j] = next(it), next(it)
+        self.grav = tuple(next(it) for _ in self.grav)
+
     def p(self, j):
         """Origin of joint frame j in joint frame j-1."""
         if j == 0:
@@ -165,6 +181,68 @@ class Model:
         return c
 
 
+def folded_parameters(robot_file, n):
+    """Parameter values (in Model.param_names order) from a standard-DH robot file.
+
+    An independent Python implementation of the conversion that models/chain.hpp
+    and lock_joints do in C++: DH link frames to joint frames, barycentric
+    parameters about each joint-frame origin, and links n..5 lumped into link
+    n-1 with their joints held at zero.
+    """
+    import tomllib
+    with open(robot_file, "rb") as f:
+        doc = tomllib.load(f)
+    if doc["robot"]["convention"] != "standard":
+        raise SystemExit(f"{robot_file}: folding needs a standard-DH robot file")
+    joints = doc["joint"]
+    if len(joints) != len(TWIST_HALF_PI):
+        raise SystemExit(f"{robot_file}: expected {len(TWIST_HALF_PI)} joints")
+    for j, J in enumerate(joints):
+        if abs(J["alpha"] - TWIST_HALF_PI[j] * sp.pi.evalf(30) / 2) > 1e-12 or J.get("offset", 0.0) != 0.0:
+            raise SystemExit(f"{robot_file}: joint {j + 1} does not have the PUMA 560's structure")
+
+    def link(J):
+        """(m, h, Io) of a link in its joint frame (joint frame = DH frame j-1 * Rz(q_j))."""
+        m = sp.Float(J["mass"], 17)
+        RF = rot_x(round(J["alpha"] / (float(sp.pi) / 2)))
+        t = sp.Matrix([J["a"], 0, J["d"]])
+        c = RF * sp.Matrix(J["com"]) + t
+        Ixx, Iyy, Izz, Ixy, Iyz, Ixz = J["inertia"]
+        Ic = sp.Matrix([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+        Ic = RF * Ic * RF.T
+        Io = Ic + m * (c.dot(c) * sp.eye(3) - c * c.T)
+        return m, m * c, Io
+
+    def move(body, R, t):
+        """(m, h, Io) of a body moved by r' = R r + t."""
+        m, h, Io = body
+        hr = R * h
+        Io2 = R * Io * R.T + (2 * t.dot(hr) + m * t.dot(t)) * sp.eye(3) - hr * t.T - t * hr.T - m * t * t.T
+        return m, hr + m * t, Io2
+
+    bodies = [link(J) for J in joints]
+    if n < len(joints):
+        # Lump links n..5 into link n-1: joint frame k in joint frame k-1 is
+        # Rx(alpha_{k-1}) with origin (a_{k-1}, 0, d_{k-1}) when q_k = 0.
+        m, h, Io = bodies[n - 1]
+        R, t = sp.eye(3), sp.zeros(3, 1)
+        for k in range(n, len(joints)):
+            P = joints[k - 1]
+            t = t + R * sp.Matrix([P["a"], 0, P["d"]])
+            R = R * rot_x(TWIST_HALF_PI[k - 1])
+            mk, hk, Iok = move(bodies[k], R, t)
+            m, h, Io = m + mk, h + hk, Io + Iok
+        bodies = bodies[:n - 1] + [(m, h, Io)]
+    values = []
+    for (m, h, Io) in bodies:
+        values += [m, h[0], h[1], h[2], Io[0, 0], Io[1, 1], Io[2, 2], Io[0, 1], Io[1, 2], Io[0, 2]]
+    values += [J["gear_ratio"] ** 2 * J["rotor_inertia"] for J in joints[:n]]
+    for J in joints[:n - 1]:
+        values += [J["a"], J["d"]]
+    values += list(doc["robot"]["gravity"])
+    return [sp.Float(float(v), 17) for v in values]
+
+
 class Printer(C99CodePrinter):
     """C++ for a generic scalar S: integer powers as products, no libm calls."""
 
@@ -187,7 +265,7 @@ class Printer(C99CodePrinter):
         return f"S({float(expr)!r})"
 
 
-def emit_kernel(model, name, outputs, inputs_doc, signature, out_lines):
+def emit_kernel(model, name, outputs, inputs_doc, signature, out_lines, folded=False):
     """CSE over the (name, index, expr) outputs and C++ for one kernel."""
     exprs = [e for (_, _, e) in outputs]
     repl, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("t"), order="none")
@@ -202,6 +280,8 @@ def emit_kernel(model, name, outputs, inputs_doc, signature, out_lines):
         used.update(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", line))
     out_lines.append(f"  // {inputs_doc}")
     out_lines.append(f"  template <class S>")
+    if folded:
+        signature = signature.replace("const S* P", "const S* /*P: folded in*/")
     out_lines.append(f"  static void {name}({signature}) {{")
     if any(f"c{j}" in used or f"s{j}" in used for j in range(model.n)):
         out_lines.append("    using std::cos;")
@@ -222,9 +302,14 @@ def emit_kernel(model, name, outputs, inputs_doc, signature, out_lines):
     return len(repl)
 
 
-def generate(n):
+def generate(n, robot_file=None):
     t0 = time.time()
     m = Model(n)
+    folded = robot_file is not None
+    values = None
+    if folded:
+        values = folded_parameters(robot_file, n)
+        m.fold(values)  # numbers enter before the derivation, so zeros prune it early
     H = m.mass_matrix()
     g = m.gravity()
     c = m.coriolis(H)
@@ -233,39 +318,48 @@ def generate(n):
     lines = []
     stats = {}
     stats["gravity"] = emit_kernel(m, "gravity", [("g", i, g[i]) for i in range(n)],
-                                   "g(q): gravity torques", "const S* P, const S* q, S* g", lines)
+                                   "g(q): gravity torques", "const S* P, const S* q, S* g", lines, folded)
     lines.append("")
     stats["mass_matrix"] = emit_kernel(m, "mass_matrix_upper", upper,
                                        "upper triangle of H(q) (row-major n x n), Z^2 Im included",
-                                       "const S* P, const S* q, S* H", lines)
+                                       "const S* P, const S* q, S* H", lines, folded)
     lines.append("")
     stats["dynamics"] = emit_kernel(
         m, "dynamics", upper + [("h", i, c[i] + g[i]) for i in range(n)],
         "upper triangle of H(q) and h(q, qd) = C(q, qd) qd + g(q), sharing subexpressions",
-        "const S* P, const S* q, const S* qd, S* H, S* h", lines)
+        "const S* P, const S* q, const S* qd, S* H, S* h", lines, folded)
     t_total = time.time() - t0
     twist = ", ".join(str(t) for t in TWIST_HALF_PI[:n])
     params = ", ".join(f'"{p}"' for p in m.param_names)
+    struct = f"LagrangePuma560Folded_{n}" if folded else f"LagrangePuma560_{n}"
+    what = (f"with the parameters of {os.path.relpath(robot_file, os.path.join(os.path.dirname(__file__), '..'))} "
+            "folded in" + (" (wrist held at q4 = q5 = q6 = 0)" if n < 6 else "")
+            if folded else "with its parameters as runtime inputs P")
     head = [
         "// GENERATED by scripts/generate_lagrange.py -- do not edit; regenerate instead.",
-        f"// Closed-form Lagrange model of the PUMA 560 with {n} moving joints (SymPy {sp.__version__}).",
-        "// P is the parameter vector in the order of kParamNames: per link j the mass,",
-        "// first moment h = m c and inertia about the joint-frame origin (models/chain.hpp),",
-        "// then the rotor inertias Z^2 Im, then a_j and d_j (p_{j+1} = (a_j, 0, d_j)), then gravity.",
+        f"// Closed-form Lagrange model of the PUMA 560 with {n} moving joints (SymPy {sp.__version__}),",
+        f"// {what}.",
+        "// Parameter vector order (kParamNames): per link j the mass, first moment h = m c",
+        "// and inertia about the joint-frame origin (models/chain.hpp), then the rotor",
+        "// inertias Z^2 Im, then a_j and d_j (p_{j+1} = (a_j, 0, d_j)), then gravity.",
         "#pragma once",
         "",
         "#include <cmath>",
         "",
         "namespace pumasim::generated {",
         "",
-        f"struct LagrangePuma560_{n} {{",
+        f"struct {struct} {{",
         f"  static constexpr int kDof = {n};",
         f"  // Twist alpha_j of each joint frame's fixed rotation Rx(alpha), in units of pi/2.",
         f"  static constexpr int kTwistHalfPi[{n}] = {{{twist}}};",
         f"  static constexpr int kNumParams = {len(m.param_names)};",
         f"  static constexpr const char* kParamNames[{len(m.param_names)}] = {{{params}}};",
-        "",
     ]
+    if folded:
+        vals = ", ".join(repr(float(v)) for v in values)
+        head.append(f"  // The values folded in; a model must match them to use these kernels.")
+        head.append(f"  static constexpr double kFoldedParams[{len(values)}] = {{{vals}}};")
+    head.append("")
     tail = ["};", "", "}  // namespace pumasim::generated", ""]
     return "\n".join(head + lines + tail), stats, t_derive, t_total
 
@@ -274,14 +368,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "generated"))
     ap.add_argument("--dof", type=int, nargs="*", default=[3, 6])
+    ap.add_argument("--robot", default=os.path.join(os.path.dirname(__file__), "..", "models", "robots",
+                                                    "puma560.toml"),
+                    help="robot file whose numbers the folded variant carries")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    for n in args.dof:
-        text, stats, t_derive, t_total = generate(n)
-        path = os.path.join(args.out, f"lagrange_puma560_{n}.hpp")
+    for n, fold in [(n, f) for f in (False, True) for n in args.dof]:
+        text, stats, t_derive, t_total = generate(n, args.robot if fold else None)
+        path = os.path.join(args.out, f"lagrange_puma560_{'folded_' if fold else ''}{n}.hpp")
         with open(path, "w") as f:
             f.write(text)
-        print(f"n = {n}: derivation {t_derive:.1f} s, total with CSE and printing {t_total:.1f} s; "
+        print(f"n = {n}{', folded' if fold else ''}: derivation {t_derive:.1f} s, total with CSE and printing {t_total:.1f} s; "
               f"{path}: {len(text):,} bytes, {text.count(chr(10)):,} lines; "
               f"CSE temporaries: " + ", ".join(f"{k} {v}" for k, v in stats.items()), flush=True)
 

@@ -57,6 +57,7 @@ void for_each_algorithm(const RobotModel& m, F&& f) {
   call.template operator()<Aba>();
   call.template operator()<LagrangeEuler>();
   call.template operator()<LagrangeSymbolic>();
+  call.template operator()<LagrangeSymbolicPuma560>();
 }
 
 }  // namespace pumasim::testing

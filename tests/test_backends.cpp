@@ -173,13 +173,29 @@ RobotModel puma_with_random_parameters(std::uint64_t seed) {
   return m;
 }
 
-TEST(LagrangeSymbolic, TakesPartForThePuma) {
+TEST(LagrangeSymbolic, BothVariantsTakePartForThePuma) {
   for (const RobotModel& m : {load_robot("puma560"), lock_joints(load_robot("puma560"), 3,
                                                                  Eigen::VectorXd::Zero(6))}) {
-    bool found = false;
-    for (const auto& info : testing::supported(m)) found |= std::string(info.name) == "lagrange-symbolic";
-    EXPECT_TRUE(found) << m.name;
+    int found = 0;
+    for (const auto& info : testing::supported(m)) {
+      const std::string name = info.name;
+      found += name == "lagrange-symbolic" || name == "lagrange-symbolic-puma560";
+    }
+    EXPECT_EQ(found, 2) << m.name;
   }
+}
+
+TEST(LagrangeSymbolic, FoldedVariantRefusesOtherParametersNamingOne) {
+  RobotModel m = load_robot("puma560");
+  m.joints[2].mass += 0.5;
+  const std::string why = find_backend("lagrange-symbolic-puma560").why_unsupported(m);
+  EXPECT_NE(why.find("m2"), std::string::npos) << why;
+  EXPECT_TRUE(find_backend("lagrange-symbolic").why_unsupported(m).empty());
+  // Wrist held elsewhere than zero: a different lumped link 3.
+  const RobotModel held = lock_joints(load_robot("puma560"), 3,
+                                      (Eigen::VectorXd(6) << 0, 0, 0, 0.3, 0.2, 0).finished());
+  EXPECT_FALSE(find_backend("lagrange-symbolic-puma560").why_unsupported(held).empty());
+  EXPECT_TRUE(find_backend("lagrange-symbolic").why_unsupported(held).empty());
 }
 
 TEST(LagrangeSymbolic, AgreesForAnyParametersOfThePumaStructure) {

@@ -71,6 +71,7 @@ TEST(PublishedValues, Puma560MassMatrixAtQzAndQr) {
     expect_near(H, Hqz, kPrinted, std::string(info.name) + " inertia(qz)");
     b->mass_matrix(puma.pose("qr")->q, H);
     expect_near(H, Hqr, kPrinted, std::string(info.name) + " inertia(qr)");
+    if (!info.why_unsupported(rigid).empty()) continue;  // folded for the file's rotor inertias
     info.make(rigid)->mass_matrix(puma.pose("qz")->q, H);
     expect_near(H.diagonal(), rigid_diag_qz, kPrinted, std::string(info.name) + " rigid diag(qz)");
   }
