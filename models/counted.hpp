@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include "models/scalar_traits.hpp"
+
 namespace pumasim {
 
 struct OpCounts {
@@ -68,19 +70,5 @@ inline double value_of(Counted x) { return x.value(); }
 
 namespace Eigen {
 template <>
-struct NumTraits<pumasim::Counted> : NumTraits<double> {
-  using Real = pumasim::Counted;
-  using NonInteger = pumasim::Counted;
-  using Literal = pumasim::Counted;
-  using Nested = pumasim::Counted;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 1,
-    MulCost = 1
-  };
-};
+struct NumTraits<pumasim::Counted> : pumasim::DoubleLikeNumTraits<pumasim::Counted, 1, 1> {};
 }  // namespace Eigen

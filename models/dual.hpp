@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "models/scalar_traits.hpp"
+
 namespace pumasim {
 
 class Dual {
@@ -63,19 +65,5 @@ inline double value_of(Dual x) { return x.value(); }
 
 namespace Eigen {
 template <>
-struct NumTraits<pumasim::Dual> : NumTraits<double> {
-  using Real = pumasim::Dual;
-  using NonInteger = pumasim::Dual;
-  using Literal = pumasim::Dual;
-  using Nested = pumasim::Dual;
-  enum {
-    IsComplex = 0,
-    IsInteger = 0,
-    IsSigned = 1,
-    RequireInitialization = 1,
-    ReadCost = 1,
-    AddCost = 2,
-    MulCost = 3
-  };
-};
+struct NumTraits<pumasim::Dual> : pumasim::DoubleLikeNumTraits<pumasim::Dual, 2, 3> {};
 }  // namespace Eigen
