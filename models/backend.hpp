@@ -20,17 +20,23 @@
 #include <Eigen/Core>
 
 #include "models/counted.hpp"
+#include "models/dual.hpp"
 #include "models/robot_model.hpp"
 
 namespace pumasim {
 
-using ConstVecRef = Eigen::Ref<const Eigen::VectorXd>;
-using VecRef = Eigen::Ref<Eigen::VectorXd>;
-using MatRef = Eigen::Ref<Eigen::MatrixXd>;
-
-class DynamicsBackend {
+// The interface on scalar S: double for simulation, Dual for exact Jacobians
+// of the plant (forward-mode derivatives through the whole algorithm).
+template <class S>
+class BasicDynamicsBackend {
  public:
-  virtual ~DynamicsBackend() = default;
+  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  using ConstVecRef = Eigen::Ref<const Vec>;
+  using VecRef = Eigen::Ref<Vec>;
+  using MatRef = Eigen::Ref<Mat>;
+
+  virtual ~BasicDynamicsBackend() = default;
   virtual const char* name() const = 0;
   virtual int dof() const = 0;
   virtual void inverse_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef qdd, VecRef tau) = 0;
@@ -39,6 +45,12 @@ class DynamicsBackend {
   virtual void gravity(ConstVecRef q, VecRef g) = 0;
   virtual void forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef tau, VecRef qdd) = 0;
 };
+
+using DynamicsBackend = BasicDynamicsBackend<double>;
+using DualDynamicsBackend = BasicDynamicsBackend<Dual>;
+using ConstVecRef = DynamicsBackend::ConstVecRef;
+using VecRef = DynamicsBackend::VecRef;
+using MatRef = DynamicsBackend::MatRef;
 
 enum class Quantity { kInverseDynamics, kMassMatrix, kBias, kGravity, kForwardDynamics };
 
@@ -50,6 +62,8 @@ struct BackendInfo {
   std::string (*why_unsupported)(const RobotModel& model);
   // std::invalid_argument with that reason if the model is not supported.
   std::unique_ptr<DynamicsBackend> (*make)(const RobotModel& model);
+  // The same algorithm on dual numbers (for exact Jacobians).
+  std::unique_ptr<DualDynamicsBackend> (*make_dual)(const RobotModel& model);
   // Arithmetic of one call computing `what` for `model` (Counted scalar).
   OpCounts (*count_ops)(const RobotModel& model, Quantity what);
 };
