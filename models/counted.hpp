@@ -55,6 +55,7 @@ class Counted {
 
   friend Counted sin(Counted a) { ++op_counts().trig; return Counted(std::sin(a.v_)); }
   friend Counted cos(Counted a) { ++op_counts().trig; return Counted(std::cos(a.v_)); }
+  friend Counted tanh(Counted a) { ++op_counts().trig; return Counted(std::tanh(a.v_)); }
   friend Counted sqrt(Counted a) { ++op_counts().sqrt; return Counted(std::sqrt(a.v_)); }
   friend Counted abs(Counted a) { return Counted(std::abs(a.v_)); }
   friend bool isfinite(Counted a) { return std::isfinite(a.v_); }

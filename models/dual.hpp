@@ -51,6 +51,10 @@ class Dual {
     const double r = std::sqrt(a.v_);
     return Dual(r, a.d_ / (2.0 * r));
   }
+  friend Dual tanh(Dual a) {
+    const double th = std::tanh(a.v_);
+    return Dual(th, (1.0 - th * th) * a.d_);
+  }
   friend Dual abs(Dual a) { return a.v_ < 0 ? -a : a; }
   friend bool isfinite(Dual a) { return std::isfinite(a.v_) && std::isfinite(a.d_); }
 

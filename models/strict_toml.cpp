@@ -164,6 +164,28 @@ std::optional<std::vector<double>> StrictTable::optional_numbers(std::string_vie
   return numbers(key, size, bounds);
 }
 
+std::vector<double> StrictTable::per_joint(std::string_view key, int n, Bounds bounds) {
+  const toml::node& nd = require(key);
+  if (nd.is_number()) {
+    const double x = *nd.value<double>();
+    if (!bounds.contains(x)) fail(key, bounds.describe(), format_number(x));
+    return std::vector<double>(static_cast<std::size_t>(n), x);
+  }
+  if (!nd.is_array()) {
+    fail(key, "a number or an array of " + std::to_string(n) + " numbers (one per joint)",
+         describe(nd));
+  }
+  return numbers(key, n, bounds);
+}
+
+std::vector<double> StrictTable::per_joint_or(std::string_view key, int n, double fallback,
+                                              Bounds bounds) {
+  if (!lookup(key)) return std::vector<double>(static_cast<std::size_t>(n), fallback);
+  return per_joint(key, n, bounds);
+}
+
+const toml::node* StrictTable::node(std::string_view key) { return lookup(key); }
+
 StrictTable StrictTable::table(std::string_view key) {
   const toml::node& node = require(key);
   if (!node.is_table()) fail(key, "a table", describe(node));

@@ -54,6 +54,12 @@ class StrictTable {
   std::vector<double> numbers(std::string_view key, int size, Bounds bounds = Bounds::any());
   std::optional<std::vector<double>> optional_numbers(std::string_view key, int size,
                                                       Bounds bounds = Bounds::any());
+  // One number for every joint, or an array of exactly n numbers.
+  std::vector<double> per_joint(std::string_view key, int n, Bounds bounds = Bounds::any());
+  std::vector<double> per_joint_or(std::string_view key, int n, double fallback,
+                                   Bounds bounds = Bounds::any());
+  // The node itself (arrays of tables, mixed content); nullptr if absent.
+  const toml::node* node(std::string_view key);
   bool has(std::string_view key) const;
   StrictTable table(std::string_view key);
   std::optional<StrictTable> optional_table(std::string_view key);

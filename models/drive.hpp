@@ -1,0 +1,121 @@
+// One joint's drive (paper sections 2-4): PIV servo card -> voltage amplifier
+// -> DC motor with armature inductance -> gear and rotor -> friction on the
+// motor shaft. All quantities are on the MOTOR side unless named joint-side:
+// motor speed w_m = Z qd, joint torque from the drive tau = Z (K i - tau_f).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+namespace pumasim {
+
+// Voltage amplifier: e_a = sat(K_A u, +-V_max), in series with R0.
+struct AmplifierParams {
+  double gain = 1.0;               // K_A [V/V]
+  double output_resistance = 0.0;  // R0 [ohm]
+  double voltage_limit = 1e9;      // V_max [V]
+};
+
+// Paper eq. (2): La di/dt = K_A u - (R0 + R) i - K w_m; torque K i.
+// La = 0 makes the current algebraic (the reduced model: no current state).
+struct MotorParams {
+  double inductance = 0.0;       // La [H]
+  double resistance = 1.0;       // R [ohm]
+  double torque_constant = 0.1;  // K [N m/A] = back-EMF constant [V s/rad]
+};
+
+enum class FrictionModel : std::uint8_t {
+  kNone,
+  kViscous,  // B w_m
+  // The paper's rule (sec. 4): at "zero" speed the friction balances the applied
+  // torque up to the static level, else it is the kinetic level against the
+  // motion. Floating-point speed is never exactly zero, so "zero" is
+  // |w_m| <= zero_speed, a named parameter (tiny by default: the rule then
+  // almost always sees motion, as in the paper's LabVIEW test ABS(V) = 0).
+  kPaper,
+  // Exact hybrid stick/slip: a stuck joint stays stuck (qd = qdd = 0) while the
+  // torque it must resist is within the static level; events at the speed's
+  // zero crossings and at break-away (needs an integrator that finds roots).
+  kHybrid,
+  // Karnopp (1985): the paper's rule with a finite band |w_m| < zero_speed.
+  kKarnopp,
+  // Smooth: Fk tanh(w_m / speed_scale); small speed_scale makes the ODE stiff.
+  kTanh,
+};
+
+const char* to_string(FrictionModel m);
+
+struct FrictionParams {
+  FrictionModel model = FrictionModel::kNone;
+  double viscous = 0.0;         // B [N m s/rad], added in every model but kNone
+  double static_torque = 0.0;   // Fs [N m] (paper: 0.146)
+  double kinetic_torque = 0.0;  // Fk [N m] (paper: 0.124)
+  double zero_speed = 1e-6;     // [rad/s]: "zero" for kPaper, band for kKarnopp
+  double speed_scale = 1e-2;    // [rad/s]: tanh scale for kTanh
+};
+
+// Slip state of a joint under the hybrid model.
+enum class SlipMode : std::int8_t { kStuck = 0, kPositive = 1, kNegative = -1 };
+
+template <class S>
+S sign_of(const S& x) {
+  return x > S(0) ? S(1) : (x < S(0) ? S(-1) : S(0));
+}
+
+// Friction torque on the motor shaft, opposing motion [N m, motor side].
+// w: shaft speed; tau_applied: the torque the friction must resist when the
+// shaft is at rest (see Plant); mode: the hybrid model's slip state.
+template <class S>
+S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, SlipMode mode) {
+  using std::tanh;
+  switch (f.model) {
+    case FrictionModel::kNone: return S(0);
+    case FrictionModel::kViscous: return S(f.viscous) * w;
+    case FrictionModel::kTanh: return S(f.kinetic_torque) * tanh(w / S(f.speed_scale)) + S(f.viscous) * w;
+    case FrictionModel::kPaper:
+    case FrictionModel::kKarnopp: {
+      const S aw = w < S(0) ? S(-w) : w;
+      if (aw <= S(f.zero_speed)) {
+        const S Fs(f.static_torque);
+        if (tau_applied > Fs) return Fs;
+        if (tau_applied < S(-Fs)) return -Fs;
+        return tau_applied;  // sticks: friction balances the applied torque
+      }
+      return S(f.kinetic_torque) * sign_of(w) + S(f.viscous) * w;
+    }
+    case FrictionModel::kHybrid:
+      if (mode == SlipMode::kStuck) return tau_applied;  // the constraint force (Plant)
+      return S(f.kinetic_torque) * S(static_cast<double>(static_cast<int>(mode))) + S(f.viscous) * w;
+  }
+  return S(0);
+}
+
+// PIV&F law of the Compumotor 6000-series servo cards (shared/reference/puma560.md,
+// sec. 7, from the 6250 user guide, ch. 4): P and I on the position error, V on
+// the measured velocity (feedback, not error), velocity and acceleration
+// feed-forward, an integral windup limit, output saturation at +-10 V:
+//   u = sat(Kp e + Ki z - Kv w + Kvff w_ref + Kaff a_ref + offset, +-u_max)
+// with e = Z (q_ref - q), w = Z qd, w_ref = Z qd_ref, a_ref = Z qdd_ref and z
+// the integral of e, clamped so |Ki z| <= integral_limit. The gains act on
+// MOTOR-side angles, as the card reads the motor encoders; so one gain sign
+// serves every joint whatever the sign of its gear ratio.
+struct PivParams {
+  double kp = 0.0;              // [V/rad], motor side
+  double ki = 0.0;              // [V/(rad s)]
+  double kv = 0.0;              // [V s/rad]
+  double kvff = 0.0;            // [V s/rad]
+  double kaff = 0.0;            // [V s^2/rad]
+  double integral_limit = 10.0; // [V], limit of |Ki z|
+  double output_limit = 10.0;   // [V], DAC range
+  double offset = 0.0;          // [V], SOFFS
+};
+
+template <class S>
+S saturate(const S& x, double limit) {
+  if (x > S(limit)) return S(limit);
+  if (x < S(-limit)) return S(-limit);
+  return x;
+}
+
+}  // namespace pumasim

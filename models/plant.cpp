@@ -1,0 +1,407 @@
+#include "models/plant.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "models/chain.hpp"
+
+namespace pumasim {
+
+const char* to_string(FrictionModel m) {
+  switch (m) {
+    case FrictionModel::kNone: return "none";
+    case FrictionModel::kViscous: return "viscous";
+    case FrictionModel::kPaper: return "paper";
+    case FrictionModel::kHybrid: return "hybrid";
+    case FrictionModel::kKarnopp: return "karnopp";
+    case FrictionModel::kTanh: return "tanh";
+  }
+  return "?";
+}
+
+int StateLayout::index(const std::string& name) const {
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (names[k] == name) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+template <class S>
+struct Plant::Workspace {
+  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+  std::unique_ptr<BasicDynamicsBackend<S>> backend;
+  Vec q, qd, u, tau, qdd, h, tm, applied;
+  Mat H, Hc;
+  Cholesky<S, Eigen::Dynamic> chol;
+  explicit Workspace(int n)
+      : q(n), qd(n), u(n), tau(n), qdd(n), h(n), tm(n), applied(n), H(n, n), Hc(n, n), chol(n) {}
+};
+
+namespace {
+
+bool is_electrical(const PlantConfig& c) {
+  if (!c.drive) return false;
+  const bool any = std::any_of(c.motor.begin(), c.motor.end(),
+                               [](const MotorParams& m) { return m.inductance > 0; });
+  const bool all = std::all_of(c.motor.begin(), c.motor.end(),
+                               [](const MotorParams& m) { return m.inductance > 0; });
+  if (any && !all) {
+    throw std::invalid_argument("plant: armature inductance must be > 0 for every joint or 0 for "
+                                "every joint (the reduced model)");
+  }
+  return all;
+}
+
+bool on_grid(double t, double period) {
+  if (!(period > 0)) return false;
+  const double k = t / period;
+  return std::abs(k - std::round(k)) < 1e-9 * std::max(1.0, std::abs(k));
+}
+
+double next_on_grid(double t, double period) {
+  return (std::floor(t / period + 1e-9) + 1.0) * period;
+}
+
+}  // namespace
+
+Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
+  const int n = cfg_.n;
+  if (cfg_.robot.dof() != 6 && cfg_.n != cfg_.robot.dof()) {
+    throw std::invalid_argument("plant: held joints need a 6-joint robot");
+  }
+  if (n < 1 || n > cfg_.robot.dof()) throw std::invalid_argument("plant: joint count out of range");
+  const auto sized = [n](std::size_t s) { return s == static_cast<std::size_t>(n); };
+  if (!sized(cfg_.friction.size())) throw std::invalid_argument("plant: one friction block per joint");
+  if (cfg_.drive && (!sized(cfg_.amplifier.size()) || !sized(cfg_.motor.size()))) {
+    throw std::invalid_argument("plant: one amplifier and motor per joint");
+  }
+  if (cfg_.controller != ControllerMode::kNone) {
+    if (!sized(cfg_.piv.size())) throw std::invalid_argument("plant: one PIV controller per joint");
+    if (!cfg_.reference && cfg_.q0.size() != n) {
+      throw std::invalid_argument("plant: a controller needs a reference, or initial angles to hold");
+    }
+    if (!cfg_.drive) throw std::invalid_argument("plant: a controller needs the drive (amplifier, motor)");
+  } else if (cfg_.drive) {
+    throw std::invalid_argument("plant: a drive needs a controller");
+  } else if (cfg_.q0.size() != n) {
+    throw std::invalid_argument("plant: a passive arm needs n initial angles");
+  }
+  if (cfg_.controller == ControllerMode::kSampled && !(cfg_.servo_period > 0)) {
+    throw std::invalid_argument("plant: a sampled controller needs a servo period > 0");
+  }
+  Eigen::VectorXd q_full = cfg_.q_held.head(cfg_.robot.dof());
+  model_ = n < cfg_.robot.dof() ? lock_joints(cfg_.robot, n, q_full) : cfg_.robot;
+
+  // State layout.
+  layout_.n = n;
+  layout_.q = 0;
+  layout_.qd = n;
+  int next = 2 * n;
+  if (is_electrical(cfg_)) layout_.i = next, next += n;
+  if (cfg_.controller == ControllerMode::kContinuous) layout_.z = next, next += n;
+  layout_.size = next;
+  const auto add = [&](const char* prefix) {
+    for (int j = 0; j < n; ++j) layout_.names.push_back(prefix + std::to_string(j + 1));
+  };
+  add("q");
+  add("qd");
+  if (layout_.i >= 0) add("i_motor");
+  if (layout_.z >= 0) add("z_piv");
+
+  wd_ = std::make_unique<Workspace<double>>(n);
+  wd_->backend = find_backend(cfg_.backend).make(model_);
+  wj_ = std::make_unique<Workspace<Dual>>(n);
+  wj_->backend = find_backend(cfg_.backend).make_dual(model_);
+  u_held_.assign(n, 0.0);
+  integral_.assign(n, 0.0);
+  mode_.assign(n, SlipMode::kStuck);
+  xtmp_.resize(layout_.size);
+  ftmp_.resize(layout_.size);
+}
+
+Plant::~Plant() = default;
+
+const ReferenceSample& Plant::current_reference(double t) {
+  if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ref_held_;
+  if (t != ref_time_) {
+    cfg_.reference->eval(t, ref_now_);
+    ref_time_ = t;
+  }
+  return ref_now_;
+}
+
+const ReferenceSample& Plant::reference_at(double t) { return current_reference(t); }
+
+template <class S>
+void Plant::controller(double t, const S* x, Workspace<S>& w) {
+  const int n = layout_.n;
+  if (cfg_.controller == ControllerMode::kSampled) {
+    for (int j = 0; j < n; ++j) w.u[j] = S(u_held_[j]);
+    return;
+  }
+  if (cfg_.controller == ControllerMode::kNone) {
+    for (int j = 0; j < n; ++j) w.u[j] = S(0);
+    return;
+  }
+  const ReferenceSample& r = current_reference(t);
+  for (int j = 0; j < n; ++j) {
+    // Motor-side angles: the card reads the motor encoder.
+    const PivParams& P = cfg_.piv[j];
+    const double Z = cfg_.robot.joints[j].gear_ratio;
+    const S e = S(Z) * (S(r.q[j]) - w.q[j]);
+    const S z = x[layout_.z + j];
+    const S v = S(P.kp) * e + S(P.ki) * z - S(P.kv * Z) * w.qd[j] + S(P.kvff * Z * r.qd[j]) +
+                S(P.kaff * Z * r.qdd[j]) + S(P.offset);
+    w.u[j] = saturate(v, P.output_limit);
+  }
+}
+
+template <class S>
+void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
+  const int n = layout_.n;
+  for (int j = 0; j < n; ++j) {
+    w.q[j] = x[layout_.q + j];
+    w.qd[j] = x[layout_.qd + j];
+  }
+  controller(t, x, w);
+  // Drive: amplifier and motor.
+  for (int j = 0; j < n; ++j) {
+    if (!cfg_.drive) {
+      w.tm[j] = S(0);
+      continue;
+    }
+    const AmplifierParams& A = cfg_.amplifier[j];
+    const MotorParams& M = cfg_.motor[j];
+    const S wm = S(cfg_.robot.joints[j].gear_ratio) * w.qd[j];
+    const S ea = saturate(S(A.gain) * w.u[j], A.voltage_limit);
+    const S R = S(A.output_resistance + M.resistance);
+    S i;
+    if (layout_.i >= 0) {
+      i = x[layout_.i + j];
+      xdot[layout_.i + j] = (ea - R * i - S(M.torque_constant) * wm) / S(M.inductance);
+    } else {
+      i = (ea - S(M.torque_constant) * wm) / R;
+    }
+    w.tm[j] = S(M.torque_constant) * i;
+  }
+  // Friction and the joint torques.
+  bool need_bias = false, hybrid = false;
+  for (const auto& f : cfg_.friction) {
+    need_bias |= f.model == FrictionModel::kPaper || f.model == FrictionModel::kKarnopp;
+    hybrid |= f.model == FrictionModel::kHybrid;
+  }
+  if (need_bias || hybrid) w.backend->bias(w.q, w.qd, w.h);
+  for (int j = 0; j < n; ++j) {
+    const double Z = cfg_.robot.joints[j].gear_ratio;
+    const S wm = S(Z) * w.qd[j];
+    w.applied[j] = (need_bias || hybrid) ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
+    const S tf = friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]);
+    w.tau[j] = S(Z) * (w.tm[j] - tf);
+  }
+  if (!hybrid) {
+    w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
+  } else {
+    // Hybrid stick/slip: a stuck joint has qdd_j = 0 and its friction is
+    // whatever holds it. Solve H qdd = tau - h with the stuck joints' rows and
+    // columns replaced by the identity (the free block is unchanged since
+    // qdd_stuck = 0); then each stuck joint's row of H gives the torque its
+    // friction must resist: applied = K i - (h_j + H_j. qdd) / Z_j.
+    const auto stuck = [&](int j) {
+      return cfg_.friction[j].model == FrictionModel::kHybrid && mode_[j] == SlipMode::kStuck;
+    };
+    w.backend->mass_matrix(w.q, w.H);
+    w.Hc = w.H;
+    for (int j = 0; j < n; ++j) {
+      w.qdd[j] = w.tau[j] - w.h[j];
+      if (!stuck(j)) continue;
+      w.qdd[j] = S(0);
+      for (int k = 0; k < n; ++k) w.Hc(j, k) = w.Hc(k, j) = S(k == j ? 1 : 0);
+    }
+    w.chol.factor(w.Hc);
+    w.chol.solve_in_place(w.qdd);
+    for (int j = 0; j < n; ++j) {
+      if (!stuck(j)) continue;
+      S sum = w.h[j];
+      for (int k = 0; k < n; ++k) sum += w.H(j, k) * w.qdd[k];
+      w.applied[j] = w.tm[j] - sum / S(cfg_.robot.joints[j].gear_ratio);
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    xdot[layout_.q + j] = w.qd[j];
+    xdot[layout_.qd + j] = w.qdd[j];
+  }
+  if (layout_.z >= 0) {
+    const ReferenceSample& r = current_reference(t);
+    for (int j = 0; j < n; ++j) {
+      const PivParams& P = cfg_.piv[j];
+      const S e = S(cfg_.robot.joints[j].gear_ratio) * (S(r.q[j]) - w.q[j]);
+      const S iz = S(P.ki) * x[layout_.z + j];
+      const S ie = S(P.ki) * e;
+      const bool windup = (iz >= S(P.integral_limit) && ie > S(0)) ||
+                          (iz <= S(-P.integral_limit) && ie < S(0));
+      xdot[layout_.z + j] = windup ? S(0) : e;
+    }
+  }
+}
+
+void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
+
+void Plant::jacobian_fd(double t, const double* x, Eigen::MatrixXd& J) {
+  const int m = layout_.size;
+  J.resize(m, m);
+  std::vector<double> f0(m);
+  rhs(t, x, f0.data());
+  std::copy(x, x + m, xtmp_.begin());
+  for (int k = 0; k < m; ++k) {
+    const double h = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(x[k]));
+    xtmp_[k] = x[k] + h;
+    rhs(t, xtmp_.data(), ftmp_.data());
+    xtmp_[k] = x[k];
+    for (int r = 0; r < m; ++r) J(r, k) = (ftmp_[r] - f0[r]) / h;
+  }
+}
+
+void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
+  const int m = layout_.size;
+  J.resize(m, m);
+  std::vector<Dual> xx(m), ff(m);
+  for (int k = 0; k < m; ++k) {
+    for (int i = 0; i < m; ++i) xx[i] = Dual(x[i], i == k ? 1.0 : 0.0);
+    eval(t, xx.data(), ff.data(), *wj_);
+    for (int r = 0; r < m; ++r) J(r, k) = ff[r].deriv();
+  }
+}
+
+double Plant::next_time_event(double t) const {
+  double next = std::numeric_limits<double>::infinity();
+  if (cfg_.controller == ControllerMode::kSampled) next = std::min(next, next_on_grid(t, cfg_.servo_period));
+  if (cfg_.reference && cfg_.setpoint_interval > 0 && cfg_.controller != ControllerMode::kNone) {
+    next = std::min(next, next_on_grid(t, cfg_.setpoint_interval));
+  }
+  return next;
+}
+
+void Plant::sample_controller(double t, const double* x) {
+  const ReferenceSample& r = current_reference(t);
+  for (int j = 0; j < layout_.n; ++j) {
+    const PivParams& P = cfg_.piv[j];
+    const double Z = cfg_.robot.joints[j].gear_ratio;
+    const double q = x[layout_.q + j], qd = x[layout_.qd + j];
+    const double e = Z * (r.q[j] - q);
+    integral_[j] += e * cfg_.servo_period;
+    if (P.ki != 0) {
+      const double lim = P.integral_limit / std::abs(P.ki);
+      integral_[j] = std::clamp(integral_[j], -lim, lim);
+    }
+    const double v = P.kp * e + P.ki * integral_[j] - P.kv * Z * qd + P.kvff * Z * r.qd[j] +
+                     P.kaff * Z * r.qdd[j] + P.offset;
+    u_held_[j] = saturate(v, P.output_limit);
+  }
+}
+
+void Plant::on_time_event(double t, const double* x) {
+  if (cfg_.controller == ControllerMode::kNone) return;
+  if (cfg_.reference && cfg_.setpoint_interval > 0 && on_grid(t, cfg_.setpoint_interval)) {
+    cfg_.reference->eval(t, ref_held_);
+  }
+  if (cfg_.controller == ControllerMode::kSampled && on_grid(t, cfg_.servo_period)) {
+    sample_controller(t, x);
+  }
+}
+
+int Plant::num_roots() const {
+  for (const auto& f : cfg_.friction) {
+    if (f.model == FrictionModel::kHybrid) return layout_.n;
+  }
+  return 0;
+}
+
+void Plant::roots(double t, const double* x, double* g) {
+  rhs(t, x, ftmp_.data());  // fills the applied torques
+  for (int j = 0; j < layout_.n; ++j) {
+    const FrictionParams& f = cfg_.friction[j];
+    if (f.model != FrictionModel::kHybrid) {
+      g[j] = 1.0;
+      continue;
+    }
+    const double wm = cfg_.robot.joints[j].gear_ratio * x[layout_.qd + j];
+    g[j] = mode_[j] == SlipMode::kStuck ? f.static_torque - std::abs(wd_->applied[j])
+                                        : wm * static_cast<int>(mode_[j]);
+  }
+}
+
+void Plant::on_root(int j, double t, double* x) {
+  const FrictionParams& f = cfg_.friction[j];
+  if (mode_[j] != SlipMode::kStuck) {  // the speed reached zero: stick
+    x[layout_.qd + j] = 0.0;
+    mode_[j] = SlipMode::kStuck;
+  }
+  rhs(t, x, ftmp_.data());
+  const double a = wd_->applied[j];
+  if (std::abs(a) > f.static_torque) mode_[j] = a > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+}
+
+void Plant::initial_state(double* x) {
+  const int n = layout_.n;
+  ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  std::fill(u_held_.begin(), u_held_.end(), 0.0);
+  std::fill(integral_.begin(), integral_.end(), 0.0);
+  std::fill(mode_.begin(), mode_.end(), SlipMode::kStuck);
+  std::fill(x, x + layout_.size, 0.0);
+  Eigen::VectorXd q(n);
+  if (cfg_.reference) {
+    cfg_.reference->eval(0.0, ref_held_);
+    q = ref_held_.q.head(n);
+  } else {
+    q = cfg_.q0;
+    // Without a reference a controller holds the initial pose.
+    ref_held_ = ReferenceSample{};
+    ref_held_.q.setZero();
+    ref_held_.qd.setZero();
+    ref_held_.qdd.setZero();
+    ref_held_.q.head(n) = q;
+  }
+  for (int j = 0; j < n; ++j) x[layout_.q + j] = q[j];
+  if (cfg_.drive) {
+    // At rest on the reference: currents hold gravity, integrals supply the voltage.
+    Eigen::VectorXd g(n);
+    wd_->backend->gravity(q, g);
+    for (int j = 0; j < n; ++j) {
+      const MotorParams& M = cfg_.motor[j];
+      const AmplifierParams& A = cfg_.amplifier[j];
+      const PivParams& P = cfg_.piv[j];
+      const double i = g[j] / (cfg_.robot.joints[j].gear_ratio * M.torque_constant);
+      if (layout_.i >= 0) x[layout_.i + j] = i;
+      const double u = (A.output_resistance + M.resistance) * i / A.gain - P.offset;
+      const double I = P.ki != 0 ? std::clamp(u / P.ki, -P.integral_limit / std::abs(P.ki),
+                                              P.integral_limit / std::abs(P.ki))
+                                 : 0.0;
+      if (layout_.z >= 0) x[layout_.z + j] = I;
+      integral_[j] = I;
+    }
+  }
+  on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
+  if (num_roots() > 0) {
+    for (int j = 0; j < n; ++j) {
+      if (cfg_.friction[j].model == FrictionModel::kHybrid) on_root(j, 0.0, x);
+    }
+  }
+}
+
+Eigen::Vector3d Plant::tool_position(const double* x) const {
+  Eigen::Matrix<double, 6, 1> q = cfg_.q_held;
+  for (int j = 0; j < layout_.n; ++j) q[j] = x[layout_.q + j];
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  forward_kinematics<double>(cfg_.robot, q, R, p);
+  return p;
+}
+
+double Plant::controller_output(double t, const double* x, int j) {
+  eval(t, x, ftmp_.data(), *wd_);
+  return wd_->u[j];
+}
+
+}  // namespace pumasim

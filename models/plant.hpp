@@ -1,0 +1,128 @@
+// The coupled electro-mechanical plant as one state-space ODE x' = f(t, x).
+//
+// Blocks, per simulated joint (drive.hpp for the laws):
+//   reference -> PIV controller -> amplifier -> DC motor -> gear and rotor
+//   -> friction -> rigid body (any back-end from the registry)
+// A scene includes only what it needs, and leaving a block out removes its
+// states. The state is [q | qd | i | z] over the n simulated joints:
+//   q, qd   always (joints n+1..6 are held: their links ride on link n)
+//   i       motor currents, only with a drive whose La > 0 (La = 0: algebraic)
+//   z       PIV integrals, only with a continuous controller
+// Discrete parts are events for the integrators: controller samples and
+// set-point updates at known times (next_time_event / on_time_event), and,
+// for the hybrid friction model, root functions (roots / on_root).
+//
+// The torque that friction must resist at rest ("applied torque", motor
+// side) is K i - h_j / Z_j for the paper's rule and Karnopp (the coupling
+// through H's off-diagonal terms is neglected, as in their single-joint
+// models); the hybrid model computes it exactly from the constrained dynamics.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "models/backend.hpp"
+#include "models/drive.hpp"
+#include "models/trajectory.hpp"
+
+namespace pumasim {
+
+enum class ControllerMode { kNone, kContinuous, kSampled };
+
+struct PlantConfig {
+  RobotModel robot;                      // all joints
+  int n = 6;                             // simulated joints: the first n
+  Eigen::Matrix<double, 6, 1> q_held = Eigen::Matrix<double, 6, 1>::Zero();  // joints > n [rad]
+  std::string backend = "crba";
+  bool drive = true;                     // amplifier + motor (needs a controller)
+  ControllerMode controller = ControllerMode::kContinuous;
+  double servo_period = 0.0;             // [s], sampled controller
+  double setpoint_interval = 0.0;        // [s], reference held between updates; 0 = continuous
+  std::vector<AmplifierParams> amplifier;  // one per simulated joint
+  std::vector<MotorParams> motor;
+  std::vector<FrictionParams> friction;
+  std::vector<PivParams> piv;
+  std::shared_ptr<const Reference> reference;  // what a controller follows
+  Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
+};
+
+struct StateLayout {
+  int n = 0;      // simulated joints
+  int q = 0;      // offsets of the blocks; -1 when absent
+  int qd = 0;
+  int i = -1;
+  int z = -1;
+  int size = 0;
+  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1..
+  int index(const std::string& name) const;  // -1 if absent
+};
+
+class Plant {
+ public:
+  explicit Plant(PlantConfig config);  // std::invalid_argument on an inconsistent configuration
+  ~Plant();
+  Plant(const Plant&) = delete;
+  Plant& operator=(const Plant&) = delete;
+
+  const StateLayout& layout() const { return layout_; }
+  const PlantConfig& config() const { return cfg_; }
+  int size() const { return layout_.size; }
+
+  // x(0): on the reference at rest, currents and integrals in equilibrium
+  // with gravity; also (re)starts the discrete state at t = 0.
+  void initial_state(double* x);
+
+  // f(t, x). Allocation-free.
+  void rhs(double t, const double* x, double* xdot);
+  // df/dx by forward differences (relative step sqrt(eps)) and exactly (dual numbers).
+  void jacobian_fd(double t, const double* x, Eigen::MatrixXd& J);
+  void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
+
+  // Time events: controller samples and set-point updates. The next event time
+  // strictly after t (+inf if none); at such a time, update the discrete state.
+  double next_time_event(double t) const;
+  void on_time_event(double t, const double* x);
+
+  // Root functions (hybrid friction, one per joint): zero at a slipping joint's
+  // speed reversal and at a stuck joint's break-away. on_root switches the
+  // joint's mode and may set its speed to exactly zero in x.
+  int num_roots() const;
+  void roots(double t, const double* x, double* g);
+  void on_root(int joint, double t, double* x);
+  SlipMode slip_mode(int joint) const { return mode_[static_cast<std::size_t>(joint)]; }
+
+  // Flange position for the state x (held joints included) [m].
+  Eigen::Vector3d tool_position(const double* x) const;
+  // The reference the controller currently uses (held set-point or at t).
+  const ReferenceSample& reference_at(double t);
+  // Controller output u [V] and motor current [A] of joint j at (t, x).
+  double controller_output(double t, const double* x, int j);
+
+ private:
+  template <class S>
+  struct Workspace;
+  template <class S>
+  void eval(double t, const S* x, S* xdot, Workspace<S>& w);
+  template <class S>
+  void controller(double t, const S* x, Workspace<S>& w);
+  const ReferenceSample& current_reference(double t);
+  void sample_controller(double t, const double* x);
+
+  PlantConfig cfg_;
+  StateLayout layout_;
+  RobotModel model_;  // the simulated joints (held links merged)
+  std::unique_ptr<Workspace<double>> wd_;
+  std::unique_ptr<Workspace<Dual>> wj_;
+  // Discrete state.
+  ReferenceSample ref_held_{}, ref_now_{};
+  double ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> u_held_, integral_;
+  std::vector<SlipMode> mode_;
+  std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
+};
+
+}  // namespace pumasim

@@ -1,0 +1,349 @@
+#include "models/scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "models/backend.hpp"
+#include "models/robot_file.hpp"
+
+namespace pumasim {
+namespace {
+
+const Bounds kPositive = Bounds::positive();
+const Bounds kNonNegative = Bounds::non_negative();
+
+int read_int(StrictTable& t, std::string_view key, int lo, int hi) {
+  const double x = t.number(key, {static_cast<double>(lo), static_cast<double>(hi)});
+  if (x != std::floor(x)) {
+    t.fail(key, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
+           std::to_string(x));
+  }
+  return static_cast<int>(x);
+}
+
+// [[a, b], [c, d], ...]: rows of `cols` numbers.
+std::vector<std::vector<double>> read_rows(StrictTable& t, std::string_view key, int cols) {
+  const toml::node* nd = t.node(key);
+  const std::string expected = "an array of [" + std::string(cols == 2 ? "a, b" : "a, b, c") +
+                               "] rows of numbers";
+  if (!nd || !nd->is_array()) t.fail(key, expected, nd ? "another type" : "nothing");
+  std::vector<std::vector<double>> rows;
+  for (const toml::node& row : *nd->as_array()) {
+    const toml::array* r = row.as_array();
+    if (!r || r->size() != static_cast<std::size_t>(cols)) {
+      t.fail(key, expected, "a row that is not " + std::to_string(cols) + " numbers");
+    }
+    std::vector<double> v;
+    for (const toml::node& x : *r) {
+      if (!x.is_number()) t.fail(key, expected, "a row with a non-number");
+      v.push_back(*x.value<double>());
+    }
+    rows.push_back(v);
+  }
+  return rows;
+}
+
+FrictionModel friction_model(const std::string& s) {
+  if (s == "none") return FrictionModel::kNone;
+  if (s == "viscous") return FrictionModel::kViscous;
+  if (s == "paper") return FrictionModel::kPaper;
+  if (s == "hybrid") return FrictionModel::kHybrid;
+  if (s == "karnopp") return FrictionModel::kKarnopp;
+  return FrictionModel::kTanh;
+}
+
+toml::array to_array(const std::vector<double>& v) {
+  toml::array a;
+  for (double x : v) a.push_back(x);
+  return a;
+}
+
+template <class F>
+toml::array per_joint_array(int n, F f) {
+  toml::array a;
+  for (int j = 0; j < n; ++j) a.push_back(f(j));
+  return a;
+}
+
+}  // namespace
+
+Scene load_scene(const std::string& path) {
+  const toml::table doc = parse_toml_file(path);
+  StrictTable root(doc, path, "");
+  Scene sc;
+  sc.file = path;
+  PlantConfig& pc = sc.plant;
+
+  StrictTable s = root.table("scene");
+  sc.name = s.string("name");
+  sc.robot_spec = s.string("robot");
+  std::string robot_path = sc.robot_spec;
+  if (robot_path.find('/') != std::string::npos && !std::filesystem::path(robot_path).is_absolute()) {
+    robot_path = (std::filesystem::path(path).parent_path() / robot_path).string();
+  }
+  try {
+    pc.robot = load_robot(robot_path);
+  } catch (const ConfigError& e) {
+    throw ConfigError(s.where("robot") + e.what());
+  }
+  const int dof = pc.robot.dof();
+  const int n = read_int(s, "joints", 1, dof);
+  pc.n = n;
+  const auto held = s.optional_numbers("held", dof - n, {-4 * M_PI, 4 * M_PI});
+  pc.q_held.setZero();
+  if (held) {
+    for (int k = 0; k < dof - n; ++k) pc.q_held[n + k] = (*held)[k];
+  }
+  pc.backend = s.string_or("backend", "crba");
+  try {
+    const BackendInfo& b = find_backend(pc.backend);
+    const RobotModel sim = n < dof ? lock_joints(pc.robot, n, pc.q_held.head(dof)) : pc.robot;
+    if (const std::string why = b.why_unsupported(sim); !why.empty()) s.fail("backend", "a back-end that supports this robot", why);
+  } catch (const std::invalid_argument& e) {
+    s.fail("backend", "one of: " + backend_names(), "\"" + pc.backend + "\"");
+  }
+  const bool has_duration = s.has("duration");
+  sc.duration = s.number_or("duration", 0.0, kPositive);
+  sc.output_interval = s.number_or("output_interval", 0.01, kPositive);
+  s.finish();
+
+  if (auto it = root.optional_table("integrator")) {
+    sc.integrator.name = it->string_or("name", sc.integrator.name);
+    sc.integrator.dt = it->number_or("dt", sc.integrator.dt, kPositive);
+    sc.integrator.rtol = it->number_or("rtol", sc.integrator.rtol, kPositive);
+    sc.integrator.atol = it->number_or("atol", sc.integrator.atol, kPositive);
+    it->finish();
+  }
+
+  // Drive: amplifier and motor come together.
+  auto amp = root.optional_table("amplifier");
+  auto mot = root.optional_table("motor");
+  if (amp.has_value() != mot.has_value()) {
+    root.fail(amp ? "motor" : "amplifier", "both [amplifier] and [motor] (the drive) or neither",
+              "only one of them");
+  }
+  pc.drive = amp.has_value();
+  if (pc.drive) {
+    const auto gain = amp->per_joint("gain", n, kPositive);
+    const auto r0 = amp->per_joint_or("output_resistance", n, 0.0, kNonNegative);
+    const auto vmax = amp->per_joint_or("voltage_limit", n, 1e9, kPositive);
+    amp->finish();
+    const auto La = mot->per_joint("inductance", n, kNonNegative);
+    const auto R = mot->per_joint("resistance", n, kPositive);
+    const auto K = mot->per_joint("torque_constant", n, kPositive);
+    mot->finish();
+    const bool any = std::any_of(La.begin(), La.end(), [](double x) { return x > 0; });
+    const bool all = std::all_of(La.begin(), La.end(), [](double x) { return x > 0; });
+    if (any && !all) {
+      mot->fail("inductance", "all > 0 (current states) or all 0 (the reduced model)", "a mix");
+    }
+    for (int j = 0; j < n; ++j) {
+      pc.amplifier.push_back({gain[j], r0[j], vmax[j]});
+      pc.motor.push_back({La[j], R[j], K[j]});
+    }
+  }
+
+  pc.friction.assign(n, FrictionParams{});
+  if (auto fr = root.optional_table("friction")) {
+    const std::string model =
+        fr->string("model", {"none", "viscous", "paper", "hybrid", "karnopp", "tanh"});
+    const FrictionModel m = friction_model(model);
+    const bool coulomb = m != FrictionModel::kNone && m != FrictionModel::kViscous;
+    const auto B = fr->per_joint_or("viscous", n, 0.0, kNonNegative);
+    const auto Fs = coulomb ? fr->per_joint("static_torque", n, kNonNegative)
+                            : std::vector<double>(n, 0.0);
+    const auto Fk = coulomb ? fr->per_joint("kinetic_torque", n, kNonNegative)
+                            : std::vector<double>(n, 0.0);
+    const double zero_default = m == FrictionModel::kKarnopp ? 1e-3 : 1e-6;
+    const double zero = fr->number_or("zero_speed", zero_default, kPositive);
+    const double scale = fr->number_or("speed_scale", 1e-2, kPositive);
+    fr->finish();
+    for (int j = 0; j < n; ++j) pc.friction[j] = {m, B[j], Fs[j], Fk[j], zero, scale};
+  }
+
+  pc.controller = ControllerMode::kNone;
+  if (auto ct = root.optional_table("controller")) {
+    const std::string mode = ct->string("mode", {"continuous", "sampled"});
+    pc.controller = mode == "sampled" ? ControllerMode::kSampled : ControllerMode::kContinuous;
+    if (pc.controller == ControllerMode::kSampled) {
+      pc.servo_period = ct->number("servo_period", kPositive);
+    }
+    pc.setpoint_interval = ct->number_or("setpoint_interval", 0.0, kNonNegative);
+    const auto kp = ct->per_joint("kp", n), ki = ct->per_joint_or("ki", n, 0.0),
+               kv = ct->per_joint_or("kv", n, 0.0), kvff = ct->per_joint_or("kvff", n, 0.0),
+               kaff = ct->per_joint_or("kaff", n, 0.0),
+               ilim = ct->per_joint_or("integral_limit", n, 10.0, kPositive),
+               ulim = ct->per_joint_or("output_limit", n, 10.0, kPositive),
+               off = ct->per_joint_or("offset", n, 0.0);
+    ct->finish();
+    for (int j = 0; j < n; ++j) pc.piv.push_back({kp[j], ki[j], kv[j], kvff[j], kaff[j], ilim[j], ulim[j], off[j]});
+    if (!pc.drive) root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
+  } else if (pc.drive) {
+    root.fail("amplifier", "a [controller] to drive the amplifier", "no controller");
+  }
+
+  if (auto rt = root.optional_table("reference")) {
+    ReferenceSettings& r = sc.reference;
+    sc.has_reference = true;
+    r.height = rt->number("height");
+    const auto st = rt->numbers("start", 2);
+    r.start = Eigen::Vector2d(st[0], st[1]);
+    r.heading = rt->number_or("heading", 0.0, {-2 * M_PI, 2 * M_PI});
+    for (StrictTable& seg : rt->array_of_tables("segments")) {
+      PathSegment p;
+      if (seg.has("line")) {
+        p.length = seg.number("line", kPositive);
+      } else {
+        p.radius = seg.number("arc_radius", kPositive);
+        p.angle = seg.number("turn_degrees", {-360, 360}) * M_PI / 180;
+        if (p.angle == 0) seg.fail("turn_degrees", "a non-zero angle", "0");
+      }
+      seg.finish();
+      r.segments.push_back(p);
+    }
+    for (const auto& row : read_rows(*rt, "profile", 2)) r.profile.emplace_back(row[0], row[1]);
+    r.max_speed = rt->number("max_speed", kPositive);
+    r.config.right_arm = rt->string_or("arm", "right", {"right", "left"}) == "right";
+    r.config.elbow_up = rt->string_or("elbow", "up", {"up", "down"}) == "up";
+    r.config.wrist_flip = rt->string_or("wrist", "noflip", {"noflip", "flip"}) == "flip";
+    r.orientation << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // flange z pointing down
+    if (rt->has("orientation")) {
+      const auto rows = read_rows(*rt, "orientation", 3);
+      if (rows.size() != 3) rt->fail("orientation", "a 3 x 3 rotation matrix (rows)", "another shape");
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) r.orientation(i, k) = rows[i][k];
+      if ((r.orientation * r.orientation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
+          r.orientation.determinant() < 0) {
+        rt->fail("orientation", "a rotation matrix (orthonormal, determinant +1)", "another matrix");
+      }
+    }
+    try {
+      Path path(r.start, r.heading, r.height, r.segments);
+      SpeedProfile profile(r.profile, path.length(), r.max_speed);
+      auto ref = std::make_shared<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation,
+                                             path, profile);
+      // The whole path must be reachable: check it densely now, not mid-run.
+      ReferenceSample sample;
+      for (int k = 0; k <= 400; ++k) ref->eval(profile.duration() * k / 400.0, sample);
+      pc.reference = ref;
+    } catch (const std::exception& e) {
+      throw ConfigError(rt->where() + e.what());
+    }
+    rt->finish();
+  }
+  if (!pc.reference) {
+    auto init = root.optional_table("initial");
+    if (!init) {
+      root.fail("initial", "a [reference] to follow or an [initial] pose (held by a controller)", "neither");
+    }
+    if (init->has("pose")) {
+      const std::string pose = init->string("pose");
+      const NamedPose* p = pc.robot.pose(pose);
+      if (!p) init->fail("pose", "a pose of the robot file", "\"" + pose + "\"");
+      pc.q0 = p->q.head(n);
+    } else {
+      const auto q = init->numbers("q", n, {-4 * M_PI, 4 * M_PI});
+      pc.q0 = Eigen::Map<const Eigen::VectorXd>(q.data(), n);
+    }
+    init->finish();
+  }
+  if (!has_duration) {
+    if (!pc.reference) root.fail("scene", "a duration (no reference to take it from)", "none");
+    sc.duration = pc.reference->profile().duration();
+  }
+  root.finish();
+  try {
+    Plant check(pc);  // the last consistency checks
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(path + ": " + e.what());
+  }
+  return sc;
+}
+
+std::string resolved_toml(const Scene& sc) {
+  const PlantConfig& pc = sc.plant;
+  const int n = pc.n;
+  toml::table doc;
+  toml::table scene{{"name", sc.name},
+                    {"robot", sc.robot_spec},
+                    {"joints", n},
+                    {"backend", pc.backend},
+                    {"duration", sc.duration},
+                    {"output_interval", sc.output_interval}};
+  toml::array held;
+  for (int k = n; k < pc.robot.dof(); ++k) held.push_back(pc.q_held[k]);
+  scene.insert("held", held);
+  doc.insert("scene", scene);
+  doc.insert("integrator", toml::table{{"name", sc.integrator.name},
+                                       {"dt", sc.integrator.dt},
+                                       {"rtol", sc.integrator.rtol},
+                                       {"atol", sc.integrator.atol}});
+  if (pc.drive) {
+    doc.insert("amplifier",
+               toml::table{{"gain", per_joint_array(n, [&](int j) { return pc.amplifier[j].gain; })},
+                           {"output_resistance", per_joint_array(n, [&](int j) { return pc.amplifier[j].output_resistance; })},
+                           {"voltage_limit", per_joint_array(n, [&](int j) { return pc.amplifier[j].voltage_limit; })}});
+    doc.insert("motor",
+               toml::table{{"inductance", per_joint_array(n, [&](int j) { return pc.motor[j].inductance; })},
+                           {"resistance", per_joint_array(n, [&](int j) { return pc.motor[j].resistance; })},
+                           {"torque_constant", per_joint_array(n, [&](int j) { return pc.motor[j].torque_constant; })}});
+  }
+  const FrictionParams& f0 = pc.friction[0];
+  doc.insert("friction",
+             toml::table{{"model", to_string(f0.model)},
+                         {"viscous", per_joint_array(n, [&](int j) { return pc.friction[j].viscous; })},
+                         {"static_torque", per_joint_array(n, [&](int j) { return pc.friction[j].static_torque; })},
+                         {"kinetic_torque", per_joint_array(n, [&](int j) { return pc.friction[j].kinetic_torque; })},
+                         {"zero_speed", f0.zero_speed},
+                         {"speed_scale", f0.speed_scale}});
+  if (pc.controller != ControllerMode::kNone) {
+    toml::table c{{"mode", pc.controller == ControllerMode::kSampled ? "sampled" : "continuous"},
+                  {"setpoint_interval", pc.setpoint_interval}};
+    if (pc.controller == ControllerMode::kSampled) c.insert("servo_period", pc.servo_period);
+    c.insert("kp", per_joint_array(n, [&](int j) { return pc.piv[j].kp; }));
+    c.insert("ki", per_joint_array(n, [&](int j) { return pc.piv[j].ki; }));
+    c.insert("kv", per_joint_array(n, [&](int j) { return pc.piv[j].kv; }));
+    c.insert("kvff", per_joint_array(n, [&](int j) { return pc.piv[j].kvff; }));
+    c.insert("kaff", per_joint_array(n, [&](int j) { return pc.piv[j].kaff; }));
+    c.insert("integral_limit", per_joint_array(n, [&](int j) { return pc.piv[j].integral_limit; }));
+    c.insert("output_limit", per_joint_array(n, [&](int j) { return pc.piv[j].output_limit; }));
+    c.insert("offset", per_joint_array(n, [&](int j) { return pc.piv[j].offset; }));
+    doc.insert("controller", c);
+  }
+  if (sc.has_reference) {
+    const ReferenceSettings& r = sc.reference;
+    toml::array segs;
+    for (const PathSegment& p : r.segments) {
+      if (p.radius > 0) {
+        segs.push_back(toml::table{{"arc_radius", p.radius}, {"turn_degrees", p.angle * 180 / M_PI}});
+      } else {
+        segs.push_back(toml::table{{"line", p.length}});
+      }
+    }
+    toml::array prof, orient;
+    for (const auto& pt : r.profile) prof.push_back(toml::array{pt.x(), pt.y()});
+    for (int i = 0; i < 3; ++i) {
+      orient.push_back(toml::array{r.orientation(i, 0), r.orientation(i, 1), r.orientation(i, 2)});
+    }
+    doc.insert("reference",
+               toml::table{{"height", r.height},
+                           {"start", toml::array{r.start.x(), r.start.y()}},
+                           {"heading", r.heading},
+                           {"segments", segs},
+                           {"profile", prof},
+                           {"max_speed", r.max_speed},
+                           {"arm", r.config.right_arm ? "right" : "left"},
+                           {"elbow", r.config.elbow_up ? "up" : "down"},
+                           {"wrist", r.config.wrist_flip ? "flip" : "noflip"},
+                           {"orientation", orient}});
+  }
+  if (!pc.reference) {
+    doc.insert("initial", toml::table{{"q", to_array(std::vector<double>(pc.q0.data(), pc.q0.data() + n))}});
+  }
+  std::ostringstream out;
+  out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << doc << "\n";
+  return out.str();
+}
+
+}  // namespace pumasim

@@ -1,0 +1,94 @@
+// Reference trajectories: a Cartesian path of lines and arcs in a horizontal
+// plane, a speed profile along it, and the joint references q_ref, qd_ref and
+// qdd_ref that the PUMA's closed-form inverse kinematics gives for it.
+//
+// The path is drawn like a turtle: a start point and heading in the plane
+// z = height (base frame), then segments that go straight or turn along an arc,
+// so that the tangent is continuous everywhere. The speed profile is a
+// piecewise-linear shape v(t)/v_max over t/T; the duration T follows from the
+// path length and the maximum speed. The tracked point is the flange origin,
+// which for the PUMA 560 (d6 = 0) is the wrist centre.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "models/kinematics.hpp"
+#include "models/robot_model.hpp"
+
+namespace pumasim {
+
+struct PathSegment {
+  double length = 0;  // straight segment [m] (when radius == 0)
+  double radius = 0;  // arc radius [m]
+  double angle = 0;   // arc turning angle [rad], positive = left turn
+};
+
+class Path {
+ public:
+  Path(Eigen::Vector2d start, double heading, double height, std::vector<PathSegment> segments);
+  double length() const { return total_; }
+  // Position, first and second derivative with respect to the arc length s.
+  void eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
+
+ private:
+  struct Piece {
+    double s0, len;
+    Eigen::Vector2d p0;
+    double heading0;
+    double curvature;  // 0 for a line, +-1/r for an arc
+  };
+  std::vector<Piece> pieces_;
+  double height_, total_ = 0;
+};
+
+class SpeedProfile {
+ public:
+  // shape: (t/T, v/v_max) points, t/T from 0 to 1 increasing, v/v_max in [0, 1] with max 1.
+  SpeedProfile(std::vector<Eigen::Vector2d> shape, double path_length, double max_speed);
+  double duration() const { return T_; }
+  double max_speed() const { return vmax_; }
+  // Arc length, speed and acceleration along the path at time t (held at the end after T).
+  void eval(double t, double& s, double& sd, double& sdd) const;
+
+ private:
+  std::vector<Eigen::Vector2d> shape_;  // in seconds and m/s
+  std::vector<double> s_at_;            // arc length at each knot
+  double T_, vmax_;
+};
+
+struct ReferenceSample {
+  Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
+  Eigen::Vector3d p, v;                    // Cartesian position [m], velocity [m/s]
+};
+
+// Joint references for the first n joints of `robot`; the others are held at
+// q_held. n = 3: the wrist centre follows the path; n = 6: the flange also
+// keeps the orientation R_fixed.
+class Reference {
+ public:
+  Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held, PumaConfig config,
+            Eigen::Matrix3d R_fixed, Path path, SpeedProfile profile);
+  const Path& path() const { return path_; }
+  const SpeedProfile& profile() const { return profile_; }
+  // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
+  void eval(double t, ReferenceSample& out) const;
+  // The flange position for joint angles q (simulated joints first).
+  Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
+
+ private:
+  // Columns for the simulated joints of [Jv; Jw] at q (exact, dual numbers).
+  void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
+
+  RobotModel robot_;
+  int n_;
+  Eigen::Matrix<double, 6, 1> q_held_;
+  PumaConfig config_;
+  Eigen::Matrix3d R_fixed_;
+  Path path_;
+  SpeedProfile profile_;
+};
+
+}  // namespace pumasim
