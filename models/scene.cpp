@@ -150,14 +150,18 @@ Scene load_scene(const std::string& path) {
         fr->string("model", {"none", "viscous", "paper", "hybrid", "karnopp", "tanh"});
     const FrictionModel m = friction_model(model);
     const bool coulomb = m != FrictionModel::kNone && m != FrictionModel::kViscous;
-    const auto B = fr->per_joint_or("viscous", n, 0.0, kNonNegative);
+    const auto B = m == FrictionModel::kNone ? std::vector<double>(n, 0.0)
+                                             : fr->per_joint_or("viscous", n, 0.0, kNonNegative);
     const auto Fs = coulomb ? fr->per_joint("static_torque", n, kNonNegative)
                             : std::vector<double>(n, 0.0);
     const auto Fk = coulomb ? fr->per_joint("kinetic_torque", n, kNonNegative)
                             : std::vector<double>(n, 0.0);
+    // Keys that mean nothing for the model are unknown keys (finish() says so).
+    const bool banded = m == FrictionModel::kPaper || m == FrictionModel::kKarnopp;
     const double zero_default = m == FrictionModel::kKarnopp ? 1e-3 : 1e-6;
-    const double zero = fr->number_or("zero_speed", zero_default, kPositive);
-    const double scale = fr->number_or("speed_scale", 1e-2, kPositive);
+    const double zero = banded ? fr->number_or("zero_speed", zero_default, kPositive) : zero_default;
+    const double scale =
+        m == FrictionModel::kTanh ? fr->number_or("speed_scale", 1e-2, kPositive) : 1e-2;
     fr->finish();
     for (int j = 0; j < n; ++j) pc.friction[j] = {m, B[j], Fs[j], Fk[j], zero, scale};
   }
@@ -290,13 +294,19 @@ std::string resolved_toml(const Scene& sc) {
                            {"torque_constant", per_joint_array(n, [&](int j) { return pc.motor[j].torque_constant; })}});
   }
   const FrictionParams& f0 = pc.friction[0];
-  doc.insert("friction",
-             toml::table{{"model", to_string(f0.model)},
-                         {"viscous", per_joint_array(n, [&](int j) { return pc.friction[j].viscous; })},
-                         {"static_torque", per_joint_array(n, [&](int j) { return pc.friction[j].static_torque; })},
-                         {"kinetic_torque", per_joint_array(n, [&](int j) { return pc.friction[j].kinetic_torque; })},
-                         {"zero_speed", f0.zero_speed},
-                         {"speed_scale", f0.speed_scale}});
+  toml::table fr{{"model", to_string(f0.model)}};
+  if (f0.model != FrictionModel::kNone) {
+    fr.insert("viscous", per_joint_array(n, [&](int j) { return pc.friction[j].viscous; }));
+  }
+  if (f0.model != FrictionModel::kNone && f0.model != FrictionModel::kViscous) {
+    fr.insert("static_torque", per_joint_array(n, [&](int j) { return pc.friction[j].static_torque; }));
+    fr.insert("kinetic_torque", per_joint_array(n, [&](int j) { return pc.friction[j].kinetic_torque; }));
+  }
+  if (f0.model == FrictionModel::kPaper || f0.model == FrictionModel::kKarnopp) {
+    fr.insert("zero_speed", f0.zero_speed);
+  }
+  if (f0.model == FrictionModel::kTanh) fr.insert("speed_scale", f0.speed_scale);
+  doc.insert("friction", fr);
   if (pc.controller != ControllerMode::kNone) {
     toml::table c{{"mode", pc.controller == ControllerMode::kSampled ? "sampled" : "continuous"},
                   {"setpoint_interval", pc.setpoint_interval}};

@@ -13,7 +13,9 @@
 #include <cstdlib>
 
 #include "models/backend.hpp"
+#include "models/plant.hpp"
 #include "models/robot_file.hpp"
+#include "models/scene.hpp"
 #include "tests/helpers.hpp"
 
 extern "C" {
@@ -70,6 +72,20 @@ TEST(NoAllocation, EveryBackendThroughTheInterface) {
       }
       EXPECT_EQ(g_allocations.load() - before, 0) << info.name << " " << m.name;
     }
+  }
+}
+
+// The plant's right-hand side f(t, x), for every shipped scene (continuous
+// reference and inverse kinematics included), allocates nothing.
+TEST(NoAllocation, PlantRightHandSide) {
+  for (const char* name : {"paper_slow", "paper_slow_6dof", "paper_slow_reduced", "passive_arm"}) {
+    Plant plant(load_scene(std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml").plant);
+    std::vector<double> x(plant.size()), f(plant.size());
+    plant.initial_state(x.data());
+    plant.rhs(0.0, x.data(), f.data());
+    const long before = g_allocations.load();
+    for (int k = 1; k <= 5; ++k) plant.rhs(0.01 * k, x.data(), f.data());
+    EXPECT_EQ(g_allocations.load() - before, 0) << name;
   }
 }
 

@@ -1,0 +1,329 @@
+// The plant: each block against a closed form, the friction rules case by
+// case, the reduced model as the La -> 0 limit, the two Jacobians, the state
+// layout, time events, inverse kinematics, and scene files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "experiments/cli.hpp"
+#include "integrators/rk4_driver.hpp"
+#include "models/kinematics.hpp"
+#include "models/plant.hpp"
+#include "models/random_chain.hpp"
+#include "models/robot_file.hpp"
+#include "models/scene.hpp"
+
+#ifndef PUMASIM_SCENES_DIR
+#error "PUMASIM_SCENES_DIR must be defined by the build"
+#endif
+
+namespace pumasim {
+namespace {
+
+std::string scene_path(const std::string& name) {
+  return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml";
+}
+
+// One joint about a vertical axis (gravity along it: no gravity torque), driven
+// by a constant voltage: a PIV with zero gains and an offset u0.
+PlantConfig one_joint(FrictionParams friction, double La, double u0) {
+  RobotModel m;
+  m.name = "one joint";
+  JointParams J;
+  J.mass = 1.0;
+  J.com = Eigen::Vector3d(0.1, 0, 0);
+  J.inertia = 0.01 * Eigen::Matrix3d::Identity();
+  J.rotor_inertia = 1e-4;  // Z^2 Im = 0.25 kg m^2
+  J.gear_ratio = 50.0;
+  m.joints.push_back(J);
+  PlantConfig c;
+  c.robot = m;
+  c.n = 1;
+  c.drive = true;
+  c.amplifier = {{2.0, 0.1, 100.0}};  // K_A, R0, V_max
+  c.motor = {{La, 1.9, 0.1}};         // La, R, K
+  c.friction = {friction};
+  c.controller = ControllerMode::kContinuous;
+  PivParams P;
+  P.offset = u0;
+  c.piv = {P};
+  c.q0 = Eigen::VectorXd::Zero(1);
+  return c;
+}
+
+// Locked rotor (held by the hybrid model's static friction, far above the
+// motor torque): i(t) = i_inf (1 - exp(-t / tau)), i_inf = K_A u0 / (R0 + R),
+// tau = La / (R0 + R).
+TEST(Motor, LockedRotorCurrentRisesWithTimeConstantLaOverR) {
+  FrictionParams f;
+  f.model = FrictionModel::kHybrid;
+  f.static_torque = 1e6;
+  Plant plant(one_joint(f, 1e-3, 1.5));
+  const double i_inf = 2.0 * 1.5 / 2.0, tau = 1e-3 / 2.0;
+  const int i_idx = plant.layout().index("i_motor1");
+  ASSERT_GE(i_idx, 0);
+  int checked = 0;
+  integrate_rk4(plant, 5 * tau, 1e-6, tau / 4, [&](double t, const double* x) {
+    EXPECT_NEAR(x[i_idx], i_inf * (1 - std::exp(-t / tau)), 1e-9) << "t = " << t;
+    EXPECT_EQ(x[plant.layout().index("qd1")], 0.0);  // stuck: exactly at rest
+    ++checked;
+  });
+  EXPECT_GE(checked, 20);
+}
+
+// Free-running motor with viscous friction B: at steady state K i = B w and
+// i = (K_A u0 - K w) / R_t, so w = K K_A u0 / (K^2 + R_t B) (motor side).
+TEST(Motor, FreeRunningSteadySpeed) {
+  FrictionParams f;
+  f.model = FrictionModel::kViscous;
+  f.viscous = 1e-4;
+  Plant plant(one_joint(f, 1e-3, 1.5));
+  std::vector<double> x_end;
+  integrate_rk4(plant, 0.6, 2e-5, 0.6, [&](double, const double* x) {
+    x_end.assign(x, x + plant.size());
+  });
+  const double w = 0.1 * 3.0 / (0.01 + 2.0 * 1e-4);
+  EXPECT_NEAR(x_end[plant.layout().index("qd1")], w / 50.0, 1e-8 * w);
+  EXPECT_NEAR(x_end[plant.layout().index("i_motor1")], 1e-4 * w / 0.1, 1e-8);
+}
+
+// The friction rules, case by case (paper sec. 4, Fs_a = 0.146, Fs_b = 0.124):
+// at zero speed the friction balances the applied torque up to the static
+// level; moving, it is the kinetic level against the motion.
+TEST(Friction, RulesCaseByCase) {
+  FrictionParams p{FrictionModel::kPaper, 0.0, 0.146, 0.124, 1e-6, 1e-2};
+  const SlipMode any = SlipMode::kStuck;
+  EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, 0.1, any), 0.1);
+  EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, -0.1, any), -0.1);
+  EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, 0.2, any), 0.146);
+  EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, -0.2, any), -0.146);
+  EXPECT_DOUBLE_EQ(friction_torque(p, 5e-7, 0.1, any), 0.1);  // inside the "zero" band
+  EXPECT_DOUBLE_EQ(friction_torque(p, 0.5, -0.3, any), 0.124);
+  EXPECT_DOUBLE_EQ(friction_torque(p, -0.5, 0.3, any), -0.124);
+  FrictionParams k = p;
+  k.model = FrictionModel::kKarnopp;
+  k.zero_speed = 1e-3;
+  k.viscous = 0.01;
+  EXPECT_DOUBLE_EQ(friction_torque(k, 5e-4, 0.1, any), 0.1);
+  EXPECT_DOUBLE_EQ(friction_torque(k, 2e-3, 0.1, any), 0.124 + 0.01 * 2e-3);
+  FrictionParams th = p;
+  th.model = FrictionModel::kTanh;
+  th.speed_scale = 0.05;
+  EXPECT_DOUBLE_EQ(friction_torque(th, 0.05, 0.0, any), 0.124 * std::tanh(1.0));
+  FrictionParams hy = p;
+  hy.model = FrictionModel::kHybrid;
+  EXPECT_DOUBLE_EQ(friction_torque(hy, 0.0, 0.13, SlipMode::kStuck), 0.13);
+  EXPECT_DOUBLE_EQ(friction_torque(hy, 0.01, 0.0, SlipMode::kPositive), 0.124);
+  EXPECT_DOUBLE_EQ(friction_torque(hy, -0.01, 0.0, SlipMode::kNegative), -0.124);
+  FrictionParams v{FrictionModel::kViscous, 0.02};
+  EXPECT_DOUBLE_EQ(friction_torque(v, 3.0, 1.0, any), 0.06);
+  EXPECT_DOUBLE_EQ(friction_torque(FrictionParams{}, 3.0, 1.0, any), 0.0);
+}
+
+// Hybrid stick/slip: at rest, a ramping motor torque breaks the joint loose
+// exactly when K i reaches the static level; the root function says so.
+TEST(Friction, HybridBreakAwayRootFunction) {
+  FrictionParams f{FrictionModel::kHybrid, 0.0, 0.146, 0.124, 1e-6, 1e-2};
+  Plant plant(one_joint(f, 1e-3, 1.5));  // K i_inf = 0.15 > 0.146: breaks away
+  ASSERT_EQ(plant.num_roots(), 1);
+  const double tau = 5e-4, i_break = 0.146 / 0.1;
+  const double t_break = -tau * std::log(1 - i_break / 1.5);
+  std::vector<double> g(1);
+  integrate_rk4(plant, 2 * t_break, 1e-6, t_break / 10, [&](double t, const double* x) {
+    plant.roots(t, x, g.data());
+    if (t < 0.99 * t_break) EXPECT_GT(g[0], 0.0) << t;
+    if (t > 1.01 * t_break) EXPECT_LT(g[0], 0.0) << t;  // the integrator would switch here
+  });
+}
+
+Scene smooth_paper_scene() {
+  Scene sc = load_scene(scene_path("paper_slow"));
+  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
+  sc.plant.setpoint_interval = 1e-3;  // held set-points: cheap right-hand side
+  return sc;
+}
+
+// The reduced model (La = 0) is the limit of the full one: the difference at a
+// fixed time shrinks in proportion to La (singular perturbation, O(La)).
+TEST(Plant, ReducedModelIsTheLimitOfVanishingInductance) {
+  const Scene base = smooth_paper_scene();
+  auto final_q = [&](double La) {
+    PlantConfig c = base.plant;
+    for (auto& m : c.motor) m.inductance = La;
+    Plant plant(c);
+    const double tau_e = La / 2.1;
+    const double dt = La > 0 ? std::min(5e-5, tau_e / 10) : 5e-5;
+    Eigen::Vector3d q;
+    integrate_rk4(plant, 0.1, dt, 0.1, [&](double, const double* x) { q = Eigen::Vector3d(x[0], x[1], x[2]); });
+    return q;
+  };
+  const Eigen::Vector3d q0 = final_q(0.0);
+  const double d3 = (final_q(1e-3) - q0).norm(), d4 = (final_q(1e-4) - q0).norm(),
+               d5 = (final_q(1e-5) - q0).norm();
+  EXPECT_GT(d5, 0.0);
+  EXPECT_GT(d3 / d4, 5.0) << d3 << " " << d4;
+  EXPECT_GT(d4 / d5, 5.0) << d4 << " " << d5;
+}
+
+// Forward differences and dual numbers agree; some entries are known exactly.
+TEST(Plant, FiniteDifferenceAndExactJacobiansAgree) {
+  const Scene sc = smooth_paper_scene();
+  Plant plant(sc.plant);
+  std::vector<double> x(plant.size());
+  plant.initial_state(x.data());
+  const StateLayout& L = plant.layout();
+  x[L.qd + 0] = 0.1, x[L.qd + 1] = -0.2, x[L.qd + 2] = 0.15;
+  x[L.i + 1] += 0.3;
+  Eigen::MatrixXd Jfd, Jex;
+  plant.jacobian_fd(0.3, x.data(), Jfd);
+  plant.jacobian_exact(0.3, x.data(), Jex);
+  EXPECT_LT((Jfd - Jex).norm(), 1e-6 * Jex.norm());
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_EQ(Jex(L.q + j, L.qd + j), 1.0);                       // q' = qd
+    EXPECT_DOUBLE_EQ(Jex(L.i + j, L.i + j), -(0.1 + 2.0) / 0.002);  // di'/di = -(R0 + R)/La
+  }
+}
+
+TEST(Plant, StateLayoutHasOnlyTheIncludedBlocks) {
+  auto names = [](const std::string& scene) {
+    Plant p(load_scene(scene_path(scene)).plant);
+    std::string s;
+    for (const auto& n : p.layout().names) s += n + " ";
+    return s;
+  };
+  EXPECT_EQ(names("paper_slow"), "q1 q2 q3 qd1 qd2 qd3 i_motor1 i_motor2 i_motor3 z_piv1 z_piv2 z_piv3 ");
+  EXPECT_EQ(names("paper_slow_reduced"), "q1 q2 q3 qd1 qd2 qd3 z_piv1 z_piv2 z_piv3 ");
+  EXPECT_EQ(names("passive_arm"), "q1 q2 q3 q4 q5 q6 qd1 qd2 qd3 qd4 qd5 qd6 ");
+  Scene sampled = load_scene(scene_path("paper_slow"));
+  sampled.plant.controller = ControllerMode::kSampled;
+  sampled.plant.servo_period = 2.5e-4;
+  Plant p(sampled.plant);
+  EXPECT_EQ(p.layout().z, -1);  // a sampled PIV's integral is discrete, not a state
+  EXPECT_DOUBLE_EQ(p.next_time_event(0.0), 2.5e-4);
+  EXPECT_DOUBLE_EQ(p.next_time_event(2.5e-4), 5e-4);
+}
+
+// A controller on the reference at t = 0 starts in equilibrium: the initial
+// state makes qdd = 0 (the currents hold gravity).
+TEST(Plant, StartsInEquilibriumOnTheReference) {
+  for (const char* name : {"paper_slow", "paper_slow_6dof", "paper_slow_reduced"}) {
+    Scene sc = load_scene(scene_path(name));
+    for (auto& f : sc.plant.friction) f = FrictionParams{};
+    for (auto& p : sc.plant.piv) p.kvff = p.kaff = 0;  // no feed-forward at t = 0
+    Plant plant(sc.plant);
+    std::vector<double> x(plant.size()), f(plant.size());
+    plant.initial_state(x.data());
+    plant.rhs(0.0, x.data(), f.data());
+    for (int j = 0; j < plant.layout().n; ++j) EXPECT_NEAR(f[plant.layout().qd + j], 0.0, 1e-9) << name;
+  }
+}
+
+TEST(Kinematics, PumaInverseKinematicsReproducesTheForward) {
+  const RobotModel puma = load_robot("puma560");
+  Rng rng(11);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Matrix<double, 6, 1> q;
+    for (int j = 0; j < 6; ++j) q[j] = rng.uniform(-M_PI, M_PI);
+    q[4] = rng.uniform(0.2, 2.5) * (rng.uniform() < 0.5 ? -1 : 1);  // away from the wrist singularity
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+    forward_kinematics<double>(puma, q, R, p);
+    bool found = false;
+    for (int c = 0; c < 8; ++c) {
+      const PumaConfig cfg{(c & 1) != 0, (c & 2) != 0, (c & 4) != 0};
+      Eigen::Matrix<double, 6, 1> qi;
+      ASSERT_TRUE(puma_ik(puma, p, R, cfg, qi));
+      Eigen::Matrix3d Ri;
+      Eigen::Vector3d pi;
+      forward_kinematics<double>(puma, qi, Ri, pi);
+      EXPECT_LT((pi - p).norm(), 1e-12);
+      EXPECT_LT((Ri - R).norm(), 1e-12);
+      Eigen::Matrix<double, 6, 1> d = qi - q;
+      for (int j = 0; j < 6; ++j) d[j] = std::remainder(d[j], 2 * M_PI);
+      found |= d.norm() < 1e-9;
+    }
+    EXPECT_TRUE(found) << "trial " << trial;
+  }
+}
+
+TEST(Scene, ResolvedSceneLoadsBackToTheSameScene) {
+  for (const char* name : {"paper_slow", "paper_fast", "paper_slow_6dof", "paper_slow_reduced", "passive_arm"}) {
+    const Scene a = load_scene(scene_path(name));
+    const std::string text = resolved_toml(a);
+    const auto path = std::filesystem::temp_directory_path() / (std::string("resolved_") + name + ".toml");
+    std::ofstream(path) << text;
+    const std::string again = resolved_toml(load_scene(path.string()));
+    // Identical but for the header line naming the source file.
+    EXPECT_EQ(text.substr(text.find('\n')), again.substr(again.find('\n'))) << name;
+  }
+}
+
+// Bad scene files: exit status 2 from `pumasim check`, one line naming the
+// file, the line and the key, nothing on standard output.
+class BadScene : public ::testing::Test {
+ protected:
+  void expect_rejected(const std::string& from, const std::string& to, const std::string& fragment) {
+    std::ifstream in(scene_path("paper_slow"));
+    std::stringstream buf;
+    buf << in.rdbuf();
+    std::string text = buf.str();
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+    const auto path = std::filesystem::temp_directory_path() / "pumasim_bad_scene.toml";
+    std::ofstream(path) << text;
+    std::ostringstream out, err;
+    const int status = run_cli({"check", path.string()}, out, err);
+    EXPECT_EQ(status, kExitBadInput) << err.str();
+    EXPECT_TRUE(out.str().empty());
+    EXPECT_NE(err.str().find(path.string() + ":"), std::string::npos) << err.str();
+    EXPECT_NE(err.str().find(fragment), std::string::npos) << err.str();
+  }
+};
+
+TEST_F(BadScene, UnknownKey) {
+  expect_rejected("resistance = 2.0", "resistance = 2.0\nresistence = 2.0",
+                  "unknown key 'motor.resistence'; expected one of: inductance, resistance");
+}
+TEST_F(BadScene, KeyThatMeansNothingForTheModel) {
+  expect_rejected("model = \"paper\"", "model = \"viscous\"", "_torque'; expected one of: model, viscous");
+}
+TEST_F(BadScene, WrongType) {
+  expect_rejected("inductance = 0.002", "inductance = \"2 mH\"",
+                  "motor.inductance: expected a number or an array of 3 numbers (one per joint)");
+}
+TEST_F(BadScene, NegativeInductance) {
+  expect_rejected("inductance = 0.002", "inductance = -0.002",
+                  "motor.inductance: expected a number >= 0, got -0.002");
+}
+TEST_F(BadScene, ZeroServoPeriod) {
+  expect_rejected("mode = \"continuous\"", "mode = \"sampled\"\nservo_period = 0.0",
+                  "controller.servo_period: expected a number > 0, got 0");
+}
+TEST_F(BadScene, JointIndexOutOfRange) {
+  expect_rejected("joints = 3", "joints = 7", "scene.joints: expected a number in [1, 6], got 7");
+}
+TEST_F(BadScene, MissingKey) {
+  expect_rejected("torque_constant = 0.228", "", "motor: missing required key 'torque_constant'");
+}
+TEST_F(BadScene, UnknownFrictionModel) {
+  expect_rejected("model = \"paper\"", "model = \"coulomb\"",
+                  "friction.model: expected one of \"none\", \"viscous\", \"paper\"");
+}
+TEST_F(BadScene, WrongLengthPerJointArray) {
+  expect_rejected("viscous = [1.48e-3, 0.817e-3, 1.38e-3]", "viscous = [1.48e-3, 0.817e-3]",
+                  "friction.viscous: expected an array of 3 numbers");
+}
+TEST_F(BadScene, PathOutOfReach) {
+  expect_rejected("height = -0.15", "height = 1.5", "out of reach");
+}
+TEST_F(BadScene, UnknownBackend) {
+  expect_rejected("backend = \"crba\"", "backend = \"newton\"", "scene.backend: expected one of: aba, crba");
+}
+
+}  // namespace
+}  // namespace pumasim
