@@ -1,0 +1,48 @@
+// The one integration loop: any integrator on the plant, stopping exactly at
+// output times, controller samples, set-point updates and (for integrators
+// that find them) friction roots; the plant updates its discrete state at
+// each such stop and the integrator restarts there (CVodeReInit, a fresh
+// multistep history). A failure ends the run as a reported result.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "integrators/integrator.hpp"
+#include "models/plant.hpp"
+
+namespace pumasim {
+
+// The plant as an OdeSystem: exact Jacobian, named states, friction roots.
+class PlantSystem final : public OdeSystem {
+ public:
+  explicit PlantSystem(Plant& p) : p_(p) {}
+  int size() const override { return p_.size(); }
+  void rhs(double t, const double* x, double* xdot) override { p_.rhs(t, x, xdot); }
+  void jacobian(double t, const double* x, Eigen::MatrixXd& J) override { p_.jacobian_exact(t, x, J); }
+  bool has_exact_jacobian() const override { return true; }
+  std::string state_name(int i) const override { return p_.layout().names[static_cast<std::size_t>(i)]; }
+  int num_roots() const override { return p_.num_roots(); }
+  void roots(double t, const double* x, double* g) override { p_.roots(t, x, g); }
+
+ private:
+  Plant& p_;
+};
+
+struct RunResult {
+  bool ok = true;
+  std::string failure;  // what, when, which state components
+  double t_final = 0;
+  long time_events = 0;
+  long root_events = 0;
+  double wall_time = 0;  // [s]
+};
+
+using Observer = std::function<void(double t, const double* x)>;
+
+// Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
+// every multiple of output_interval reached.
+RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
+                    const Observer& observe);
+
+}  // namespace pumasim

@@ -1,0 +1,103 @@
+// One interface for every integrator, and the ODE systems they advance.
+//
+// An Integrator advances an OdeSystem from reset(t0, x0) with advance_to(t):
+// it stops exactly at t, or earlier at the first root of the system's root
+// functions (if it finds roots), or reports a failure that names the time
+// and the state components involved. Statistics are counted the same way
+// for every method. Options a method cannot honour are errors, not no-ops.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace pumasim {
+
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+  virtual int size() const = 0;
+  virtual void rhs(double t, const double* x, double* xdot) = 0;
+  // df/dx; the default is forward differences.
+  virtual void jacobian(double t, const double* x, Eigen::MatrixXd& J);
+  virtual bool has_exact_jacobian() const { return false; }
+  virtual std::string state_name(int i) const { return std::string("x").append(std::to_string(i + 1)); }
+  // Root functions g(t, x): the integrators that find roots stop where one changes sign.
+  virtual int num_roots() const { return 0; }
+  virtual void roots(double /*t*/, const double* /*x*/, double* /*g*/) {}
+};
+
+struct IntegratorSettings;  // models/scene.hpp: name, dt, rtol, atol
+
+struct IntegratorOptions {
+  double dt = 5e-4;             // fixed-step methods [s]
+  double rtol = 1e-6;           // adaptive methods
+  double atol = 1e-8;
+  bool exact_jacobian = false;  // implicit methods: the system's exact Jacobian, not differences
+  long max_steps = 50'000'000;  // per advance_to; beyond it, a reported failure
+};
+
+struct IntegratorStats {
+  long steps = 0;
+  long rhs_evaluations = 0;
+  long jacobian_evaluations = 0;
+  long linear_solves = 0;       // factorisations and solves of the Newton matrix
+  long rejected_steps = 0;
+  long nonlinear_iterations = 0;
+  long restarts = 0;            // resets after events
+  double wall_time = 0.0;       // [s], of advance_to calls
+};
+
+struct IntegratorCapabilities {
+  bool adaptive = false;
+  int order = 0;
+  bool implicit = false;
+  bool uses_jacobian = false;
+  bool finds_roots = false;  // locates roots; fixed-step methods check signs per step
+};
+
+struct Outcome {
+  enum Status { kReached, kRoot, kFailed } status = kReached;
+  int root = -1;        // with kRoot: which root function
+  std::string message;  // with kFailed: what, when, which components
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  virtual const char* name() const = 0;
+  virtual IntegratorCapabilities capabilities() const = 0;
+  // (Re)start at (t0, x0): multistep history and step-size memory are dropped.
+  virtual void reset(OdeSystem& sys, double t0, const double* x0) = 0;
+  virtual Outcome advance_to(double t) = 0;
+  virtual double time() const = 0;
+  virtual const double* state() const = 0;
+  const IntegratorStats& stats() const { return stats_; }
+
+ protected:
+  IntegratorStats stats_;
+};
+
+struct IntegratorInfo {
+  const char* name;
+  const char* summary;
+  std::unique_ptr<Integrator> (*make)(const IntegratorOptions& options);
+};
+
+// All integrators, sorted by name.
+std::span<const IntegratorInfo> integrators();
+// The entry called `name`; std::invalid_argument listing the valid names otherwise.
+const IntegratorInfo& find_integrator(std::string_view name);
+std::string integrator_names();
+inline std::unique_ptr<Integrator> make_integrator(std::string_view name, const IntegratorOptions& o) {
+  return find_integrator(name).make(o);
+}
+
+// "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.
+std::string non_finite_components(const OdeSystem& sys, double t, const double* x);
+
+}  // namespace pumasim

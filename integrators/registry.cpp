@@ -1,0 +1,84 @@
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "integrators/integrator.hpp"
+#include "integrators/registry_entries.hpp"
+
+namespace pumasim {
+
+void OdeSystem::jacobian(double t, const double* x, Eigen::MatrixXd& J) {
+  const int m = size();
+  J.resize(m, m);
+  std::vector<double> x1(x, x + m), f0(m), f1(m);
+  rhs(t, x, f0.data());
+  for (int k = 0; k < m; ++k) {
+    const double h = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(x[k]));
+    x1[k] = x[k] + h;
+    rhs(t, x1.data(), f1.data());
+    x1[k] = x[k];
+    for (int r = 0; r < m; ++r) J(r, k) = (f1[r] - f0[r]) / h;
+  }
+}
+
+std::string non_finite_components(const OdeSystem& sys, double t, const double* x) {
+  std::string bad;
+  int count = 0;
+  for (int i = 0; i < sys.size(); ++i) {
+    if (std::isfinite(x[i])) continue;
+    if (count++ < 4) {
+      if (!bad.empty()) bad.append(", ");
+      bad.append(sys.state_name(i)).append(" = ").append(std::to_string(x[i]));
+    }
+  }
+  if (bad.empty()) return "";
+  if (count > 4) bad += " and " + std::to_string(count - 4) + " more";
+  return "non-finite state at t = " + std::to_string(t) + " s: " + bad;
+}
+
+namespace {
+
+// Sorted by name (checked below).
+constexpr std::array<IntegratorInfo, 7> kIntegrators{{
+    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2},
+    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3},
+    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start): the paper's method", &detail::make_ab4},
+    {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams},
+    {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf},
+    {"euler", "forward Euler, fixed step", &detail::make_euler},
+    {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4},
+}};
+
+}  // namespace
+
+std::span<const IntegratorInfo> integrators() {
+  static const bool sorted = std::is_sorted(kIntegrators.begin(), kIntegrators.end(), [](auto& a, auto& b) {
+    return std::string_view(a.name) < std::string_view(b.name);
+  });
+  if (!sorted) throw std::logic_error("integrator registry is not sorted by name");
+  return kIntegrators;
+}
+
+std::string integrator_names() {
+  std::string s;
+  for (const auto& i : integrators()) {
+    if (!s.empty()) s.append(", ");
+    s.append(i.name);
+  }
+  return s;
+}
+
+const IntegratorInfo& find_integrator(std::string_view name) {
+  const auto all = integrators();
+  const auto it = std::lower_bound(all.begin(), all.end(), name,
+                                   [](const auto& i, auto key) { return std::string_view(i.name) < key; });
+  if (it == all.end() || std::string_view(it->name) != name) {
+    throw std::invalid_argument("unknown integrator '" + std::string(name) + "'; expected one of: " +
+                                integrator_names());
+  }
+  return *it;
+}
+
+}  // namespace pumasim

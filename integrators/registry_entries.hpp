@@ -1,0 +1,16 @@
+// Private: the factories behind the integrator registry (integrators/registry.cpp).
+#pragma once
+
+#include <memory>
+
+#include "integrators/integrator.hpp"
+
+namespace pumasim::detail {
+std::unique_ptr<Integrator> make_euler(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_rk4(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_ab2(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_ab3(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_ab4(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_cvode_bdf(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_cvode_adams(const IntegratorOptions&);
+}  // namespace pumasim::detail

@@ -1,0 +1,246 @@
+// SUNDIALS CVODE (6.x API) behind the Integrator interface: BDF and Adams,
+// both with Newton iterations and a dense direct linear solver; the Jacobian
+// by CVODE's difference quotients or the system's exact one. Only this file
+// (and the ARKODE adapter) include SUNDIALS headers.
+//
+// The C callbacks catch every exception: a non-finite derivative is reported
+// as recoverable (CVODE shrinks the step), anything else as fatal and rethrown
+// after CVode returns. A failure names CVODE's flag, the time, and the state
+// components with the largest weighted local error estimate.
+#include <algorithm>
+#include <cstdio>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "integrators/integrator.hpp"
+#include "integrators/registry_entries.hpp"
+
+#if SUNDIALS_VERSION_MAJOR != 6
+#error "pumasim's CVODE adapter is written for the SUNDIALS 6.x API"
+#endif
+
+namespace pumasim {
+namespace {
+
+class Cvode final : public Integrator {
+ public:
+  Cvode(const IntegratorOptions& o, int method) : opt_(o), method_(method) {
+    if (!(o.rtol > 0) || !(o.atol > 0)) throw std::invalid_argument("cvode: expected rtol > 0 and atol > 0");
+    if (SUNContext_Create(nullptr, &ctx_) != 0) throw std::runtime_error("cvode: SUNContext_Create failed");
+  }
+  ~Cvode() override { release(); SUNContext_Free(&ctx_); }
+
+  const char* name() const override { return method_ == CV_BDF ? "cvode-bdf" : "cvode-adams"; }
+  IntegratorCapabilities capabilities() const override {
+    IntegratorCapabilities c;
+    c.adaptive = true;
+    c.order = method_ == CV_BDF ? 5 : 12;
+    c.implicit = true;
+    c.uses_jacobian = true;
+    c.finds_roots = true;
+    return c;
+  }
+
+  void reset(OdeSystem& sys, double t0, const double* x0) override {
+    const int n = sys.size();
+    if (sys_ == &sys && mem_ && n == n_) {  // same system: CVodeReInit keeps the set-up
+      std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
+      check(CVodeReInit(mem_, t0, y_), "CVodeReInit");
+      ++stats_.restarts;
+    } else {
+      release();
+      sys_ = &sys;
+      n_ = n;
+      y_ = N_VNew_Serial(n, ctx_);
+      std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
+      mem_ = CVodeCreate(method_, ctx_);
+      if (!mem_) throw std::runtime_error("cvode: CVodeCreate failed");
+      check(CVodeInit(mem_, &Cvode::rhs, t0, y_), "CVodeInit");
+      check(CVodeSetUserData(mem_, this), "CVodeSetUserData");
+      check(CVodeSetErrHandlerFn(mem_, &Cvode::on_error, this), "CVodeSetErrHandlerFn");
+      check(CVodeSStolerances(mem_, opt_.rtol, opt_.atol), "CVodeSStolerances");
+      check(CVodeSetMaxNumSteps(mem_, opt_.max_steps), "CVodeSetMaxNumSteps");
+      A_ = SUNDenseMatrix(n, n, ctx_);
+      LS_ = SUNLinSol_Dense(y_, A_, ctx_);
+      check(CVodeSetLinearSolver(mem_, LS_, A_), "CVodeSetLinearSolver");
+      if (opt_.exact_jacobian) {
+        if (!sys.has_exact_jacobian()) {
+          throw std::invalid_argument(std::string(name()) + ": exact Jacobian requested, but the "
+                                      "system has none");
+        }
+        check(CVodeSetJacFn(mem_, &Cvode::jac), "CVodeSetJacFn");
+        J_.resize(n, n);
+      }
+      nroots_ = sys.num_roots();
+      if (nroots_ > 0) check(CVodeRootInit(mem_, nroots_, &Cvode::rootfn), "CVodeRootInit");
+      rootsfound_.assign(static_cast<std::size_t>(std::max(nroots_, 1)), 0);
+      base_ = {};
+    }
+    t_ = t0;
+  }
+
+  Outcome advance_to(double t_stop) override {
+    const auto start = std::chrono::steady_clock::now();
+    Outcome out;
+    if (t_stop > t_) {
+      check(CVodeSetStopTime(mem_, t_stop), "CVodeSetStopTime");
+      error_.clear();
+      pending_ = nullptr;
+      double t = t_;
+      const int flag = CVode(mem_, t_stop, y_, &t, CV_NORMAL);
+      if (pending_) std::rethrow_exception(pending_);
+      t_ = t;
+      if (flag == CV_ROOT_RETURN) {
+        check(CVodeGetRootInfo(mem_, rootsfound_.data()), "CVodeGetRootInfo");
+        out.status = Outcome::kRoot;
+        out.root = static_cast<int>(std::find_if(rootsfound_.begin(), rootsfound_.end(),
+                                                 [](int r) { return r != 0; }) - rootsfound_.begin());
+      } else if (flag < 0) {
+        out.status = Outcome::kFailed;
+        out.message = failure(flag);
+      }
+    }
+    collect_stats();
+    stats_.wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  }
+
+  double time() const override { return t_; }
+  const double* state() const override { return N_VGetArrayPointer(y_); }
+
+ private:
+  static int rhs(double t, N_Vector y, N_Vector ydot, void* self) {
+    auto* me = static_cast<Cvode*>(self);
+    try {
+      me->sys_->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+      const double* d = N_VGetArrayPointer(ydot);
+      for (int i = 0; i < me->n_; ++i) {
+        if (!std::isfinite(d[i])) return 1;  // recoverable: CVODE retries with a smaller step
+      }
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static int jac(double t, N_Vector y, N_Vector, SUNMatrix J, void* self, N_Vector, N_Vector, N_Vector) {
+    auto* me = static_cast<Cvode*>(self);
+    try {
+      me->sys_->jacobian(t, N_VGetArrayPointer(y), me->J_);
+      for (int c = 0; c < me->n_; ++c)
+        for (int r = 0; r < me->n_; ++r) SM_ELEMENT_D(J, r, c) = me->J_(r, c);
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static int rootfn(double t, N_Vector y, double* g, void* self) {
+    auto* me = static_cast<Cvode*>(self);
+    try {
+      me->sys_->roots(t, N_VGetArrayPointer(y), g);
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static void on_error(int, const char* module, const char* function, char* msg, void* self) {
+    static_cast<Cvode*>(self)->error_ = std::string(module) + "." + function + ": " + msg;
+  }
+
+  std::string failure(int flag) {
+    std::string msg = std::string(name()) + " failed with flag " + std::to_string(flag) + " (" +
+                      CVodeGetReturnFlagName(flag) + ") at t = " + std::to_string(t_) + " s";
+    if (!error_.empty()) msg += ": " + error_;
+    // The components with the largest weighted local error estimates.
+    N_Vector ele = N_VClone(y_), w = N_VClone(y_);
+    if (CVodeGetEstLocalErrors(mem_, ele) == CV_SUCCESS && CVodeGetErrWeights(mem_, w) == CV_SUCCESS) {
+      std::vector<int> idx(n_);
+      std::iota(idx.begin(), idx.end(), 0);
+      const double* e = N_VGetArrayPointer(ele);
+      const double* ww = N_VGetArrayPointer(w);
+      std::sort(idx.begin(), idx.end(), [&](int a, int b) {
+        return std::abs(e[a] * ww[a]) > std::abs(e[b] * ww[b]);
+      });
+      msg += "; largest weighted local errors:";
+      for (int k = 0; k < std::min(3, n_); ++k) {
+        msg.append(" ").append(sys_->state_name(idx[k])).append(" (");
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.3g", std::abs(e[idx[k]] * ww[idx[k]]));
+        msg.append(buf).append(")");
+      }
+    }
+    N_VDestroy(ele);
+    N_VDestroy(w);
+    const std::string bad = non_finite_components(*sys_, t_, N_VGetArrayPointer(y_));
+    if (!bad.empty()) msg.append("; ").append(bad);
+    return msg;
+  }
+
+  void collect_stats() {
+    long v = 0;
+    auto get = [&](int (*fn)(void*, long*)) { v = 0; fn(mem_, &v); return v; };
+    IntegratorStats now;
+    now.steps = get(CVodeGetNumSteps);
+    now.rhs_evaluations = get(CVodeGetNumRhsEvals) + get(CVodeGetNumLinRhsEvals);
+    now.jacobian_evaluations = get(CVodeGetNumJacEvals);
+    now.linear_solves = get(CVodeGetNumLinSolvSetups);
+    now.rejected_steps = get(CVodeGetNumErrTestFails);
+    now.nonlinear_iterations = get(CVodeGetNumNonlinSolvIters);
+    // CVODE counts from its last (re)initialisation: accumulate across restarts.
+    if (now.steps < base_.steps) base_ = {};
+    stats_.steps += now.steps - base_.steps;
+    stats_.rhs_evaluations += now.rhs_evaluations - base_.rhs_evaluations;
+    stats_.jacobian_evaluations += now.jacobian_evaluations - base_.jacobian_evaluations;
+    stats_.linear_solves += now.linear_solves - base_.linear_solves;
+    stats_.rejected_steps += now.rejected_steps - base_.rejected_steps;
+    stats_.nonlinear_iterations += now.nonlinear_iterations - base_.nonlinear_iterations;
+    base_ = now;
+  }
+
+  void check(int flag, const char* what) const {
+    if (flag < 0) throw std::runtime_error(std::string("cvode: ") + what + " failed with flag " + std::to_string(flag));
+  }
+  void release() {
+    if (mem_) CVodeFree(&mem_);
+    if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;
+    if (A_) SUNMatDestroy(A_), A_ = nullptr;
+    if (y_) N_VDestroy(y_), y_ = nullptr;
+  }
+
+  IntegratorOptions opt_;
+  int method_;
+  SUNContext ctx_ = nullptr;
+  void* mem_ = nullptr;
+  N_Vector y_ = nullptr;
+  SUNMatrix A_ = nullptr;
+  SUNLinearSolver LS_ = nullptr;
+  OdeSystem* sys_ = nullptr;
+  int n_ = 0, nroots_ = 0;
+  double t_ = 0;
+  Eigen::MatrixXd J_;
+  std::vector<int> rootsfound_;
+  std::exception_ptr pending_;
+  std::string error_;
+  IntegratorStats base_;
+};
+
+}  // namespace
+
+namespace detail {
+std::unique_ptr<Integrator> make_cvode_bdf(const IntegratorOptions& o) { return std::make_unique<Cvode>(o, CV_BDF); }
+std::unique_ptr<Integrator> make_cvode_adams(const IntegratorOptions& o) { return std::make_unique<Cvode>(o, CV_ADAMS); }
+}  // namespace detail
+
+}  // namespace pumasim
