@@ -6,10 +6,20 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <thread>
 #include <stdexcept>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+#include <sys/utsname.h>
 
+#include <boost/version.hpp>
+#include <sundials/sundials_config.h>
+
+#include "integrators/driver.hpp"
+#include "integrators/integrator.hpp"
 #include "integrators/rk4_driver.hpp"
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
@@ -34,6 +44,11 @@ constexpr const char* kUsage =
     "  check <scene.toml>\n"
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
+    "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
+    "      [--t-end X] [--out DIR] [--exact-jacobian]\n"
+    "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
+    "      stats.json, scene.resolved.toml, meta.json\n"
+    "  integrators   lists the integrators\n"
     "  simulate <scene.toml> [--dt X] [--t-end X]\n"
     "      runs the scene with fixed-step RK4 (stopping at every controller sample and\n"
     "      set-point update) and prints a JSON summary with the path error\n"
@@ -298,6 +313,171 @@ int cmd_simulate(const std::vector<std::string>& args, std::ostream& out) {
   return kExitOk;
 }
 
+std::string unit_of(const std::string& state) {
+  if (state.rfind("qd", 0) == 0) return "rad/s";
+  if (state.rfind("q", 0) == 0) return "rad";
+  if (state.rfind("i_motor", 0) == 0) return "A";
+  if (state.rfind("z_piv", 0) == 0) return "rad s";
+  return "-";
+}
+
+std::string shell_line(const char* cmd) {
+  std::string outp;
+  if (FILE* f = popen(cmd, "r")) {
+    char buf[256];
+    while (fgets(buf, sizeof buf, f)) outp += buf;
+    pclose(f);
+  }
+  while (!outp.empty() && (outp.back() == '\n' || outp.back() == ' ')) outp.pop_back();
+  return outp;
+}
+
+int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  const Options opt = Options::parse(args, 2, {"integrator", "backend", "rtol", "atol", "dt", "t-end", "out"},
+                                     {"exact-jacobian"});
+  Scene sc = scene_argument(args);
+  if (auto b = opt.get("backend")) {
+    const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
+    const RobotModel sim = sc.plant.n < sc.plant.robot.dof()
+                               ? lock_joints(sc.plant.robot, sc.plant.n, sc.plant.q_held.head(sc.plant.robot.dof()))
+                               : sc.plant.robot;
+    if (const std::string why = info.why_unsupported(sim); !why.empty()) throw UsageError("--backend: " + why);
+    sc.plant.backend = *b;
+  }
+  if (auto i = opt.get("integrator")) sc.integrator.name = *i;
+  const IntegratorInfo& iinfo = find_integrator(sc.integrator.name);
+  IntegratorOptions io;
+  io.dt = sc.integrator.dt;
+  io.rtol = sc.integrator.rtol;
+  io.atol = sc.integrator.atol;
+  io.exact_jacobian = opt.flags.count("exact-jacobian") > 0;
+  const bool adaptive = iinfo.make(io)->capabilities().adaptive;
+  if (opt.get("dt")) {
+    if (adaptive) throw UsageError("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
+    io.dt = sc.integrator.dt = parse_double(*opt.get("dt"), "--dt");
+  }
+  if (opt.get("rtol") || opt.get("atol")) {
+    if (!adaptive) throw UsageError("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
+    if (opt.get("rtol")) io.rtol = sc.integrator.rtol = parse_double(*opt.get("rtol"), "--rtol");
+    if (opt.get("atol")) io.atol = sc.integrator.atol = parse_double(*opt.get("atol"), "--atol");
+  }
+  if (io.exact_jacobian && !iinfo.make(IntegratorOptions{})->capabilities().uses_jacobian) {
+    throw UsageError("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
+  }
+  if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) throw UsageError("--dt, --rtol, --atol: expected numbers > 0");
+  if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
+  if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
+  const std::filesystem::path dir = opt.get("out") ? *opt.get("out") : "results/" + sc.name;
+
+  Plant plant(sc.plant);
+  auto integ = iinfo.make(io);
+  const StateLayout& L = plant.layout();
+  const int n = L.n;
+  // Trajectory rows, written once the run is over.
+  std::ostringstream csv;
+  csv << "t [s]";
+  for (const auto& name : L.names) csv << "," << name << " [" << unit_of(name) << "]";
+  if (sc.plant.reference) {
+    for (int j = 0; j < n; ++j) csv << ",q_ref" << j + 1 << " [rad]";
+  }
+  csv << ",x [m],y [m],z [m]";
+  if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm]";
+  csv << "\n";
+  double max_err = 0, sum_sq = 0;
+  long samples = 0;
+  ReferenceSample ref;
+  const bool tty = isatty(STDERR_FILENO);
+  auto last_progress = std::chrono::steady_clock::now();
+  char buf[40];
+  auto num = [&](double v) { std::snprintf(buf, sizeof buf, ",%.17g", v); csv << buf; };
+  const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
+    std::snprintf(buf, sizeof buf, "%.17g", t);
+    csv << buf;
+    for (int i = 0; i < plant.size(); ++i) num(x[i]);
+    const Eigen::Vector3d p = plant.tool_position(x);
+    if (sc.plant.reference) {
+      sc.plant.reference->eval(std::min(t, sc.plant.reference->profile().duration()), ref);
+      for (int j = 0; j < n; ++j) num(ref.q[j]);
+    }
+    num(p.x()), num(p.y()), num(p.z());
+    if (sc.plant.reference) {
+      const double e = (p - ref.p).norm();
+      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e);
+      max_err = std::max(max_err, e);
+      sum_sq += e * e;
+      ++samples;
+    }
+    csv << "\n";
+    if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
+      err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
+      last_progress = std::chrono::steady_clock::now();
+    }
+  });
+  if (tty) err << "\r" << std::string(60, ' ') << "\r";
+  const IntegratorStats& st = integ->stats();
+  std::ostringstream js;
+  js << "{\n  \"scene\": " << json_string(sc.name) << ",\n  \"integrator\": " << json_string(sc.integrator.name)
+     << ",\n  \"backend\": " << json_string(sc.plant.backend) << ",\n  \"ok\": " << (r.ok ? "true" : "false")
+     << ",\n  \"failure\": " << json_string(r.failure) << ",\n  \"t_end\": ";
+  json_number(js, sc.duration);
+  js << ",\n  \"t_reached\": ";
+  json_number(js, r.t_final);
+  js << ",\n  \"dt\": ";
+  json_number(js, adaptive ? std::nan("") : io.dt);
+  js << ",\n  \"rtol\": ";
+  json_number(js, adaptive ? io.rtol : std::nan(""));
+  js << ",\n  \"atol\": ";
+  json_number(js, adaptive ? io.atol : std::nan(""));
+  js << ",\n  \"exact_jacobian\": " << (io.exact_jacobian ? "true" : "false");
+  js << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations
+     << ",\n  \"jacobian_evaluations\": " << st.jacobian_evaluations << ",\n  \"linear_solves\": " << st.linear_solves
+     << ",\n  \"rejected_steps\": " << st.rejected_steps << ",\n  \"nonlinear_iterations\": " << st.nonlinear_iterations
+     << ",\n  \"restarts\": " << st.restarts << ",\n  \"time_events\": " << r.time_events
+     << ",\n  \"root_events\": " << r.root_events << ",\n  \"integration_wall_time_s\": ";
+  json_number(js, st.wall_time);
+  js << ",\n  \"wall_time_s\": ";
+  json_number(js, r.wall_time);
+  js << ",\n  \"max_path_error_mm\": ";
+  json_number(js, samples ? 1e3 * max_err : std::nan(""));
+  js << ",\n  \"rms_path_error_mm\": ";
+  json_number(js, samples ? 1e3 * std::sqrt(sum_sq / samples) : std::nan(""));
+  js << "\n}\n";
+
+  utsname u{};
+  uname(&u);
+  std::ostringstream meta;
+  meta << "{\n  \"git_revision\": " << json_string(shell_line("git rev-parse --short HEAD 2>/dev/null"))
+       << ",\n  \"git_dirty\": " << (shell_line("git status --porcelain 2>/dev/null | head -1").empty() ? "false" : "true")
+       << ",\n  \"compiler\": " << json_string(std::string("g++ ") + __VERSION__)
+       << ",\n  \"flags\": " << json_string(PUMASIM_CXX_FLAGS)
+       << ",\n  \"eigen\": \"" << EIGEN_WORLD_VERSION << "." << EIGEN_MAJOR_VERSION << "." << EIGEN_MINOR_VERSION
+       << "\",\n  \"sundials\": " << json_string(SUNDIALS_VERSION)
+       << ",\n  \"boost\": \"" << BOOST_VERSION / 100000 << "." << BOOST_VERSION / 100 % 1000 << "\""
+       << ",\n  \"tomlplusplus\": \"" << TOML_LIB_MAJOR << "." << TOML_LIB_MINOR << "." << TOML_LIB_PATCH << "\""
+       << ",\n  \"machine\": " << json_string(std::string(u.sysname) + " " + u.release + " " + u.machine)
+       << ",\n  \"cpus\": " << std::thread::hardware_concurrency() << "\n}\n";
+
+  // Everything is written into a temporary directory that replaces DIR at the end.
+  const std::filesystem::path tmp = dir.string() + ".partial";
+  std::filesystem::remove_all(tmp);
+  std::filesystem::create_directories(tmp);
+  std::ofstream(tmp / "trajectory.csv") << csv.str();
+  std::ofstream(tmp / "stats.json") << js.str();
+  std::ofstream(tmp / "meta.json") << meta.str();
+  std::ofstream(tmp / "scene.resolved.toml") << resolved_toml(sc);
+  std::filesystem::remove_all(dir);
+  std::filesystem::rename(tmp, dir);
+  out << js.str();
+  out << "results: " << dir.string() << "/\n";
+  if (!r.ok) err << "pumasim run: " << r.failure << "\n";
+  return r.ok ? kExitOk : kExitInternal;
+}
+
+int cmd_integrators(std::ostream& out) {
+  for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
+  return kExitOk;
+}
+
 int cmd_backends(std::ostream& out) {
   for (const auto& b : backends()) out << b.name << "\t" << b.summary << "\n";
   return kExitOk;
@@ -307,17 +487,19 @@ int cmd_backends(std::ostream& out) {
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
-    if (args.empty()) throw UsageError("missing command; expected dynamics, backends, check, simulate or help");
+    if (args.empty()) throw UsageError("missing command; expected run, check, simulate, dynamics, backends, integrators or help");
     const std::string& cmd = args[0];
     if (cmd == "dynamics") return cmd_dynamics(args, out);
     if (cmd == "backends") return cmd_backends(out);
     if (cmd == "check") return cmd_check(args, out);
+    if (cmd == "run") return cmd_run(args, out, err);
+    if (cmd == "integrators") return cmd_integrators(out);
     if (cmd == "simulate") return cmd_simulate(args, out);
     if (cmd == "help" || cmd == "--help" || cmd == "-h") {
       out << kUsage;
       return kExitOk;
     }
-    throw UsageError("unknown command '" + cmd + "'; expected dynamics, backends, check, simulate or help");
+    throw UsageError("unknown command '" + cmd + "'; expected run, check, simulate, dynamics, backends, integrators or help");
   } catch (const UsageError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const ConfigError& e) {
