@@ -1,17 +1,21 @@
 #!/usr/bin/env bash
 # The README's main command: install what is missing, build, run the default job.
 #
-# Default job: the default scene (the paper's slow experiment) simulated with
-# RK4, the PUMA 560 dynamics at the nominal pose `qn` with every back-end,
-# then the dynamics back-end benchmark, which rewrites
-# results/bench/dynamics.json and results/dynamics_backends.md.
+# Default job: the default scene (the paper's slow experiment) through
+# `pumasim run` into results/paper_slow/ with its plots, the paper's runs into
+# results/paper/, the PUMA 560 dynamics at the pose `qn` with every back-end,
+# then the dynamics back-end benchmark (results/dynamics_backends.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh
 bin=build/release/bin
 
-echo "== default scene: experiments/scenes/paper_slow.toml (RK4, dt = 0.5 ms) =="
-"$bin/pumasim" simulate experiments/scenes/paper_slow.toml
+echo "== default scene: experiments/scenes/paper_slow.toml =="
+"$bin/pumasim" run experiments/scenes/paper_slow.toml
+/usr/bin/python3 scripts/plot_run.py results/paper_slow
+
+echo "== the paper's experiment: results/paper/ =="
+/usr/bin/python3 experiments/paper_experiment.py
 
 echo "== PUMA 560 at qn, forward dynamics with tau = 0, every back-end =="
 "$bin/pumasim" backends | cut -f1 | while read -r b; do
@@ -22,4 +26,5 @@ done
 
 echo "== dynamics back-end benchmark (a few minutes) =="
 scripts/bench_dynamics.sh
-echo "results: results/dynamics_backends.md (table), results/bench/dynamics.json (raw)"
+echo "results: results/paper_slow/ (default scene), results/paper/README.md (the paper's experiment),"
+echo "         results/dynamics_backends.md (back-end benchmark)"

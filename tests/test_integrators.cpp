@@ -6,6 +6,11 @@
 #include <cmath>
 #include <string>
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "experiments/cli.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "models/scene.hpp"
@@ -249,6 +254,47 @@ TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
     EXPECT_EQ(r.time_events, 200) << name;  // samples at 1 ms, 2 ms, ..., 200 ms
   }
   for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-9) << i;
+}
+
+// pumasim run: the four files, with the named columns; bad options exit 2 and
+// write nothing.
+TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_run_test";
+  std::filesystem::remove_all(dir);
+  std::ostringstream out, err;
+  ASSERT_EQ(run_cli({"run", scene, "--integrator", "rk4", "--dt=0.0005", "--t-end", "0.2", "--out", dir.string()},
+                    out, err), kExitOk) << err.str();
+  for (const char* f : {"trajectory.csv", "stats.json", "scene.resolved.toml", "meta.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  }
+  std::ifstream csv(dir / "trajectory.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("t [s],q1 [rad],q2 [rad],q3 [rad],qd1 [rad/s]", 0), 0u) << header;
+  EXPECT_NE(header.find("i_motor1 [A]"), std::string::npos);
+  EXPECT_NE(header.find("path_error [mm]"), std::string::npos);
+  long rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, 21);  // t = 0, 0.01, ..., 0.2
+  EXPECT_NE(out.str().find("\"ok\": true"), std::string::npos) << out.str();
+  EXPECT_FALSE(std::filesystem::exists(dir.string() + ".partial"));
+
+  auto bad = [&](std::vector<std::string> args, const std::string& fragment) {
+    std::ostringstream o, e;
+    std::filesystem::remove_all(dir);
+    EXPECT_EQ(run_cli(args, o, e), kExitBadInput) << e.str();
+    EXPECT_NE(e.str().find(fragment), std::string::npos) << e.str();
+    EXPECT_FALSE(std::filesystem::exists(dir));
+  };
+  bad({"run", scene, "--integrator", "cvode-bdf", "--dt", "0.001", "--out", dir.string()},
+      "--dt: cvode-bdf is adaptive; expected --rtol and --atol");
+  bad({"run", scene, "--integrator", "ab2", "--rtol", "1e-6", "--out", dir.string()},
+      "--rtol/--atol: ab2 has a fixed step; expected --dt");
+  bad({"run", scene, "--integrator", "rk4", "--exact-jacobian", "--out", dir.string()},
+      "--exact-jacobian: rk4 uses no Jacobian");
+  bad({"run", scene, "--integrator", "rk45", "--out", dir.string()},
+      "unknown integrator 'rk45'; expected one of: ab2");
 }
 
 }  // namespace
