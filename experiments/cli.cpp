@@ -20,6 +20,7 @@
 
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
+#include "integrators/registry.hpp"
 #include "integrators/rk4_driver.hpp"
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"

@@ -8,9 +8,7 @@
 #pragma once
 
 #include <memory>
-#include <span>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -81,21 +79,6 @@ class Integrator {
  protected:
   IntegratorStats stats_;
 };
-
-struct IntegratorInfo {
-  const char* name;
-  const char* summary;
-  std::unique_ptr<Integrator> (*make)(const IntegratorOptions& options);
-};
-
-// All integrators, sorted by name.
-std::span<const IntegratorInfo> integrators();
-// The entry called `name`; std::invalid_argument listing the valid names otherwise.
-const IntegratorInfo& find_integrator(std::string_view name);
-std::string integrator_names();
-inline std::unique_ptr<Integrator> make_integrator(std::string_view name, const IntegratorOptions& o) {
-  return find_integrator(name).make(o);
-}
 
 // "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "integrators/integrator.hpp"
+#include "integrators/registry.hpp"
 #include "integrators/registry_entries.hpp"
 
 namespace pumasim {
@@ -41,13 +42,16 @@ std::string non_finite_components(const OdeSystem& sys, double t, const double* 
 namespace {
 
 // Sorted by name (checked below).
-constexpr std::array<IntegratorInfo, 7> kIntegrators{{
+constexpr std::array<IntegratorInfo, 9> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start): the paper's method", &detail::make_ab4},
     {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams},
     {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf},
     {"euler", "forward Euler, fixed step", &detail::make_euler},
+    {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5},
+    {"odeint-rosenbrock4", "Boost.Odeint Rosenbrock 4, adaptive, linearly implicit, the system's Jacobian",
+     &detail::make_odeint_rosenbrock4},
     {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4},
 }};
 

@@ -13,4 +13,6 @@ std::unique_ptr<Integrator> make_ab3(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_ab4(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_bdf(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_adams(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_odeint_rosenbrock4(const IntegratorOptions&);
 }  // namespace pumasim::detail

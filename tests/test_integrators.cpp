@@ -13,6 +13,7 @@
 #include "experiments/cli.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
+#include "integrators/registry.hpp"
 #include "models/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
@@ -110,6 +111,18 @@ TEST_P(EveryIntegrator, ConvergesAtItsOrder) {
 // for lambda = -1e6 in few steps (A(alpha)-stable BDF / Newton-corrected Adams).
 TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
   const std::string n = name();
+  if (caps().adaptive && !caps().implicit) {
+    // Explicit and adaptive: the step-size control keeps it stable, at the
+    // price of steps: at least |lambda| T / 3.31 (DOPRI5's real stability bound).
+    Linear stiff(-1e4);
+    auto integ = make_integrator(name(), tol(1e-6, 1e-10));
+    const double x0 = 1.0;
+    integ->reset(stiff, 0.0, &x0);
+    ASSERT_EQ(integ->advance_to(1.0).status, Outcome::kReached) << n;
+    EXPECT_LT(std::abs(integ->state()[0]), 1e-6) << n;
+    EXPECT_GE(integ->stats().steps, static_cast<long>(1e4 / 3.31)) << n;
+    return;
+  }
   if (caps().implicit) {
     Linear stiff(-1e6);
     auto integ = make_integrator(name(), tol(1e-6, 1e-10));
@@ -135,7 +148,7 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
 // (eigenvalues reach about -1e4): they must end in a reported failure.
 TEST_P(EveryIntegrator, SolvesTheStiffRobertsonProblem) {
   Robertson sys;
-  if (!caps().implicit) {
+  if (!caps().implicit && !caps().adaptive) {
     auto integ = make_integrator(name(), fixed(1e-3));
     const double y0[3] = {1.0, 0.0, 0.0};
     integ->reset(sys, 0.0, y0);
@@ -152,8 +165,10 @@ TEST_P(EveryIntegrator, SolvesTheStiffRobertsonProblem) {
   EXPECT_NEAR(y[0], 7.158271e-01, 1e-6);
   EXPECT_NEAR(y[1], 9.185535e-06, 1e-11);
   EXPECT_NEAR(y[2], 2.841637e-01, 1e-6);
-  EXPECT_GT(integ->stats().jacobian_evaluations, 0);
-  EXPECT_GT(integ->stats().linear_solves, 0);
+  if (caps().uses_jacobian) {
+    EXPECT_GT(integ->stats().jacobian_evaluations, 0);
+    EXPECT_GT(integ->stats().linear_solves, 0);
+  }
 }
 
 TEST_P(EveryIntegrator, CountsItsStatistics) {
@@ -188,9 +203,10 @@ TEST_P(EveryIntegrator, StopsAtRoots) {
   if (caps().finds_roots) {
     EXPECT_NEAR(integ->time(), std::log(2.0), 1e-6) << name();
   } else {
-    // Stopped at the end of the step where its own solution crossed the level.
+    // Stopped at the end of the step where its own solution crossed the level:
+    // within a step (fixed: 1 ms; adaptive here: about 0.02 s) after the root.
     EXPECT_LE(integ->state()[0], 0.5) << name();
-    EXPECT_NEAR(integ->time(), std::log(2.0), 0.01) << name();
+    EXPECT_NEAR(integ->time(), std::log(2.0), caps().adaptive ? 0.1 : 0.01) << name();
   }
 }
 
