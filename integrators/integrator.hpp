@@ -71,12 +71,14 @@ class Integrator {
   virtual IntegratorCapabilities capabilities() const = 0;
   // (Re)start at (t0, x0): multistep history and step-size memory are dropped.
   virtual void reset(OdeSystem& sys, double t0, const double* x0) = 0;
-  virtual Outcome advance_to(double t) = 0;
+  // Advances to t (or to a root or failure before it); counts the wall time.
+  Outcome advance_to(double t);
   virtual double time() const = 0;
   virtual const double* state() const = 0;
   const IntegratorStats& stats() const { return stats_; }
 
  protected:
+  virtual Outcome advance(double t) = 0;
   IntegratorStats stats_;
 };
 

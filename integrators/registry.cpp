@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -22,6 +23,13 @@ void OdeSystem::jacobian(double t, const double* x, Eigen::MatrixXd& J) {
     x1[k] = x[k];
     for (int r = 0; r < m; ++r) J(r, k) = (f1[r] - f0[r]) / h;
   }
+}
+
+Outcome Integrator::advance_to(double t) {
+  const auto start = std::chrono::steady_clock::now();
+  Outcome out = advance(t);
+  stats_.wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
 }
 
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x) {

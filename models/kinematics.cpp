@@ -4,15 +4,15 @@
 
 namespace pumasim {
 
-Eigen::MatrixXd geometric_jacobian(const RobotModel& m, const Eigen::VectorXd& q) {
-  const int n = m.dof();
-  Eigen::MatrixXd J(6, n);
+void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<double, 6, 1>& q, int columns,
+                        Eigen::Matrix<double, 6, 6>& J) {
   Eigen::Matrix3d R0;
   Eigen::Vector3d p0;
   forward_kinematics<double>(m, q, R0, p0);
-  std::vector<Dual> qq(static_cast<std::size_t>(n));
-  for (int k = 0; k < n; ++k) {
-    for (int i = 0; i < n; ++i) qq[i] = Dual(q[i], i == k ? 1.0 : 0.0);
+  std::array<Dual, 6> qq;
+  J.setZero();
+  for (int k = 0; k < columns; ++k) {
+    for (int i = 0; i < 6; ++i) qq[i] = Dual(q[i], i == k ? 1.0 : 0.0);
     Eigen::Matrix<Dual, 3, 3> R;
     Eigen::Matrix<Dual, 3, 1> p;
     forward_kinematics<Dual>(m, qq, R, p);
@@ -26,7 +26,6 @@ Eigen::MatrixXd geometric_jacobian(const RobotModel& m, const Eigen::VectorXd& q
     J(4, k) = W(0, 2);
     J(5, k) = W(1, 0);
   }
-  return J;
 }
 
 std::string puma_ik_unsupported(const RobotModel& m) {

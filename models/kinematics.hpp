@@ -44,9 +44,12 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
   }
 }
 
-// Geometric Jacobian of the flange (rows: linear velocity, angular velocity;
-// base frame) by one dual-number pass per joint: exact.
-Eigen::MatrixXd geometric_jacobian(const RobotModel& m, const Eigen::VectorXd& q);
+// Geometric Jacobian of the flange of a robot with at most 6 joints (rows:
+// linear velocity, angular velocity; base frame), for the first `columns`
+// joints (the others zero), by one dual-number pass per joint: exact and
+// allocation-free.
+void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<double, 6, 1>& q, int columns,
+                        Eigen::Matrix<double, 6, 6>& J);
 
 // PUMA 560 arm configuration for the closed-form inverse kinematics.
 struct PumaConfig {

@@ -118,26 +118,7 @@ Eigen::Vector3d Reference::position(const Eigen::Matrix<double, 6, 1>& q_full) c
 }
 
 void Reference::jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const {
-  Eigen::Matrix3d R0;
-  Eigen::Vector3d p0;
-  forward_kinematics<double>(robot_, q, R0, p0);
-  std::array<Dual, 6> qq;
-  J.setZero();
-  for (int k = 0; k < n_; ++k) {
-    for (int i = 0; i < 6; ++i) qq[i] = Dual(q[i], i == k ? 1.0 : 0.0);
-    Eigen::Matrix<Dual, 3, 3> R;
-    Eigen::Matrix<Dual, 3, 1> p;
-    forward_kinematics<Dual>(robot_, qq, R, p);
-    Eigen::Matrix3d dR;
-    for (int r = 0; r < 3; ++r) {
-      J(r, k) = p[r].deriv();
-      for (int c = 0; c < 3; ++c) dR(r, c) = R(r, c).deriv();
-    }
-    const Eigen::Matrix3d W = dR * R0.transpose();
-    J(3, k) = W(2, 1);
-    J(4, k) = W(0, 2);
-    J(5, k) = W(1, 0);
-  }
+  geometric_jacobian(robot_, q, n_, J);
 }
 
 void Reference::eval(double t, ReferenceSample& out) const {

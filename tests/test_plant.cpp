@@ -135,8 +135,12 @@ TEST(Friction, HybridBreakAwayRootFunction) {
   std::vector<double> g(1);
   integrate_rk4(plant, 2 * t_break, 1e-6, t_break / 10, [&](double t, const double* x) {
     plant.roots(t, x, g.data());
-    if (t < 0.99 * t_break) EXPECT_GT(g[0], 0.0) << t;
-    if (t > 1.01 * t_break) EXPECT_LT(g[0], 0.0) << t;  // the integrator would switch here
+    if (t < 0.99 * t_break) {
+      EXPECT_GT(g[0], 0.0) << t;
+    }
+    if (t > 1.01 * t_break) {
+      EXPECT_LT(g[0], 0.0) << t;  // the integrator would switch here
+    }
   });
 }
 
