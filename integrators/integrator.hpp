@@ -23,6 +23,12 @@ class OdeSystem {
   // df/dx; the default is forward differences.
   virtual void jacobian(double t, const double* x, Eigen::MatrixXd& J);
   virtual bool has_exact_jacobian() const { return false; }
+  // IMEX split f = fe + fi (fe explicit, fi implicit). The default puts all of
+  // f in the implicit part; systems with a natural split override it.
+  virtual void rhs_split(double t, const double* x, double* fe, double* fi) {
+    rhs(t, x, fi);
+    for (int k = 0; k < size(); ++k) fe[k] = 0.0;
+  }
   virtual std::string state_name(int i) const { return std::string("x").append(std::to_string(i + 1)); }
   // Root functions g(t, x): the integrators that find roots stop where one changes sign.
   virtual int num_roots() const { return 0; }

@@ -50,10 +50,15 @@ std::string non_finite_components(const OdeSystem& sys, double t, const double* 
 namespace {
 
 // Sorted by name (checked below).
-constexpr std::array<IntegratorInfo, 9> kIntegrators{{
+constexpr std::array<IntegratorInfo, 12> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start): the paper's method", &detail::make_ab4},
+    {"arkode-dirk", "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
+     &detail::make_arkode_dirk},
+    {"arkode-erk", "SUNDIALS ARKODE, explicit RK (order 4); adaptive", &detail::make_arkode_erk},
+    {"arkode-imex", "SUNDIALS ARKODE, additive IMEX RK (order 4): the system's stiff part implicit; adaptive",
+     &detail::make_arkode_imex},
     {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams},
     {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf},
     {"euler", "forward Euler, fixed step", &detail::make_euler},

@@ -23,6 +23,7 @@
 
 #include "integrators/integrator.hpp"
 #include "integrators/registry_entries.hpp"
+#include "integrators/sundials_common.hpp"
 
 #if SUNDIALS_VERSION_MAJOR != 6
 #error "pumasim's CVODE adapter is written for the SUNDIALS 6.x API"
@@ -163,20 +164,7 @@ class Cvode final : public Integrator {
     // The components with the largest weighted local error estimates.
     N_Vector ele = N_VClone(y_), w = N_VClone(y_);
     if (CVodeGetEstLocalErrors(mem_, ele) == CV_SUCCESS && CVodeGetErrWeights(mem_, w) == CV_SUCCESS) {
-      std::vector<int> idx(n_);
-      std::iota(idx.begin(), idx.end(), 0);
-      const double* e = N_VGetArrayPointer(ele);
-      const double* ww = N_VGetArrayPointer(w);
-      std::sort(idx.begin(), idx.end(), [&](int a, int b) {
-        return std::abs(e[a] * ww[a]) > std::abs(e[b] * ww[b]);
-      });
-      msg += "; largest weighted local errors:";
-      for (int k = 0; k < std::min(3, n_); ++k) {
-        msg.append(" ").append(sys_->state_name(idx[k])).append(" (");
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.3g", std::abs(e[idx[k]] * ww[idx[k]]));
-        msg.append(buf).append(")");
-      }
+      msg += detail::largest_weighted_errors(*sys_, ele, w);
     }
     N_VDestroy(ele);
     N_VDestroy(w);

@@ -197,10 +197,10 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
     const double Z = cfg_.robot.joints[j].gear_ratio;
     const S wm = S(Z) * w.qd[j];
     w.applied[j] = (need_bias || hybrid) ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
-    const S tf = friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]);
+    const S tf = friction_on_ ? friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]) : S(0);
     w.tau[j] = S(Z) * (w.tm[j] - tf);
   }
-  if (!hybrid) {
+  if (!hybrid || !friction_on_) {
     w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
   } else {
     // Hybrid stick/slip: a stuck joint has qdd_j = 0 and its friction is
@@ -247,6 +247,20 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
 }
 
 void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
+
+void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
+  eval(t, x, fi, *wd_);  // the whole f
+  friction_on_ = false;
+  eval(t, x, fe, *wd_);  // f without friction
+  friction_on_ = true;
+  for (int k = 0; k < layout_.size; ++k) fi[k] -= fe[k];  // the friction's part
+  if (layout_.i >= 0) {
+    for (int j = 0; j < layout_.n; ++j) {  // the current equation: all implicit
+      fi[layout_.i + j] += fe[layout_.i + j];
+      fe[layout_.i + j] = 0.0;
+    }
+  }
+}
 
 void Plant::jacobian_fd(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = layout_.size;

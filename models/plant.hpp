@@ -78,6 +78,11 @@ class Plant {
 
   // f(t, x). Allocation-free.
   void rhs(double t, const double* x, double* xdot);
+  // IMEX split f = fe + fi: fi holds the stiff parts, the armature current
+  // equation and the friction torques' effect on qdd (f minus f without
+  // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
+  // integrals. Allocation-free.
+  void rhs_split(double t, const double* x, double* fe, double* fi);
   // df/dx by forward differences (relative step sqrt(eps)) and exactly (dual numbers).
   void jacobian_fd(double t, const double* x, Eigen::MatrixXd& J);
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
@@ -123,6 +128,7 @@ class Plant {
   std::vector<double> u_held_, integral_;
   std::vector<SlipMode> mode_;
   std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
+  bool friction_on_ = true;          // off only inside rhs_split
 };
 
 }  // namespace pumasim

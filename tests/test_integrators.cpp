@@ -113,14 +113,15 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
   const std::string n = name();
   if (caps().adaptive && !caps().implicit) {
     // Explicit and adaptive: the step-size control keeps it stable, at the
-    // price of steps: at least |lambda| T / 3.31 (DOPRI5's real stability bound).
+    // price of steps: at least |lambda| T / 10 (the real stability intervals of
+    // these tables are shorter than 4: DOPRI5's is 3.31).
     Linear stiff(-1e4);
     auto integ = make_integrator(name(), tol(1e-6, 1e-10));
     const double x0 = 1.0;
     integ->reset(stiff, 0.0, &x0);
     ASSERT_EQ(integ->advance_to(1.0).status, Outcome::kReached) << n;
     EXPECT_LT(std::abs(integ->state()[0]), 1e-6) << n;
-    EXPECT_GE(integ->stats().steps, static_cast<long>(1e4 / 3.31)) << n;
+    EXPECT_GE(integ->stats().steps, static_cast<long>(1e4 / 10)) << n;
     return;
   }
   if (caps().implicit) {
@@ -270,6 +271,44 @@ TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
     EXPECT_EQ(r.time_events, 200) << name;  // samples at 1 ms, 2 ms, ..., 200 ms
   }
   for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-9) << i;
+}
+
+// The plant's IMEX split: fe + fi = f; the armature current equation is all
+// implicit; without friction the rigid body is all explicit.
+TEST(Imex, PlantSplitSumsToTheRightHandSide) {
+  Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
+  Plant plant(sc.plant);
+  const StateLayout& L = plant.layout();
+  std::vector<double> x(plant.size()), f(plant.size()), fe(plant.size()), fi(plant.size());
+  plant.initial_state(x.data());
+  x[L.qd] = 0.2, x[L.qd + 1] = -0.1, x[L.i + 2] += 0.5;  // moving: kinetic friction acts
+  plant.rhs(0.5, x.data(), f.data());
+  plant.rhs_split(0.5, x.data(), fe.data(), fi.data());
+  for (int k = 0; k < plant.size(); ++k) EXPECT_NEAR(fe[k] + fi[k], f[k], 1e-12 * (1 + std::abs(f[k]))) << L.names[k];
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_EQ(fe[L.i + j], 0.0);
+    EXPECT_EQ(fi[L.q + j], 0.0);  // q' = qd is explicit
+  }
+  EXPECT_NE(fi[L.qd], 0.0);  // the friction torque's effect on qdd is implicit
+  for (auto& fr : sc.plant.friction) fr = FrictionParams{};
+  Plant smooth(sc.plant);
+  smooth.rhs_split(0.5, x.data(), fe.data(), fi.data());
+  for (int j = 0; j < 3; ++j) EXPECT_EQ(fi[L.qd + j], 0.0);
+}
+
+TEST(Imex, AgreesWithBdfOnThePlant) {
+  Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
+  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
+  sc.plant.setpoint_interval = 1e-3;
+  std::vector<double> a, b;
+  for (const char* name : {"arkode-imex", "cvode-bdf"}) {
+    Plant plant(sc.plant);
+    auto integ = make_integrator(name, tol(1e-10, 1e-12));
+    std::vector<double>& out = std::string(name) == "cvode-bdf" ? b : a;
+    const RunResult r = run_plant(plant, *integ, 0.1, 0.1, [&](double, const double* x) { out.assign(x, x + plant.size()); });
+    ASSERT_TRUE(r.ok) << r.failure;
+  }
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-8) << i;
 }
 
 // pumasim run: the four files, with the named columns; bad options exit 2 and
