@@ -46,7 +46,7 @@ constexpr const char* kUsage =
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR] [--exact-jacobian]\n"
+    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N]\n"
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json\n"
     "  integrators   lists the integrators\n"
@@ -334,7 +334,8 @@ std::string shell_line(const char* cmd) {
 }
 
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  const Options opt = Options::parse(args, 2, {"integrator", "backend", "rtol", "atol", "dt", "t-end", "out"},
+  const Options opt = Options::parse(args, 2, {"integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
+                                               "max-steps"},
                                      {"exact-jacobian"});
   Scene sc = scene_argument(args);
   if (auto b = opt.get("backend")) {
@@ -366,6 +367,12 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     throw UsageError("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
   }
   if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) throw UsageError("--dt, --rtol, --atol: expected numbers > 0");
+  long max_steps = 0;
+  if (auto m = opt.get("max-steps")) {
+    const double v = parse_double(*m, "--max-steps");
+    if (!(v >= 1) || v != std::floor(v)) throw UsageError("--max-steps: expected a whole number >= 1");
+    max_steps = static_cast<long>(v);
+  }
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
   const std::filesystem::path dir = opt.get("out") ? *opt.get("out") : "results/" + sc.name;
@@ -413,7 +420,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
-  });
+  }, max_steps);
   if (tty) err << "\r" << std::string(60, ' ') << "\r";
   const IntegratorStats& st = integ->stats();
   std::ostringstream js;

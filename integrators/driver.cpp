@@ -8,7 +8,7 @@
 namespace pumasim {
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe) {
+                    const Observer& observe, long max_steps) {
   const auto start = std::chrono::steady_clock::now();
   PlantSystem sys(plant);
   std::vector<double> x(plant.size());
@@ -32,6 +32,12 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       break;
     }
     x.assign(xs, xs + plant.size());
+    if (max_steps > 0 && integrator.stats().steps > max_steps) {
+      res.ok = false;
+      res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
+                    " steps exhausted at t = " + std::to_string(t) + " s";
+      break;
+    }
     if (o.status == Outcome::kRoot) {
       plant.on_root(o.root, t, x.data());
       integrator.reset(sys, t, x.data());

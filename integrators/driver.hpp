@@ -42,8 +42,9 @@ struct RunResult {
 using Observer = std::function<void(double t, const double* x)>;
 
 // Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
-// every multiple of output_interval reached.
+// every multiple of output_interval reached. A run that needs more than
+// max_steps steps in all (0: no limit) ends as a reported failure.
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe);
+                    const Observer& observe, long max_steps = 0);
 
 }  // namespace pumasim
