@@ -372,6 +372,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     const double v = parse_double(*m, "--max-steps");
     if (!(v >= 1) || v != std::floor(v)) throw UsageError("--max-steps: expected a whole number >= 1");
     max_steps = static_cast<long>(v);
+    io.max_steps = max_steps;  // also each integrator's own per-call limit
   }
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
