@@ -44,10 +44,10 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
   }
 }
 
-// Geometric Jacobian of the flange of a robot with at most 6 joints (rows:
-// linear velocity, angular velocity; base frame), for the first `columns`
-// joints (the others zero), by one dual-number pass per joint: exact and
-// allocation-free.
+// Geometric Jacobian of the flange of a robot with 6 joints (rows: linear
+// velocity, angular velocity; base frame), for the first `columns` joints
+// (the others zero): the closed form [z_i x (p_e - o_i); z_i] from one
+// kinematic pass. Allocation-free.
 void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<double, 6, 1>& q, int columns,
                         Eigen::Matrix<double, 6, 6>& J);
 

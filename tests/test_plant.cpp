@@ -254,6 +254,33 @@ TEST(Kinematics, PumaInverseKinematicsReproducesTheForward) {
   }
 }
 
+// The geometric Jacobian against central differences of the forward
+// kinematics (position rows) and of the rotation (angular rows, skew(w) = dR R^T),
+// in both DH conventions.
+TEST(Kinematics, GeometricJacobianMatchesDifferencesOfForwardKinematics) {
+  for (const RobotModel& m : {load_robot("puma560"), random_chain(6, 77, DhConvention::kModified)}) {
+    Rng rng(5);
+    Eigen::Matrix<double, 6, 1> q;
+    for (int j = 0; j < 6; ++j) q[j] = rng.uniform(-2, 2);
+    Eigen::Matrix<double, 6, 6> J;
+    geometric_jacobian(m, q, 6, J);
+    Eigen::Matrix3d R0, Rp, Rm;
+    Eigen::Vector3d p0, pp, pm;
+    forward_kinematics<double>(m, q, R0, p0);
+    const double h = 1e-6;
+    for (int k = 0; k < 6; ++k) {
+      Eigen::Matrix<double, 6, 1> a = q, b = q;
+      a[k] += h, b[k] -= h;
+      forward_kinematics<double>(m, a, Rp, pp);
+      forward_kinematics<double>(m, b, Rm, pm);
+      const Eigen::Vector3d v = (pp - pm) / (2 * h);
+      const Eigen::Matrix3d W = (Rp - Rm) / (2 * h) * R0.transpose();
+      EXPECT_LT((J.block<3, 1>(0, k) - v).norm(), 1e-8) << m.name << " column " << k;
+      EXPECT_LT((J.block<3, 1>(3, k) - Eigen::Vector3d(W(2, 1), W(0, 2), W(1, 0))).norm(), 1e-8) << m.name;
+    }
+  }
+}
+
 TEST(Scene, ResolvedSceneLoadsBackToTheSameScene) {
   for (const char* name : {"paper_slow", "paper_fast", "paper_slow_6dof", "paper_slow_reduced", "passive_arm"}) {
     const Scene a = load_scene(scene_path(name));
