@@ -21,7 +21,6 @@
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
-#include "integrators/rk4_driver.hpp"
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
 #include "models/scene.hpp"
@@ -50,9 +49,7 @@ constexpr const char* kUsage =
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json\n"
     "  integrators   lists the integrators\n"
-    "  simulate <scene.toml> [--dt X] [--t-end X]\n"
-    "      runs the scene with fixed-step RK4 (stopping at every controller sample and\n"
-    "      set-point update) and prints a JSON summary with the path error\n"
+
     "  help       prints this text\n";
 
 // --key=value, --key value, or a bare --flag; values may start with '-'.
@@ -271,49 +268,6 @@ int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
   return kExitOk;
 }
 
-int cmd_simulate(const std::vector<std::string>& args, std::ostream& out) {
-  const Options opt = Options::parse(args, 2, {"dt", "t-end"}, {});
-  const Scene sc = scene_argument(args);
-  const double dt = opt.get("dt") ? parse_double(*opt.get("dt"), "--dt") : sc.integrator.dt;
-  const double t_end = opt.get("t-end") ? parse_double(*opt.get("t-end"), "--t-end") : sc.duration;
-  if (!(dt > 0) || !(t_end > 0)) throw UsageError("--dt and --t-end: expected numbers > 0");
-  Plant plant(sc.plant);
-  double max_err = 0, sum_sq = 0;
-  long samples = 0;
-  bool finite = true;
-  ReferenceSample ref;
-  const auto start = std::chrono::steady_clock::now();
-  const Rk4Stats st = integrate_rk4(plant, t_end, dt, sc.output_interval,
-                                    [&](double t, const double* x) {
-    for (int i = 0; i < plant.size(); ++i) finite &= std::isfinite(x[i]);
-    if (!sc.plant.reference) return;
-    sc.plant.reference->eval(std::min(t, sc.plant.reference->profile().duration()), ref);
-    const double e = (plant.tool_position(x) - ref.p).norm();
-    max_err = std::max(max_err, e);
-    sum_sq += e * e;
-    ++samples;
-  });
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::ostringstream o;
-  o << "{\n  \"scene\": " << json_string(sc.name) << ",\n  \"integrator\": \"rk4\",\n  \"dt\": ";
-  json_number(o, dt);
-  o << ",\n  \"t_end\": ";
-  json_number(o, t_end);
-  o << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations
-    << ",\n  \"time_events\": " << st.time_events << ",\n  \"wall_time_s\": ";
-  json_number(o, wall);
-  o << ",\n  \"finite\": " << (finite ? "true" : "false");
-  if (samples > 0) {
-    o << ",\n  \"max_path_error_mm\": ";
-    json_number(o, 1e3 * max_err);
-    o << ",\n  \"rms_path_error_mm\": ";
-    json_number(o, 1e3 * std::sqrt(sum_sq / samples));
-  }
-  o << "\n}\n";
-  out << o.str();
-  return kExitOk;
-}
-
 std::string unit_of(const std::string& state) {
   if (state.rfind("qd", 0) == 0) return "rad/s";
   if (state.rfind("q", 0) == 0) return "rad";
@@ -496,19 +450,18 @@ int cmd_backends(std::ostream& out) {
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
-    if (args.empty()) throw UsageError("missing command; expected run, check, simulate, dynamics, backends, integrators or help");
+    if (args.empty()) throw UsageError("missing command; expected run, check, dynamics, backends, integrators or help");
     const std::string& cmd = args[0];
     if (cmd == "dynamics") return cmd_dynamics(args, out);
     if (cmd == "backends") return cmd_backends(out);
     if (cmd == "check") return cmd_check(args, out);
     if (cmd == "run") return cmd_run(args, out, err);
     if (cmd == "integrators") return cmd_integrators(out);
-    if (cmd == "simulate") return cmd_simulate(args, out);
     if (cmd == "help" || cmd == "--help" || cmd == "-h") {
       out << kUsage;
       return kExitOk;
     }
-    throw UsageError("unknown command '" + cmd + "'; expected run, check, simulate, dynamics, backends, integrators or help");
+    throw UsageError("unknown command '" + cmd + "'; expected run, check, dynamics, backends, integrators or help");
   } catch (const UsageError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const ConfigError& e) {

@@ -95,13 +95,9 @@ class FixedStep : public Integrator {
       }
       if (!g_.empty()) {
         sys_->roots(t_, x_.data(), g_new_.data());
-        for (std::size_t k = 0; k < g_.size(); ++k) {
-          if ((g_[k] > 0) != (g_new_[k] > 0)) {
-            g_ = g_new_;
-            return {Outcome::kRoot, static_cast<int>(k), ""};
-          }
-        }
+        const int k = first_crossing(g_, g_new_);
         g_ = g_new_;
+        if (k >= 0) return {Outcome::kRoot, k, ""};
       }
     }
     return {};

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <vector>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -87,6 +88,11 @@ class Integrator {
   virtual Outcome advance(double t) = 0;
   IntegratorStats stats_;
 };
+
+// The first root function that crossed zero between two evaluations, or -1.
+// A crossing is a strict sign change, or a non-zero value reaching zero;
+// leaving zero (where an event was just handled) is not one.
+int first_crossing(const std::vector<double>& g_old, const std::vector<double>& g_new);
 
 // "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x);

@@ -32,6 +32,13 @@ Outcome Integrator::advance_to(double t) {
   return out;
 }
 
+int first_crossing(const std::vector<double>& g_old, const std::vector<double>& g_new) {
+  for (std::size_t k = 0; k < g_old.size(); ++k) {
+    if ((g_old[k] > 0 && g_new[k] <= 0) || (g_old[k] < 0 && g_new[k] >= 0)) return static_cast<int>(k);
+  }
+  return -1;
+}
+
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x) {
   std::string bad;
   int count = 0;

@@ -218,19 +218,10 @@ class Arkode final : public Integrator {
       v = 0, ARKStepGetNumNonlinSolvIters(mem_, &v), now.nonlinear_iterations = v;
     }
     v = 0, ARKStepGetNumErrTestFails(mem_, &v), now.rejected_steps = v;
-    if (now.steps < base_.steps) base_ = {};  // counters restart with ARKStepReInit
-    stats_.steps += now.steps - base_.steps;
-    stats_.rhs_evaluations += now.rhs_evaluations - base_.rhs_evaluations;
-    stats_.jacobian_evaluations += now.jacobian_evaluations - base_.jacobian_evaluations;
-    stats_.linear_solves += now.linear_solves - base_.linear_solves;
-    stats_.rejected_steps += now.rejected_steps - base_.rejected_steps;
-    stats_.nonlinear_iterations += now.nonlinear_iterations - base_.nonlinear_iterations;
-    base_ = now;
+    detail::accumulate_since_reinit(stats_, base_, now);
   }
 
-  void check(int flag, const char* what) const {
-    if (flag < 0) throw std::runtime_error(std::string("arkode: ") + what + " failed with flag " + std::to_string(flag));
-  }
+  void check(int flag, const char* what) const { detail::check_flag(flag, "arkode", what); }
   void release() {
     if (mem_) ARKStepFree(&mem_);
     if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;

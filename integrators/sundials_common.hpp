@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,26 @@ inline std::string largest_weighted_errors(const OdeSystem& sys, N_Vector ele, N
     msg.append(" ").append(sys.state_name(idx[k])).append(" (").append(buf).append(")");
   }
   return msg;
+}
+
+// SUNDIALS counts from its last (re)initialisation: add what `now` counted
+// since `base` to `total`, across restarts.
+inline void accumulate_since_reinit(IntegratorStats& total, IntegratorStats& base,
+                                    const IntegratorStats& now) {
+  if (now.steps < base.steps) base = {};  // counters restarted
+  total.steps += now.steps - base.steps;
+  total.rhs_evaluations += now.rhs_evaluations - base.rhs_evaluations;
+  total.jacobian_evaluations += now.jacobian_evaluations - base.jacobian_evaluations;
+  total.linear_solves += now.linear_solves - base.linear_solves;
+  total.rejected_steps += now.rejected_steps - base.rejected_steps;
+  total.nonlinear_iterations += now.nonlinear_iterations - base.nonlinear_iterations;
+  base = now;
+}
+
+inline void check_flag(int flag, const char* module, const char* what) {
+  if (flag < 0) {
+    throw std::runtime_error(std::string(module) + ": " + what + " failed with flag " + std::to_string(flag));
+  }
 }
 
 }  // namespace pumasim::detail

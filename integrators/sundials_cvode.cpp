@@ -183,20 +183,10 @@ class Cvode final : public Integrator {
     now.linear_solves = get(CVodeGetNumLinSolvSetups);
     now.rejected_steps = get(CVodeGetNumErrTestFails);
     now.nonlinear_iterations = get(CVodeGetNumNonlinSolvIters);
-    // CVODE counts from its last (re)initialisation: accumulate across restarts.
-    if (now.steps < base_.steps) base_ = {};
-    stats_.steps += now.steps - base_.steps;
-    stats_.rhs_evaluations += now.rhs_evaluations - base_.rhs_evaluations;
-    stats_.jacobian_evaluations += now.jacobian_evaluations - base_.jacobian_evaluations;
-    stats_.linear_solves += now.linear_solves - base_.linear_solves;
-    stats_.rejected_steps += now.rejected_steps - base_.rejected_steps;
-    stats_.nonlinear_iterations += now.nonlinear_iterations - base_.nonlinear_iterations;
-    base_ = now;
+    detail::accumulate_since_reinit(stats_, base_, now);
   }
 
-  void check(int flag, const char* what) const {
-    if (flag < 0) throw std::runtime_error(std::string("cvode: ") + what + " failed with flag " + std::to_string(flag));
-  }
+  void check(int flag, const char* what) const { detail::check_flag(flag, "cvode", what); }
   void release() {
     if (mem_) CVodeFree(&mem_);
     if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;

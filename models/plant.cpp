@@ -114,6 +114,10 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   wd_->backend = find_backend(cfg_.backend).make(model_);
   wj_ = std::make_unique<Workspace<Dual>>(n);
   wj_->backend = find_backend(cfg_.backend).make_dual(model_);
+  for (const auto& f : cfg_.friction) {
+    needs_bias_ |= f.model == FrictionModel::kPaper || f.model == FrictionModel::kKarnopp;
+    hybrid_ |= f.model == FrictionModel::kHybrid;
+  }
   u_held_.assign(n, 0.0);
   integral_.assign(n, 0.0);
   mode_.assign(n, SlipMode::kStuck);
@@ -187,20 +191,17 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
     w.tm[j] = S(M.torque_constant) * i;
   }
   // Friction and the joint torques.
-  bool need_bias = false, hybrid = false;
-  for (const auto& f : cfg_.friction) {
-    need_bias |= f.model == FrictionModel::kPaper || f.model == FrictionModel::kKarnopp;
-    hybrid |= f.model == FrictionModel::kHybrid;
-  }
-  if (need_bias || hybrid) w.backend->bias(w.q, w.qd, w.h);
+  const bool hybrid = hybrid_ && friction_on_;
+  const bool need_bias = needs_bias_ || hybrid;
+  if (need_bias) w.backend->bias(w.q, w.qd, w.h);
   for (int j = 0; j < n; ++j) {
     const double Z = cfg_.robot.joints[j].gear_ratio;
     const S wm = S(Z) * w.qd[j];
-    w.applied[j] = (need_bias || hybrid) ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
+    w.applied[j] = need_bias ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
     const S tf = friction_on_ ? friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]) : S(0);
     w.tau[j] = S(Z) * (w.tm[j] - tf);
   }
-  if (!hybrid || !friction_on_) {
+  if (!hybrid) {
     w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
   } else {
     // Hybrid stick/slip: a stuck joint has qdd_j = 0 and its friction is
@@ -325,12 +326,7 @@ void Plant::on_time_event(double t, const double* x) {
   }
 }
 
-int Plant::num_roots() const {
-  for (const auto& f : cfg_.friction) {
-    if (f.model == FrictionModel::kHybrid) return layout_.n;
-  }
-  return 0;
-}
+int Plant::num_roots() const { return hybrid_ ? layout_.n : 0; }
 
 void Plant::roots(double t, const double* x, double* g) {
   rhs(t, x, ftmp_.data());  // fills the applied torques

@@ -129,6 +129,8 @@ class Plant {
   std::vector<SlipMode> mode_;
   std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
   bool friction_on_ = true;          // off only inside rhs_split
+  bool needs_bias_ = false;          // paper or Karnopp friction: the applied torque needs h
+  bool hybrid_ = false;              // some joint has the hybrid stick/slip model
 };
 
 }  // namespace pumasim

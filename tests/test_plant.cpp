@@ -10,7 +10,8 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "integrators/rk4_driver.hpp"
+#include "integrators/driver.hpp"
+#include "integrators/registry.hpp"
 #include "models/kinematics.hpp"
 #include "models/plant.hpp"
 #include "models/random_chain.hpp"
@@ -23,6 +24,16 @@
 
 namespace pumasim {
 namespace {
+
+// The plant from its initial state to t_end with RK4 at dt, through the driver.
+RunResult run_rk4(Plant& plant, double t_end, double dt, double output_interval, const Observer& observe) {
+  IntegratorOptions o;
+  o.dt = dt;
+  auto rk4 = make_integrator("rk4", o);
+  const RunResult r = run_plant(plant, *rk4, t_end, output_interval, observe);
+  EXPECT_TRUE(r.ok) << r.failure;
+  return r;
+}
 
 std::string scene_path(const std::string& name) {
   return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml";
@@ -67,7 +78,7 @@ TEST(Motor, LockedRotorCurrentRisesWithTimeConstantLaOverR) {
   const int i_idx = plant.layout().index("i_motor1");
   ASSERT_GE(i_idx, 0);
   int checked = 0;
-  integrate_rk4(plant, 5 * tau, 1e-6, tau / 4, [&](double t, const double* x) {
+  run_rk4(plant, 5 * tau, 1e-6, tau / 4, [&](double t, const double* x) {
     EXPECT_NEAR(x[i_idx], i_inf * (1 - std::exp(-t / tau)), 1e-9) << "t = " << t;
     EXPECT_EQ(x[plant.layout().index("qd1")], 0.0);  // stuck: exactly at rest
     ++checked;
@@ -83,7 +94,7 @@ TEST(Motor, FreeRunningSteadySpeed) {
   f.viscous = 1e-4;
   Plant plant(one_joint(f, 1e-3, 1.5));
   std::vector<double> x_end;
-  integrate_rk4(plant, 0.6, 2e-5, 0.6, [&](double, const double* x) {
+  run_rk4(plant, 0.6, 2e-5, 0.6, [&](double, const double* x) {
     x_end.assign(x, x + plant.size());
   });
   const double w = 0.1 * 3.0 / (0.01 + 2.0 * 1e-4);
@@ -125,23 +136,31 @@ TEST(Friction, RulesCaseByCase) {
 }
 
 // Hybrid stick/slip: at rest, a ramping motor torque breaks the joint loose
-// exactly when K i reaches the static level; the root function says so.
-TEST(Friction, HybridBreakAwayRootFunction) {
+// exactly when K i reaches the static level (closed form from the current
+// rise): the root function is positive while stuck, the driver switches the
+// joint to slipping at that time (fixed step: at the end of the step that
+// crosses it), and the joint then moves forward.
+TEST(Friction, HybridBreakAwayAtTheClosedFormTime) {
   FrictionParams f{FrictionModel::kHybrid, 0.0, 0.146, 0.124, 1e-6, 1e-2};
   Plant plant(one_joint(f, 1e-3, 1.5));  // K i_inf = 0.15 > 0.146: breaks away
   ASSERT_EQ(plant.num_roots(), 1);
   const double tau = 5e-4, i_break = 0.146 / 0.1;
   const double t_break = -tau * std::log(1 - i_break / 1.5);
   std::vector<double> g(1);
-  integrate_rk4(plant, 2 * t_break, 1e-6, t_break / 10, [&](double t, const double* x) {
-    plant.roots(t, x, g.data());
+  const int qd = plant.layout().index("qd1");
+  const RunResult r = run_rk4(plant, 2 * t_break, 1e-6, t_break / 10, [&](double t, const double* x) {
     if (t < 0.99 * t_break) {
+      plant.roots(t, x, g.data());
       EXPECT_GT(g[0], 0.0) << t;
+      EXPECT_EQ(plant.slip_mode(0), SlipMode::kStuck) << t;
+      EXPECT_EQ(x[qd], 0.0) << t;
     }
     if (t > 1.01 * t_break) {
-      EXPECT_LT(g[0], 0.0) << t;  // the integrator would switch here
+      EXPECT_EQ(plant.slip_mode(0), SlipMode::kPositive) << t;
+      EXPECT_GT(x[qd], 0.0) << t;
     }
   });
+  EXPECT_EQ(r.root_events, 1);
 }
 
 Scene smooth_paper_scene() {
@@ -162,7 +181,7 @@ TEST(Plant, ReducedModelIsTheLimitOfVanishingInductance) {
     const double tau_e = La / 2.1;
     const double dt = La > 0 ? std::min(5e-5, tau_e / 10) : 5e-5;
     Eigen::Vector3d q;
-    integrate_rk4(plant, 0.1, dt, 0.1, [&](double, const double* x) { q = Eigen::Vector3d(x[0], x[1], x[2]); });
+    run_rk4(plant, 0.1, dt, 0.1, [&](double, const double* x) { q = Eigen::Vector3d(x[0], x[1], x[2]); });
     return q;
   };
   const Eigen::Vector3d q0 = final_q(0.0);
