@@ -28,6 +28,8 @@
 namespace pumasim {
 namespace {
 
+constexpr long kDefaultStepBudget = 10'000'000;  // pumasim run --max-steps
+
 // Bad command-line input; becomes one line on stderr and exit status 2.
 class UsageError : public std::runtime_error {
  public:
@@ -47,7 +49,8 @@ constexpr const char* kUsage =
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
     "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N]\n"
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
-    "      stats.json, scene.resolved.toml, meta.json\n"
+    "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
+    "      (default 10000000; 0: no limit) end the run as a reported failure\n"
     "  integrators   lists the integrators\n"
 
     "  help       prints this text\n";
@@ -321,13 +324,16 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     throw UsageError("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
   }
   if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) throw UsageError("--dt, --rtol, --atol: expected numbers > 0");
-  long max_steps = 0;
+  // A step budget for the whole run, so that a method crawling through a
+  // chattering discontinuity (steps of nanoseconds) ends as a reported failure
+  // within about a minute instead of running for hours; 0: no limit.
+  long max_steps = kDefaultStepBudget;
   if (auto m = opt.get("max-steps")) {
     const double v = parse_double(*m, "--max-steps");
-    if (!(v >= 1) || v != std::floor(v)) throw UsageError("--max-steps: expected a whole number >= 1");
+    if (!(v >= 0) || v != std::floor(v)) throw UsageError("--max-steps: expected a whole number >= 0 (0: no limit)");
     max_steps = static_cast<long>(v);
-    io.max_steps = max_steps;  // also each integrator's own per-call limit
   }
+  if (max_steps > 0) io.max_steps = max_steps;  // also each integrator's own per-call limit
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
   const std::filesystem::path dir = opt.get("out") ? *opt.get("out") : "results/" + sc.name;

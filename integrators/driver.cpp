@@ -35,7 +35,8 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     if (max_steps > 0 && integrator.stats().steps > max_steps) {
       res.ok = false;
       res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
-                    " steps exhausted at t = " + std::to_string(t) + " s";
+                    " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
+                    fastest_component(sys, t, x.data());
       break;
     }
     if (o.status == Outcome::kRoot) {

@@ -97,4 +97,8 @@ int first_crossing(const std::vector<double>& g_old, const std::vector<double>& 
 // "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x);
 
+// "qd2 = 0.0123 (|f| / max(1, |x|) = 4.5e+03 1/s)": the state component that
+// changes fastest at (t, x), where a step-size collapse usually comes from.
+std::string fastest_component(OdeSystem& sys, double t, const double* x);
+
 }  // namespace pumasim

@@ -9,8 +9,11 @@
 // vectors and matrices: the system and its Jacobian are adapted to them
 // (copies of n doubles per call), the plant's code is not duplicated. Its
 // dfdt (the explicit time dependence, through the reference) is a forward
-// difference in t. Neither method locates roots: like the fixed-step
-// methods they check the root functions' signs after each accepted step.
+// difference in t. Roots: after an accepted step over which a root function
+// changes sign, the zero is located by the Illinois variant of regula falsi,
+// each trial point one step of the method itself from the step's start (no
+// interpolant needed, so the located state has the method's own accuracy);
+// the run stops just past the zero, like CVODE.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -51,6 +54,10 @@ class OdeintBase : public Integrator {
   // One attempted step from t_ with size h; true if accepted (t_, state, h updated).
   virtual bool try_step(double& h) = 0;
   virtual const double* data() const = 0;
+  // One step of the underlying method (no error control) of size h from
+  // (t0, x0) into out; and overwrite the current state.
+  virtual void step_from(const double* x0, double t0, double h, double* out) = 0;
+  virtual void set_state(const double* x) = 0;
 
   IntegratorOptions opt_;
   OdeSystem* sys_ = nullptr;
@@ -65,6 +72,7 @@ class OdeintBase : public Integrator {
       double h = std::min(h_, t_stop - t_);
       const bool last = h >= t_stop - t_;
       const double t_before = t_;
+      if (!g_.empty()) x_start_.assign(data(), data() + sys_->size());
       if (try_step(h)) {
         ++stats_.steps;
         if (last && t_ >= t_before + (t_stop - t_before) * (1 - 1e-12)) t_ = t_stop;
@@ -74,9 +82,8 @@ class OdeintBase : public Integrator {
         }
         if (!g_.empty()) {
           sys_->roots(t_, data(), g_new_.data());
-          const int k = first_crossing(g_, g_new_);
+          if (first_crossing(g_, g_new_) >= 0) return {Outcome::kRoot, locate_root(t_before), ""};
           g_ = g_new_;
-          if (k >= 0) return {Outcome::kRoot, k, ""};
         }
       } else {
         ++stats_.rejected_steps;
@@ -95,22 +102,63 @@ class OdeintBase : public Integrator {
     }
     return {};
   }
+  // The step from (t0, x_start_) to (t_, data()) crossed a zero of some root
+  // function (g_ before, g_new_ after). Shrinks the bracket [a, b] of step
+  // sizes around the earliest zero until it is 100 eps (|t| + |h|) wide, moves
+  // to the state at t0 + b (past the zero) and returns the root's index.
+  int locate_root(double t0) {
+    const int n = sys_->size(), m = static_cast<int>(g_.size());
+    std::vector<double> ga = g_, gb = g_new_, gs(m), xs(n), xb(data(), data() + n);
+    double a = 0.0, b = t_ - t0;
+    const double tol = 100 * std::numeric_limits<double>::epsilon() * (std::abs(t0) + b);
+    // The crossing that linear interpolation puts first.
+    auto earliest = [&](const std::vector<double>& g0, const std::vector<double>& g1, double& frac) {
+      int k = -1;
+      frac = 2.0;
+      for (int i = 0; i < m; ++i) {
+        const std::vector<double> o{g0[i]}, w{g1[i]};
+        if (first_crossing(o, w) < 0) continue;
+        const double f = g0[i] / (g0[i] - g1[i]);
+        if (f < frac) frac = f, k = i;
+      }
+      return k;
+    };
+    double frac;
+    int k = earliest(ga, gb, frac);
+    double wa = 1.0, wb = 1.0;  // Illinois weights on the retained end's g
+    int side = 0;
+    for (int it = 0; it < 200 && b - a > tol; ++it) {
+      const double fa = wa * ga[k], fb = wb * gb[k];
+      double s = fa != fb ? a + (b - a) * fa / (fa - fb) : 0.5 * (a + b);
+      s = std::clamp(s, a + 0.5 * tol, b - 0.5 * tol);
+      step_from(x_start_.data(), t0, s, xs.data());
+      sys_->roots(t0 + s, xs.data(), gs.data());
+      double f2;
+      const int k2 = earliest(ga, gs, f2);
+      if (k2 >= 0) {  // a zero in [a, s]
+        b = s, gb = gs, xb = xs, k = k2;
+        wb = 1.0;
+        if (side == -1) wa *= 0.5;
+        side = -1;
+      } else {
+        a = s, ga = gs;
+        wa = 1.0;
+        if (side == 1) wb *= 0.5;
+        side = 1;
+      }
+    }
+    t_ = t0 + b;
+    set_state(xb.data());
+    g_ = gb;
+    return k;
+  }
   // The non-finite components, or else the fastest-changing one.
   std::string non_finite_suffix() const {
     const std::string bad = non_finite_components(*sys_, t_, data());
     if (!bad.empty()) return "; " + bad;
-    const int n = sys_->size();
-    std::vector<double> f(n);
-    sys_->rhs(t_, data(), f.data());
-    int worst = 0;
-    double rate = -1;
-    for (int i = 0; i < n; ++i) {
-      const double r = std::abs(f[i]) / std::max(1.0, std::abs(data()[i]));
-      if (r > rate || !std::isfinite(r)) rate = r, worst = i;
-    }
-    return "; fastest-changing component " + sys_->state_name(worst) + " = " + std::to_string(data()[worst]);
+    return "; fastest-changing component " + fastest_component(*sys_, t_, data());
   }
-  std::vector<double> g_, g_new_;
+  std::vector<double> g_, g_new_, x_start_;
 };
 
 class Dopri5 final : public OdeintBase {
@@ -123,29 +171,38 @@ class Dopri5 final : public OdeintBase {
   IntegratorCapabilities capabilities() const override {
     IntegratorCapabilities c;
     c.adaptive = true;
+    c.finds_roots = true;
     c.order = 5;
     return c;
   }
   const double* state() const override { return x_.data(); }
 
  protected:
+  auto odeint_system() {
+    return [this](const State& x, State& dx, double t) {
+      dx.resize(x.size());
+      sys_->rhs(t, x.data(), dx.data());
+      ++stats_.rhs_evaluations;
+    };
+  }
   void load(const double* x0, int n) override { x_.assign(x0, x0 + n); }
   void fresh_stepper() override {
     stepper_ = Stepper(odeint::default_error_checker<double, odeint::range_algebra, odeint::default_operations>(
         opt_.atol, opt_.rtol));
   }
-  bool try_step(double& h) override {
-    auto f = [this](const State& x, State& dx, double t) {
-      dx.resize(x.size());
-      sys_->rhs(t, x.data(), dx.data());
-      ++stats_.rhs_evaluations;
-    };
-    return stepper_.try_step(f, x_, t_, h) == odeint::success;
-  }
+  bool try_step(double& h) override { return stepper_.try_step(odeint_system(), x_, t_, h) == odeint::success; }
   const double* data() const override { return x_.data(); }
+  void step_from(const double* x0, double t0, double h, double* out) override {
+    xin_.assign(x0, x0 + x_.size());
+    xout_.resize(x_.size());
+    odeint::runge_kutta_dopri5<State> rk;  // fresh: no first-same-as-last state carried over
+    rk.do_step(odeint_system(), xin_, t0, xout_, h);
+    std::copy(xout_.begin(), xout_.end(), out);
+  }
+  void set_state(const double* x) override { std::copy(x, x + x_.size(), x_.begin()); }
 
  private:
-  State x_;
+  State x_, xin_, xout_;
   Stepper stepper_;
 };
 
@@ -160,6 +217,7 @@ class Rosenbrock4 final : public OdeintBase {
   IntegratorCapabilities capabilities() const override {
     IntegratorCapabilities c;
     c.adaptive = true;
+    c.finds_roots = true;
     c.order = 4;
     c.implicit = true;
     c.uses_jacobian = true;
@@ -168,14 +226,8 @@ class Rosenbrock4 final : public OdeintBase {
   const double* state() const override { return &x_[0]; }
 
  protected:
-  void load(const double* x0, int n) override {
-    x_.resize(n);
-    std::copy(x0, x0 + n, x_.begin());
-    f0_.resize(n), f1_.resize(n), xt_.resize(n);
-  }
-  // rosenbrock4_controller is not assignable (const coefficients): rebuilt on reset.
-  void fresh_stepper() override { stepper_ = std::make_unique<Stepper>(opt_.atol, opt_.rtol); }
-  bool try_step(double& h) override {
+  // The (f, Jacobian) pair odeint's implicit steppers take, over uBLAS types.
+  auto odeint_system() {
     const int n = static_cast<int>(x_.size());
     auto f = [this, n](const Vec& x, Vec& dx, double t) {
       std::copy(x.begin(), x.end(), xt_.begin());
@@ -199,13 +251,33 @@ class Rosenbrock4 final : public OdeintBase {
       dfdt.resize(n);
       for (int r = 0; r < n; ++r) dfdt[r] = (f1_[r] - f0_[r]) / dt;
     };
-    const bool ok = stepper_->try_step(std::make_pair(f, jac), x_, t_, h) == odeint::success;
+    return std::make_pair(f, jac);
+  }
+  void load(const double* x0, int n) override {
+    x_.resize(n);
+    std::copy(x0, x0 + n, x_.begin());
+    f0_.resize(n), f1_.resize(n), xt_.resize(n);
+  }
+  // rosenbrock4_controller is not assignable (const coefficients): rebuilt on reset.
+  void fresh_stepper() override { stepper_ = std::make_unique<Stepper>(opt_.atol, opt_.rtol); }
+  bool try_step(double& h) override {
+    const bool ok = stepper_->try_step(odeint_system(), x_, t_, h) == odeint::success;
     ++stats_.linear_solves;  // one LU factorisation per attempted step
     return ok;
   }
   const double* data() const override { return &x_[0]; }
+  void step_from(const double* x0, double t0, double h, double* out) override {
+    const int n = static_cast<int>(x_.size());
+    Vec xin(n), xout(n);
+    std::copy(x0, x0 + n, xin.begin());
+    stepper_->stepper().do_step(odeint_system(), xin, t0, xout, h);
+    ++stats_.linear_solves;
+    std::copy(xout.begin(), xout.end(), out);
+  }
+  void set_state(const double* x) override { std::copy(x, x + x_.size(), x_.begin()); }
 
  private:
+
   Vec x_;
   std::unique_ptr<Stepper> stepper_;
   std::vector<double> f0_, f1_, xt_;

@@ -2,6 +2,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -52,6 +53,21 @@ std::string non_finite_components(const OdeSystem& sys, double t, const double* 
   if (bad.empty()) return "";
   if (count > 4) bad += " and " + std::to_string(count - 4) + " more";
   return "non-finite state at t = " + std::to_string(t) + " s: " + bad;
+}
+
+std::string fastest_component(OdeSystem& sys, double t, const double* x) {
+  const int n = sys.size();
+  std::vector<double> f(static_cast<std::size_t>(n));
+  sys.rhs(t, x, f.data());
+  int worst = 0;
+  double rate = -1;
+  for (int i = 0; i < n; ++i) {
+    const double r = std::abs(f[i]) / std::max(1.0, std::abs(x[i]));
+    if (r > rate || !std::isfinite(r)) rate = r, worst = i;
+  }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, " (|f| / max(1, |x|) = %.3g 1/s)", rate);
+  return sys.state_name(worst) + " = " + std::to_string(x[worst]) + buf;
 }
 
 namespace {

@@ -316,7 +316,7 @@ void Plant::sample_controller(double t, const double* x) {
   }
 }
 
-void Plant::on_time_event(double t, const double* x) {
+void Plant::on_time_event(double t, double* x) {
   if (cfg_.controller == ControllerMode::kNone) return;
   if (cfg_.reference && cfg_.setpoint_interval > 0 && on_grid(t, cfg_.setpoint_interval)) {
     cfg_.reference->eval(t, ref_held_);
@@ -324,6 +324,7 @@ void Plant::on_time_event(double t, const double* x) {
   if (cfg_.controller == ControllerMode::kSampled && on_grid(t, cfg_.servo_period)) {
     sample_controller(t, x);
   }
+  settle_modes(t, x);
 }
 
 int Plant::num_roots() const { return hybrid_ ? layout_.n : 0; }
@@ -343,14 +344,37 @@ void Plant::roots(double t, const double* x, double* g) {
 }
 
 void Plant::on_root(int j, double t, double* x) {
-  const FrictionParams& f = cfg_.friction[j];
   if (mode_[j] != SlipMode::kStuck) {  // the speed reached zero: stick
     x[layout_.qd + j] = 0.0;
     mode_[j] = SlipMode::kStuck;
+  } else {  // break-away: |applied| crossed Fs, slip in its direction
+    rhs(t, x, ftmp_.data());
+    mode_[j] = wd_->applied[j] >= 0 ? SlipMode::kPositive : SlipMode::kNegative;
   }
-  rhs(t, x, ftmp_.data());
-  const double a = wd_->applied[j];
-  if (std::abs(a) > f.static_torque) mode_[j] = a > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+  settle_modes(t, x);
+}
+
+void Plant::settle_modes(double t, double* x) {
+  if (!hybrid_) return;
+  // A mode switch (or a controller sample) changes every stuck joint's applied
+  // torque at once through H; release, one at a time, the stuck joint whose
+  // applied torque exceeds Fs the most, until the modes are consistent. Each
+  // pass releases one joint, so at most n passes. Without this a root
+  // function could start past its zero after a restart and never cross it
+  // (a joint stuck for the rest of the run).
+  for (int pass = 0; pass <= layout_.n; ++pass) {
+    rhs(t, x, ftmp_.data());
+    int worst = -1;
+    double excess = 0.0;
+    for (int j = 0; j < layout_.n; ++j) {
+      const FrictionParams& f = cfg_.friction[j];
+      if (f.model != FrictionModel::kHybrid || mode_[j] != SlipMode::kStuck) continue;
+      const double e = std::abs(wd_->applied[j]) - f.static_torque;
+      if (e > excess) excess = e, worst = j;
+    }
+    if (worst < 0) return;
+    mode_[worst] = wd_->applied[worst] > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+  }
 }
 
 void Plant::initial_state(double* x) {
@@ -393,11 +417,7 @@ void Plant::initial_state(double* x) {
     }
   }
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
-  if (num_roots() > 0) {
-    for (int j = 0; j < n; ++j) {
-      if (cfg_.friction[j].model == FrictionModel::kHybrid) on_root(j, 0.0, x);
-    }
-  }
+  settle_modes(0.0, x);  // hybrid joints start stuck unless already pushed past Fs
 }
 
 Eigen::Vector3d Plant::tool_position(const double* x) const {

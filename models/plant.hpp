@@ -90,14 +90,18 @@ class Plant {
   // Time events: controller samples and set-point updates. The next event time
   // strictly after t (+inf if none); at such a time, update the discrete state.
   double next_time_event(double t) const;
-  void on_time_event(double t, const double* x);
+  // May release stuck hybrid-friction joints (settle_modes), hence x non-const.
+  void on_time_event(double t, double* x);
 
   // Root functions (hybrid friction, one per joint): zero at a slipping joint's
   // speed reversal and at a stuck joint's break-away. on_root switches the
-  // joint's mode and may set its speed to exactly zero in x.
+  // joint's mode (a slipping joint's speed is set to exactly zero in x), then
+  // settle_modes releases every stuck joint now pushed past its static torque,
+  // so that after any discrete change each stuck joint's root function is >= 0.
   int num_roots() const;
   void roots(double t, const double* x, double* g);
   void on_root(int joint, double t, double* x);
+  void settle_modes(double t, double* x);
   SlipMode slip_mode(int joint) const { return mode_[static_cast<std::size_t>(joint)]; }
 
   // Flange position for the state x (held joints included) [m].

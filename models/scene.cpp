@@ -227,9 +227,7 @@ Scene load_scene(const std::string& path) {
       SpeedProfile profile(r.profile, path.length(), r.max_speed);
       auto ref = std::make_shared<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation,
                                              path, profile);
-      // The whole path must be reachable: check it densely now, not mid-run.
-      ReferenceSample sample;
-      for (int k = 0; k <= 400; ++k) ref->eval(profile.duration() * k / 400.0, sample);
+      // (The constructor checks the whole path: reach, joint limits, branch.)
       pc.reference = ref;
     } catch (const std::exception& e) {
       throw ConfigError(rt->where() + e.what());

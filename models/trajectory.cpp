@@ -108,6 +108,67 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
     throw std::invalid_argument(why);
   }
   if (n_ != 3 && n_ != 6) throw std::invalid_argument("reference: expected 3 or 6 joints");
+  // The branch table: the first point's angles (the configured wrist
+  // solution) nearest the middle of each range, then each point's solution
+  // and angles nearest the previous one's. 2000 points: a few
+  // ms once per scene. A point out of reach, a joint leaving its range or
+  // moving more than pi/4 between two points (a pass close to a singularity)
+  // is reported here, before any run.
+  const int points = 2000;
+  const double L = path_.length();
+  Eigen::Matrix<double, 6, 1> prev;
+  for (int j = 0; j < 6; ++j) prev[j] = 0.5 * (robot_.joints[j].q_min + robot_.joints[j].q_max);
+  branch_.reserve(points);
+  for (int k = 0; k < points; ++k) {
+    const double s = L * k / (points - 1);
+    Eigen::Vector3d p, dp, ddp;
+    path_.eval(s, p, dp, ddp);
+    Eigen::Matrix<double, 6, 1> q;
+    if (!joint_angles(p, prev, k > 0, q)) {
+      throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
+                               std::to_string(p.y()) + ", " + std::to_string(p.z()) + ") m at s = " +
+                               std::to_string(s) + " m is out of reach");
+    }
+    for (int j = 0; j < n_; ++j) {
+      const JointParams& J = robot_.joints[j];
+      if (k > 0 && std::abs(q[j] - prev[j]) > M_PI / 4) {
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " turns by " +
+                                 std::to_string(q[j] - prev[j]) + " rad between s = " +
+                                 std::to_string(L * (k - 1) / (points - 1)) + " and " + std::to_string(s) +
+                                 " m of the path (too close to a singularity)");
+      }
+      if (q[j] < J.q_min - 1e-9 || q[j] > J.q_max + 1e-9) {
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " at " + std::to_string(q[j]) +
+                                 " rad leaves its limits [" + std::to_string(J.q_min) + ", " +
+                                 std::to_string(J.q_max) + "] at s = " + std::to_string(s) + " m of the path");
+      }
+    }
+    branch_.push_back(q);
+    prev = q;
+  }
+}
+
+bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near,
+                             bool track_wrist, Eigen::Matrix<double, 6, 1>& q) const {
+  q = q_held_;
+  bool ok;
+  if (n_ == 3) {
+    Eigen::Vector3d q3;
+    ok = puma_ik_position(robot_, p, config_, q3);
+    q.head<3>() = q3;
+  } else {
+    ok = puma_ik(robot_, p, R_fixed_, config_, q);
+  }
+  for (int j = 0; j < n_; ++j) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+  if (n_ == 6 && track_wrist) {
+    // The other wrist solution (q4 + pi, -q5, q6 + pi) gives the same pose;
+    // through a wrist singularity (q5 = 0) the continuous motion passes from
+    // one to the other, so take whichever is nearer.
+    Eigen::Vector3d alt(q[3] + M_PI, -q[4], q[5] + M_PI);
+    for (int j = 0; j < 3; ++j) alt[j] += 2 * M_PI * std::round((near[3 + j] - alt[j]) / (2 * M_PI));
+    if ((alt - near.tail<3>()).squaredNorm() < (q.tail<3>() - near.tail<3>()).squaredNorm()) q.tail<3>() = alt;
+  }
+  return ok;
 }
 
 Eigen::Vector3d Reference::position(const Eigen::Matrix<double, 6, 1>& q_full) const {
@@ -129,24 +190,12 @@ void Reference::eval(double t, ReferenceSample& out) const {
   out.p = p;
   out.v = dp * sd;
   const Eigen::Vector3d a = ddp * sd * sd + dp * sdd;
-  // Joint positions.
-  Eigen::Matrix<double, 6, 1> q = q_held_;
-  bool ok;
-  if (n_ == 3) {
-    Eigen::Vector3d q3;
-    ok = puma_ik_position(robot_, p, config_, q3);
-    q.head<3>() = q3;
-  } else {
-    ok = puma_ik(robot_, p, R_fixed_, config_, q);
-  }
-  // The IK returns angles in (-pi, pi]; use each joint's representative within
-  // its limits (the one nearest the middle of the range), so the reference is
-  // continuous wherever the path stays inside the joints' ranges.
-  for (int j = 0; j < 6; ++j) {
-    const JointParams& J = robot_.joints[j];
-    const double mid = 0.5 * (J.q_min + J.q_max);
-    q[j] += 2 * M_PI * std::round((mid - q[j]) / (2 * M_PI));
-  }
+  // Joint positions: the IK's branch nearest the table's angles at this s.
+  const double L = path_.length();
+  const std::size_t k = branch_.empty() ? 0
+                        : static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
+  Eigen::Matrix<double, 6, 1> q;
+  const bool ok = joint_angles(p, branch_.empty() ? q_held_ : branch_[k], !branch_.empty(), q);
   if (!ok) {
     throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
                              std::to_string(p.y()) + ", " + std::to_string(p.z()) +

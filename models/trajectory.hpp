@@ -79,8 +79,13 @@ class Reference {
   Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
 
  private:
-  // Columns for the simulated joints of [Jv; Jw] at q (exact, dual numbers).
+  // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
+  // IK at the path point p, each angle the representative (mod 2 pi) nearest
+  // `near`, and with track_wrist the wrist solution nearest it; false if out
+  // of reach.
+  bool joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near, bool track_wrist,
+                    Eigen::Matrix<double, 6, 1>& q) const;
 
   RobotModel robot_;
   int n_;
@@ -89,6 +94,12 @@ class Reference {
   Eigen::Matrix3d R_fixed_;
   Path path_;
   SpeedProfile profile_;
+  // Joint angles along the path, unwrapped by continuity, at equal steps of
+  // arc length: the wrist solution, and the branch of a joint whose range
+  // exceeds 2 pi (the PUMA's wrist roll), are chosen nearest these, so the
+  // reference stays continuous where the IK's (-pi, pi] would jump and through
+  // a wrist singularity.
+  std::vector<Eigen::Matrix<double, 6, 1>> branch_;
 };
 
 }  // namespace pumasim
