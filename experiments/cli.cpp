@@ -352,17 +352,32 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   csv << ",x [m],y [m],z [m]";
   if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm]";
   csv << "\n";
+  // The run only copies the state at each output (the wall time is the
+  // simulation's); rows are formatted, with reference and kinematics, after.
+  const int m = plant.size();
+  std::vector<double> saved;  // [t, x...] per output
+  saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
+  const bool tty = isatty(STDERR_FILENO);
+  auto last_progress = std::chrono::steady_clock::now();
+  const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
+    saved.push_back(t);
+    saved.insert(saved.end(), x, x + m);
+    if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
+      err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
+      last_progress = std::chrono::steady_clock::now();
+    }
+  }, max_steps);
   double max_err = 0, sum_sq = 0;
   long samples = 0;
   ReferenceSample ref;
-  const bool tty = isatty(STDERR_FILENO);
-  auto last_progress = std::chrono::steady_clock::now();
   char buf[40];
   auto num = [&](double v) { std::snprintf(buf, sizeof buf, ",%.17g", v); csv << buf; };
-  const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
+  for (std::size_t row = 0; row + m < saved.size(); row += static_cast<std::size_t>(m + 1)) {
+    const double t = saved[row];
+    const double* x = &saved[row + 1];
     std::snprintf(buf, sizeof buf, "%.17g", t);
     csv << buf;
-    for (int i = 0; i < plant.size(); ++i) num(x[i]);
+    for (int i = 0; i < m; ++i) num(x[i]);
     const Eigen::Vector3d p = plant.tool_position(x);
     if (sc.plant.reference) {
       sc.plant.reference->eval(std::min(t, sc.plant.reference->profile().duration()), ref);
@@ -377,11 +392,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       ++samples;
     }
     csv << "\n";
-    if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
-      err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
-      last_progress = std::chrono::steady_clock::now();
-    }
-  }, max_steps);
+  }
   if (tty) err << "\r" << std::string(60, ' ') << "\r";
   const IntegratorStats& st = integ->stats();
   std::ostringstream js;

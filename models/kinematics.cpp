@@ -6,37 +6,6 @@ namespace pumasim {
 
 // Closed form from one kinematic pass: column i is [z_i x (p_e - o_i); z_i],
 // with z_i the axis of joint i and o_i a point on it, in the base frame.
-void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<double, 6, 1>& q, int columns,
-                        Eigen::Matrix<double, 6, 6>& J) {
-  std::array<Eigen::Vector3d, 6> z, o;
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int j = 0; j < m.dof(); ++j) {
-    const JointParams& P = m.joints[j];
-    const double th = q[j] + P.offset, ct = std::cos(th), st = std::sin(th);
-    const double ca = std::cos(P.alpha), sa = std::sin(P.alpha);
-    Eigen::Matrix3d Rz, Rx;
-    Rz << ct, -st, 0, st, ct, 0, 0, 0, 1;
-    Rx << 1, 0, 0, 0, ca, -sa, 0, sa, ca;
-    if (m.convention == DhConvention::kStandard) {  // joint j turns about z of frame j-1
-      z[j] = R.col(2), o[j] = p;
-      p += R * (Rz * Eigen::Vector3d(P.a, 0, P.d));
-      R = (R * Rz * Rx).eval();
-    } else {  // about z of frame j, after Rx(alpha) Tx(a)
-      p += R * Eigen::Vector3d(P.a, 0, 0);
-      R = (R * Rx).eval();
-      z[j] = R.col(2), o[j] = p;
-      p += R * Eigen::Vector3d(0, 0, P.d);
-      R = (R * Rz).eval();
-    }
-  }
-  J.setZero();
-  for (int k = 0; k < columns; ++k) {
-    J.block<3, 1>(0, k) = z[k].cross(p - o[k]);
-    J.block<3, 1>(3, k) = z[k];
-  }
-}
-
 std::string puma_ik_unsupported(const RobotModel& m) {
   const double twist[6] = {M_PI / 2, 0, -M_PI / 2, M_PI / 2, -M_PI / 2, 0};
   if (m.convention != DhConvention::kStandard || m.dof() != 6) {

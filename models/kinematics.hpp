@@ -48,8 +48,42 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
 // velocity, angular velocity; base frame), for the first `columns` joints
 // (the others zero): the closed form [z_i x (p_e - o_i); z_i] from one
 // kinematic pass. Allocation-free.
-void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<double, 6, 1>& q, int columns,
-                        Eigen::Matrix<double, 6, 6>& J);
+// With S = Dual and q = Dual(q, qd), the derivative parts are dJ/dt exactly.
+template <class S>
+void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, int columns,
+                        Eigen::Matrix<S, 6, 6>& J) {
+  using std::cos;
+  using std::sin;
+  using V3 = Eigen::Matrix<S, 3, 1>;
+  using M3 = Eigen::Matrix<S, 3, 3>;
+  std::array<V3, 6> z, o;
+  M3 R = M3::Identity();
+  V3 p = V3::Zero();
+  for (int j = 0; j < m.dof(); ++j) {
+    const JointParams& P = m.joints[j];
+    const S th = q[j] + S(P.offset), ct = cos(th), st = sin(th);
+    const double ca = std::cos(P.alpha), sa = std::sin(P.alpha);
+    M3 Rz, Rx;
+    Rz << ct, -st, S(0), st, ct, S(0), S(0), S(0), S(1);
+    Rx << S(1), S(0), S(0), S(0), S(ca), S(-sa), S(0), S(sa), S(ca);
+    if (m.convention == DhConvention::kStandard) {  // joint j turns about z of frame j-1
+      z[j] = R.col(2), o[j] = p;
+      p += R * (Rz * V3(S(P.a), S(0), S(P.d)));
+      R = (R * Rz * Rx).eval();
+    } else {  // about z of frame j, after Rx(alpha) Tx(a)
+      p += R * V3(S(P.a), S(0), S(0));
+      R = (R * Rx).eval();
+      z[j] = R.col(2), o[j] = p;
+      p += R * V3(S(0), S(0), S(P.d));
+      R = (R * Rz).eval();
+    }
+  }
+  J.setZero();
+  for (int k = 0; k < columns; ++k) {
+    J.template block<3, 1>(0, k) = z[k].cross(p - o[k]);
+    J.template block<3, 1>(3, k) = z[k];
+  }
+}
 
 // PUMA 560 arm configuration for the closed-form inverse kinematics.
 struct PumaConfig {

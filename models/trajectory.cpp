@@ -182,6 +182,16 @@ void Reference::jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<dou
   geometric_jacobian(robot_, q, n_, J);
 }
 
+void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
+                              Eigen::Matrix<double, 6, 6>& Jdot) const {
+  Eigen::Matrix<Dual, 6, 1> qq;
+  for (int j = 0; j < 6; ++j) qq[j] = Dual(q[j], qd[j]);
+  Eigen::Matrix<Dual, 6, 6> JJ;
+  geometric_jacobian(robot_, qq, n_, JJ);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) Jdot(r, c) = JJ(r, c).deriv();
+}
+
 void Reference::eval(double t, ReferenceSample& out) const {
   double s, sd, sdd;
   profile_.eval(t, s, sd, sdd);
@@ -202,32 +212,31 @@ void Reference::eval(double t, ReferenceSample& out) const {
                              ") m at t = " + std::to_string(t) + " s is out of reach");
   }
   // Rates: J qd = [v; 0] and J qdd = [a; 0] - Jdot qd, over the simulated joints
-  // (n = 3: position rows only). Jdot qd by a central difference along qd.
-  Eigen::Matrix<double, 6, 6> J, Jp, Jm;
+  // (n = 3: position rows only). Jdot qd exactly: the Jacobian on dual numbers
+  // q + eps qd (a central difference here put noise of about 1e-10 into qdd,
+  // which a tight-tolerance reference run could not get past).
+  Eigen::Matrix<double, 6, 6> J;
   jacobian(q, J);
   const int rows = n_ == 3 ? 3 : 6;
   Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
   rhs.head<3>() = out.v;
   Eigen::Matrix<double, 6, 1> qd = Eigen::Matrix<double, 6, 1>::Zero();
   Eigen::Matrix<double, 6, 1> qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> Jdot;
   if (rows == 3) {
     const Eigen::Matrix3d A = J.topLeftCorner<3, 3>();
     const Eigen::PartialPivLU<Eigen::Matrix3d> lu(A);
     qd.head<3>() = lu.solve(out.v);
-    const double h = 1e-6;
-    jacobian(q + h * qd, Jp);
-    jacobian(q - h * qd, Jm);
-    const Eigen::Vector3d Jdot_qd = (Jp - Jm).topLeftCorner<3, 3>() * qd.head<3>() / (2 * h);
+    jacobian_rate(q, qd, Jdot);
+    const Eigen::Vector3d Jdot_qd = Jdot.topLeftCorner<3, 3>() * qd.head<3>();
     qdd.head<3>() = lu.solve(a - Jdot_qd);
   } else {
     const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(J);
     qd = lu.solve(rhs);
-    const double h = 1e-6;
-    jacobian(q + h * qd, Jp);
-    jacobian(q - h * qd, Jm);
+    jacobian_rate(q, qd, Jdot);
     Eigen::Matrix<double, 6, 1> acc = Eigen::Matrix<double, 6, 1>::Zero();
     acc.head<3>() = a;
-    qdd = lu.solve(acc - (Jp - Jm) * qd / (2 * h));
+    qdd = lu.solve(acc - Jdot * qd);
   }
   out.q = q;
   out.qd = qd;

@@ -81,6 +81,9 @@ class Reference {
  private:
   // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
+  // Its time derivative along qd (exact: one pass on dual numbers).
+  void jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
+                     Eigen::Matrix<double, 6, 6>& Jdot) const;
   // IK at the path point p, each angle the representative (mod 2 pi) nearest
   // `near`, and with track_wrist the wrist solution nearest it; false if out
   // of reach.

@@ -214,7 +214,19 @@ TEST(Friction, HybridModesStayConsistentWithEveryRootFinder) {
 // continuous and its rate consistent with it (central differences), inside
 // the joint limits, and the pose is the path point with the fixed orientation.
 TEST(Reference, ContinuousThroughTheWristSingularityAndBeyondPi) {
-  const Scene sc = load_scene(scene_path("paper_slow_6dof"));
+  // paper_slow_6dof with the flange pointing straight down (the scene tilts it
+  // to stay clear of the singularity).
+  std::string text;
+  {
+    std::ifstream in(scene_path("paper_slow_6dof"));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    text = std::regex_replace(ss.str(), std::regex("orientation = \\[\\[.*"),
+                              "orientation = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]");
+  }
+  const auto path = std::filesystem::temp_directory_path() / "pumasim_reference_down.toml";
+  std::ofstream(path) << text;
+  const Scene sc = load_scene(path.string());
   const Reference& ref = *sc.plant.reference;
   const RobotModel& m = sc.plant.robot;
   const double T = ref.profile().duration(), h = 1e-4;
@@ -354,7 +366,8 @@ TEST(Kinematics, PumaInverseKinematicsReproducesTheForward) {
 
 // The geometric Jacobian against central differences of the forward
 // kinematics (position rows) and of the rotation (angular rows, skew(w) = dR R^T),
-// in both DH conventions.
+// in both DH conventions; its rate on dual numbers against central
+// differences of the Jacobian.
 TEST(Kinematics, GeometricJacobianMatchesDifferencesOfForwardKinematics) {
   for (const RobotModel& m : {load_robot("puma560"), random_chain(6, 77, DhConvention::kModified)}) {
     Rng rng(5);
@@ -375,6 +388,22 @@ TEST(Kinematics, GeometricJacobianMatchesDifferencesOfForwardKinematics) {
       const Eigen::Matrix3d W = (Rp - Rm) / (2 * h) * R0.transpose();
       EXPECT_LT((J.block<3, 1>(0, k) - v).norm(), 1e-8) << m.name << " column " << k;
       EXPECT_LT((J.block<3, 1>(3, k) - Eigen::Vector3d(W(2, 1), W(0, 2), W(1, 0))).norm(), 1e-8) << m.name;
+    }
+    // On dual numbers q + eps qd the derivative parts are dJ/dt = J'(q) qd.
+    Eigen::Matrix<double, 6, 1> qd;
+    for (int j = 0; j < 6; ++j) qd[j] = rng.uniform(-1, 1);
+    Eigen::Matrix<Dual, 6, 1> qq;
+    for (int j = 0; j < 6; ++j) qq[j] = Dual(q[j], qd[j]);
+    Eigen::Matrix<Dual, 6, 6> JJ;
+    geometric_jacobian(m, qq, 6, JJ);
+    Eigen::Matrix<double, 6, 6> Jp, Jm;
+    geometric_jacobian(m, Eigen::Matrix<double, 6, 1>(q + h * qd), 6, Jp);
+    geometric_jacobian(m, Eigen::Matrix<double, 6, 1>(q - h * qd), 6, Jm);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) {
+        EXPECT_NEAR(JJ(r, c).value(), J(r, c), 1e-15) << m.name;
+        EXPECT_NEAR(JJ(r, c).deriv(), (Jp(r, c) - Jm(r, c)) / (2 * h), 1e-8) << m.name;
+      }
     }
   }
 }
