@@ -43,14 +43,15 @@ constexpr const char* kUsage =
     "           [--qdd=<csv>] [--tau=<csv>] [--no-rotor-inertia]\n"
     "      prints H, h, g (and tau from qdd, qdd from tau) as one JSON object\n"
     "  backends   lists the dynamics back-ends\n"
-    "  check <scene.toml>\n"
+    "  check <scene.toml> [--set section.key=value ...]\n"
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N]\n"
+    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N] [--set section.key=value ...]\n"
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
-    "      (default 10000000; 0: no limit) end the run as a reported failure\n"
+    "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
+    "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5\n"
     "  integrators   lists the integrators\n"
 
     "  help       prints this text\n";
@@ -59,6 +60,7 @@ constexpr const char* kUsage =
 struct Options {
   std::map<std::string, std::string> values;
   std::map<std::string, bool> flags;
+  std::vector<std::string> sets;  // --set section.key=value, repeatable
 
   static Options parse(const std::vector<std::string>& args, std::size_t first,
                        const std::vector<std::string>& valued,
@@ -76,6 +78,14 @@ struct Options {
       if (is_in(flag_names, key)) {
         if (eq != std::string::npos) throw UsageError("--" + key + " takes no value");
         o.flags[key] = true;
+      } else if (key == "set" && is_in(valued, key)) {
+        if (eq != std::string::npos) {
+          o.sets.push_back(a.substr(eq + 1));
+        } else if (i + 1 < args.size()) {
+          o.sets.push_back(args[++i]);
+        } else {
+          throw UsageError("--set expects section.key=value");
+        }
       } else if (is_in(valued, key)) {
         if (eq != std::string::npos) {
           o.values[key] = a.substr(eq + 1);
@@ -246,16 +256,16 @@ int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) 
   return kExitOk;
 }
 
-Scene scene_argument(const std::vector<std::string>& args) {
+Scene scene_argument(const std::vector<std::string>& args, const Options& opt) {
   if (args.size() < 2 || args[1].rfind("--", 0) == 0) {
     throw UsageError(args[0] + ": expected a scene file, e.g. experiments/scenes/paper_slow.toml");
   }
-  return load_scene(args[1]);
+  return load_scene(args[1], opt.sets);
 }
 
 int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
-  Options::parse(args, 2, {}, {});
-  const Scene sc = scene_argument(args);
+  const Options opt = Options::parse(args, 2, {"set"}, {});
+  const Scene sc = scene_argument(args, opt);
   Plant plant(sc.plant);
   std::vector<double> x(plant.size());
   plant.initial_state(x.data());
@@ -291,10 +301,10 @@ std::string shell_line(const char* cmd) {
 }
 
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  const Options opt = Options::parse(args, 2, {"integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
+  const Options opt = Options::parse(args, 2, {"set", "integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
                                                "max-steps"},
                                      {"exact-jacobian"});
-  Scene sc = scene_argument(args);
+  Scene sc = scene_argument(args, opt);
   if (auto b = opt.get("backend")) {
     const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
     const RobotModel sim = sc.plant.n < sc.plant.robot.dof()

@@ -68,8 +68,9 @@ toml::array per_joint_array(int n, F f) {
 
 }  // namespace
 
-Scene load_scene(const std::string& path) {
-  const toml::table doc = parse_toml_file(path);
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  toml::table doc = parse_toml_file(path);
+  apply_overrides(doc, overrides);
   StrictTable root(doc, path, "");
   Scene sc;
   sc.file = path;

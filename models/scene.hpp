@@ -43,7 +43,8 @@ struct Scene {
 };
 
 // Loads and checks a scene; ConfigError naming file, line and key otherwise.
-Scene load_scene(const std::string& path);
+// overrides: "section.key=value" (TOML value syntax), applied before the checks.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 
 // The scene with every default filled in, as TOML.
 std::string resolved_toml(const Scene& scene);

@@ -52,6 +52,42 @@ toml::table parse_toml_file(const std::string& path) {
   }
 }
 
+namespace {
+// Puts every leaf of `from` into `into`, creating or replacing along the path.
+void merge_into(toml::table& into, const toml::table& from) {
+  for (const auto& [k, v] : from) {
+    if (const toml::table* sub = v.as_table()) {
+      toml::table* dst = into.get_as<toml::table>(k);
+      if (!dst) {
+        into.insert_or_assign(k, toml::table{});
+        dst = into.get_as<toml::table>(k);
+      }
+      merge_into(*dst, *sub);
+    } else {
+      into.erase(k.str());  // re-inserted with the override's key, which names its source
+      into.insert_or_assign(k, v);
+    }
+  }
+}
+}  // namespace
+
+void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
+  for (const std::string& o : overrides) {
+    const auto eq = o.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw ConfigError("--set " + o + ": expected section.key=value (a TOML value, e.g. motor.inductance=1e-5)");
+    }
+    toml::table t;
+    try {
+      t = toml::parse(o.substr(0, eq) + " = " + o.substr(eq + 1), "--set " + o);
+    } catch (const toml::parse_error& e) {
+      throw ConfigError("--set " + o + ": expected section.key=value with a TOML value (" +
+                        std::string(e.description()) + ")");
+    }
+    merge_into(doc, t);
+  }
+}
+
 StrictTable::StrictTable(const toml::table& table, std::string file, std::string path)
     : table_(&table), file_(std::move(file)), path_(std::move(path)) {}
 
@@ -59,7 +95,20 @@ std::string StrictTable::key_path(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
+namespace {
+// The command-line override a key came from ("--set a.b=1"), or "". (Keys
+// keep their source when merged; values copied into a table do not.)
+std::string override_of(const toml::key& k) {
+  const auto& p = k.source().path;
+  return p && p->rfind("--set", 0) == 0 ? *p : std::string();
+}
+}  // namespace
+
 std::string StrictTable::where(std::string_view key) const {
+  const auto it = table_->find(key);
+  if (it != table_->end()) {
+    if (const std::string o = override_of(it->first); !o.empty()) return o + ": " + key_path(key) + ": ";
+  }
   const toml::node* node = table_->get(key);
   const auto& src = node ? node->source() : table_->source();
   return file_ + ":" + line_of(src) + ": " + key_path(key) + ": ";
@@ -225,8 +274,9 @@ void StrictTable::finish() const {
     if (std::find(asked_.begin(), asked_.end(), k.str()) != asked_.end()) continue;
     std::string known;
     for (const auto& a : asked_) known += (known.empty() ? "" : ", ") + a;
-    throw ConfigError(file_ + ":" + line_of(k.source()) + ": unknown key '" + key_path(k.str()) +
-                      "'; expected one of: " + known);
+    const std::string o = override_of(k);
+    throw ConfigError((o.empty() ? file_ + ":" + line_of(k.source()) : o) + ": unknown key '" +
+                      key_path(k.str()) + "'; expected one of: " + known);
   }
 }
 

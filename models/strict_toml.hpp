@@ -41,6 +41,11 @@ struct Bounds {
 // Parse a whole file; a syntax error becomes a ConfigError naming file and line.
 toml::table parse_toml_file(const std::string& path);
 
+// Command-line overrides "section.key=value" (value in TOML syntax) merged
+// into a parsed document before it is checked; a bad value is reported as
+// "--set section.key=value: section.key: expected ...".
+void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides);
+
 class StrictTable {
  public:
   StrictTable(const toml::table& table, std::string file, std::string path);

@@ -443,6 +443,27 @@ class BadScene : public ::testing::Test {
   }
 };
 
+// Command-line overrides: a value replaced, and bad ones named by the
+// override itself (the file's line would point at the wrong value).
+TEST(SceneOverrides, ReplaceValuesAndNameTheOverrideInErrors) {
+  const Scene sc = load_scene(scene_path("paper_slow"), {"motor.inductance=1e-5", "controller.kp=[1, 2, 3]"});
+  EXPECT_EQ(sc.plant.motor[2].inductance, 1e-5);
+  EXPECT_EQ(sc.plant.piv[1].kp, 2.0);
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"motor.inductance=-1", "--set motor.inductance=-1: motor.inductance: expected a number >= 0, got -1"},
+      {"motor.inductanc=1", "--set motor.inductanc=1: unknown key 'motor.inductanc'"},
+      {"motor.inductance=abc", "--set motor.inductance=abc: expected section.key=value with a TOML value"},
+      {"inductance", "--set inductance: expected section.key=value"},
+  };
+  for (const auto& [o, fragment] : bad) {
+    std::ostringstream out, err;
+    const int status = run_cli({"check", scene_path("paper_slow"), "--set", o}, out, err);
+    EXPECT_EQ(status, kExitBadInput) << o;
+    EXPECT_TRUE(out.str().empty()) << o;
+    EXPECT_NE(err.str().find(fragment), std::string::npos) << err.str();
+  }
+}
+
 TEST_F(BadScene, UnknownKey) {
   expect_rejected("resistance = 2.0", "resistance = 2.0\nresistence = 2.0",
                   "unknown key 'motor.resistence'; expected one of: inductance, resistance");
