@@ -1,4 +1,5 @@
 #include "experiments/cli.hpp"
+#include "experiments/stiffness.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -52,6 +53,11 @@ constexpr const char* kUsage =
     "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
     "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
     "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5\n"
+    "  stiffness <scene.toml> [--t-end X] [--samples N] [--bisect] [--set section.key=value ...]\n"
+    "      eigenvalues of the plant Jacobian along a run (default 20 samples over\n"
+    "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
+    "      by state; each explicit method's largest stable step from its stability\n"
+    "      region and, with --bisect, found on the scene\n"
     "  integrators   lists the integrators\n"
 
     "  help       prints this text\n";
@@ -463,6 +469,41 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   return r.ok ? kExitOk : kExitInternal;
 }
 
+int cmd_stiffness(const std::vector<std::string>& args, std::ostream& out) {
+  const Options opt = Options::parse(args, 2, {"set", "t-end", "samples"}, {"bisect"});
+  const Scene sc = scene_argument(args, opt);
+  const double t_end = opt.get("t-end") ? parse_double(*opt.get("t-end"), "--t-end") : std::min(1.0, sc.duration);
+  if (!(t_end > 0)) throw UsageError("--t-end: expected a number > 0");
+  double samples = 20;
+  if (auto s = opt.get("samples")) {
+    samples = parse_double(*s, "--samples");
+    if (!(samples >= 1 && samples <= 10000) || samples != std::floor(samples)) {
+      throw UsageError("--samples: expected a whole number in [1, 10000]");
+    }
+  }
+  const StiffnessReport rep = analyse_stiffness(sc, t_end, static_cast<int>(samples), opt.flags.count("bisect") > 0);
+  char line[256];
+  out << "# stiffness of " << sc.name << " over [0, " << t_end << "] s: eigenvalues of the exact plant Jacobian\n"
+      << "# along a run with " << sc.integrator.name << "; tau = 1/|Re lambda|; state: largest participation\n";
+  out << "t [s]\tspectral radius [1/s]\tstiffness ratio\tfastest tau [s]\tfastest state\tslowest tau [s]\t"
+         "slowest state\tunstable modes\n";
+  for (const StiffnessSample& s : rep.samples) {
+    std::snprintf(line, sizeof line, "%.4g\t%.4g\t%.4g\t%.3g\t%s\t%.3g\t%s\t%d\n", s.t, s.spectral_radius,
+                  s.stiffness_ratio, s.fastest.re != 0 ? -1 / s.fastest.re : 0.0, s.fastest.state.c_str(),
+                  s.slowest.re != 0 ? -1 / s.slowest.re : 0.0, s.slowest.state.c_str(), s.unstable_modes);
+    out << line;
+  }
+  out << "\n# largest stable fixed step: predicted from the stability region and every decaying\n"
+      << "# eigenvalue sampled" << (opt.flags.count("bisect") ? "; measured by bisection on the scene" : "") << "\n"
+      << "integrator\tpredicted [s]\tmeasured [s]\tnote\n";
+  for (const StepBound& b : rep.steps) {
+    std::snprintf(line, sizeof line, "%s\t%.4g\t%.4g\t%s\n", b.integrator.c_str(), b.predicted, b.measured,
+                  b.note.c_str());
+    out << line;
+  }
+  return kExitOk;
+}
+
 int cmd_integrators(std::ostream& out) {
   for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
   return kExitOk;
@@ -484,6 +525,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     if (cmd == "check") return cmd_check(args, out);
     if (cmd == "run") return cmd_run(args, out, err);
     if (cmd == "integrators") return cmd_integrators(out);
+    if (cmd == "stiffness") return cmd_stiffness(args, out);
     if (cmd == "help" || cmd == "--help" || cmd == "-h") {
       out << kUsage;
       return kExitOk;

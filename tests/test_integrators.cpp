@@ -14,6 +14,7 @@
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
+#include "integrators/stability.hpp"
 #include "models/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
@@ -227,6 +228,58 @@ TEST_P(EveryIntegrator, ReportsDivergenceWithTimeAndComponent) {
   // dt = 1 ms overflows 1.7 % late), so "near" is within 0.05 s.
   EXPECT_NEAR(std::stod(out.message.substr(at + 4)), 1.0, 0.05) << out.message;
   EXPECT_NE(out.message.find("speed"), std::string::npos) << out.message;
+}
+
+// y' = (a + ib) y as the real system [a -b; b a].
+class Rotating final : public OdeSystem {
+ public:
+  Rotating(double a, double b) : a_(a), b_(b) {}
+  int size() const override { return 2; }
+  void rhs(double, const double* x, double* f) override {
+    f[0] = a_ * x[0] - b_ * x[1];
+    f[1] = b_ * x[0] + a_ * x[1];
+  }
+
+ private:
+  double a_, b_;
+};
+
+// The predicted stable step: on the negative real axis the closed-form
+// intervals (Euler 2, RK4 2.7853 -- the real root of its stability polynomial
+// = -1 -- AB2 1, AB3 6/11, AB4 3/10); on the imaginary axis RK4 reaches
+// 2 sqrt(2) and Euler nothing; and the integrators themselves, on a rotating
+// decaying mode, decay just below the predicted step and grow just above it.
+TEST(Stability, PredictedStepsMatchClosedFormsAndTheIntegrators) {
+  const std::vector<std::pair<std::string, double>> real_axis{
+      {"euler", 2.0}, {"rk4", 2.785293563405282}, {"ab2", 1.0}, {"ab3", 6.0 / 11}, {"ab4", 0.3}};
+  for (const auto& [m, bound] : real_axis) {
+    EXPECT_NEAR(*max_stable_step(m, {{-1.0, 0.0}}), bound, 1e-9) << m;
+    EXPECT_NEAR(*max_stable_step(m, {{-10.0, 0.0}, {-1.0, 0.0}}), bound / 10, 1e-10) << m;
+  }
+  EXPECT_NEAR(*max_stable_step("rk4", {{-1e-9, 1.0}}), 2 * std::sqrt(2.0), 1e-6);
+  // Euler's region touches the imaginary axis only at 0 (a region test with
+  // a 1e-12 margin for points on the boundary leaves about 1.4e-6).
+  EXPECT_LT(*max_stable_step("euler", {{-1e-9, 1.0}}), 1e-5);
+  EXPECT_FALSE(max_stable_step("cvode-bdf", {{-1.0, 0.0}}).has_value());
+  const double a = -1.0, b = 3.0;
+  for (const char* m : {"euler", "rk4", "ab2", "ab3", "ab4"}) {
+    const double h = *max_stable_step(m, {{a, b}});
+    auto final_size = [&](double dt) {
+      Rotating sys(a, b);
+      IntegratorOptions o;
+      o.dt = dt;
+      auto integ = make_integrator(m, o);
+      const double x0[2] = {1.0, 0.0};
+      integ->reset(sys, 0.0, x0);
+      // Long enough for a spurious multistep root just outside the unit circle,
+      // excited only by the start-up error, to outgrow the initial value.
+      const double T = 20000 * h;
+      integ->advance_to(T);
+      return std::hypot(integ->state()[0], integ->state()[1]);
+    };
+    EXPECT_LT(final_size(0.97 * h), 1.0) << m << " h = " << h;
+    EXPECT_GT(final_size(1.03 * h), 1.0) << m << " h = " << h;
+  }
 }
 
 std::vector<std::string> all_names() {

@@ -1,0 +1,47 @@
+// Stiffness diagnosis of a scene: the eigenvalues of the plant Jacobian along
+// a trajectory (spectral radius, stiffness ratio, fastest and slowest time
+// constants with the state that participates most), and for each explicit
+// fixed-step integrator the largest stable step its stability region predicts
+// beside the largest found by bisection on the scene itself.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "models/scene.hpp"
+
+namespace pumasim {
+
+struct ModeInfo {
+  double re = 0, im = 0;  // eigenvalue [1/s]
+  std::string state;      // the state with the largest participation factor
+};
+
+struct StiffnessSample {
+  double t = 0;
+  double spectral_radius = 0;  // max |lambda|
+  double stiffness_ratio = 0;  // max |Re lambda| / min |Re lambda| over decaying modes
+  ModeInfo fastest, slowest;   // decaying modes with the largest / smallest |Re lambda|
+  int unstable_modes = 0;      // Re lambda > 0 (a physically growing mode)
+};
+
+struct StepBound {
+  std::string integrator;
+  double predicted = 0;  // min over samples of the region's bound [s]
+  double measured = 0;   // largest stable dt found by bisection [s] (0: not measured)
+  std::string note;
+};
+
+struct StiffnessReport {
+  std::vector<StiffnessSample> samples;
+  std::vector<StepBound> steps;
+};
+
+// samples: Jacobians at that many equally spaced times of a run over
+// [0, t_end] with the scene's own integrator and settings. bisect: also
+// measure each explicit method's largest stable step (stable: the run over
+// [0, t_end] succeeds and ends within 10 % (relative, per state, floor 1) of
+// that run's final state).
+StiffnessReport analyse_stiffness(const Scene& scene, double t_end, int samples, bool bisect);
+
+}  // namespace pumasim
