@@ -1,0 +1,156 @@
+#!/usr/bin/python3
+"""Writes results/README.md from the sweeps' and the stiffness tables' outputs.
+
+    /usr/bin/python3 experiments/report.py [--results DIR] [--out FILE] [--minutes M]
+
+Reads every <sweep>_summary.json and <sweep>.csv under DIR (default results/)
+and results/stiffness/*.csv; every number in the report is read from those
+files (the sweeps' qualitative findings come from the sweep files, where they
+were written after reading the tables). --minutes: how long the whole
+regeneration took, for the header (scripts/results.sh passes it).
+"""
+import argparse
+import csv
+import glob
+import json
+import math
+import os
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+
+def read_csv(path):
+    with open(path) as f:
+        lines = [line for line in f if not line.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
+def fmt_int(x):
+    return f"{int(float(x)):,}"
+
+
+def sweep_section(summary, folder, rel):
+    name = summary["name"]
+    rows = read_csv(os.path.join(folder, name + ".csv"))
+    out = [f"### {summary['title']}", "",
+           f"Sweep `{summary['file']}` on scene `experiments/scenes/{summary['scene']}.toml`; "
+           f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason).",
+           ""]
+    if summary.get("findings"):
+        out += [summary["findings"], ""]
+    agree = summary["agreement"]
+    worst = max(a["ee_mm"] for a in agree.values())
+    track = [a["tracking_mm"] for a in agree.values() if a["tracking_mm"] is not None]
+    out += [f"References: per variant, the reference and a cross-check by a different method differ by at most "
+            f"{worst:.2g} mm at the end effector (every variant's figure is in the CSV header)"
+            + (f"; the path-tracking error itself is {min(track):.3g}–{max(track):.3g} mm." if track else "."), ""]
+    if summary.get("distance_to_limit"):
+        lim = summary["limit_variant"]
+        cells = ", ".join(f"{lab} {d['ee_mm']:.3g} mm" for lab, d in summary["distance_to_limit"].items()
+                          if lab != lim)
+        out += [f"Distance of each variant's reference solution to the `{lim}` one (max end-effector "
+                f"distance): {cells}.", ""]
+    variants = [v["label"] for v in summary["variants"]]
+    integrators = sorted({r["integrator"] for r in rows})
+    target = summary["target_mm"]
+    out += [f"Cheapest run per integrator and variant whose end effector stays within {target:g} mm of the "
+            "reference: RHS evaluations (setting); `fail` if every setting failed, `–` if none was accurate "
+            "enough.", "",
+            "| integrator | " + " | ".join(variants) + " |", "|---|" + "---:|" * len(variants)]
+    for n in integrators:
+        cells = []
+        for v in variants:
+            rs = [r for r in rows if r["integrator"] == n and r["variant"] == v]
+            good = [r for r in rs if r["ok"] == "True" and float(r["max_ee_error_mm"]) <= target]
+            if good:
+                b = min(good, key=lambda r: float(r["rhs_evaluations"]))
+                cells.append(f"{fmt_int(b['rhs_evaluations'])} ({b['setting']})")
+            elif rs and all(r["ok"] != "True" for r in rs):
+                cells.append("fail")
+            else:
+                cells.append("–")
+        out.append(f"| {n} | " + " | ".join(cells) + " |")
+    out += ["", f"![{name}]({rel}/{name}.png)", ""]
+    if summary.get("has_cost_plot"):
+        out += [f"![{name} cost]({rel}/{name}_cost.png)", ""]
+    return out
+
+
+def stiffness_section(folder, rel):
+    files = sorted(glob.glob(os.path.join(folder, "*.csv")))
+    if not files:
+        return []
+    out = ["## Stiffness diagnostics", "",
+           "From `pumasim stiffness <scene> --bisect` (experiments/stiffness_table.py): the largest eigenvalue "
+           "modulus of the plant Jacobian along the run, the stiffness ratio, and for each explicit fixed-step "
+           "method the largest stable step its stability region predicts beside the one found by bisection on "
+           "the scene.", ""]
+    for path in files:
+        rows = read_csv(path)
+        name = os.path.splitext(os.path.basename(path))[0]
+        methods = sorted({r["integrator"] for r in rows})
+        out += [f"### {name}", "", "| case | spectral radius [1/s] | stiffness ratio | fastest mode | "
+                + " | ".join(f"{m} predicted / measured [s]" for m in methods) + " |",
+                "|---|---:|---:|---|" + "---:|" * len(methods)]
+        cases = []
+        for r in rows:
+            if r["case"] not in cases:
+                cases.append(r["case"])
+        for c in cases:
+            rc = [r for r in rows if r["case"] == c]
+            r0 = rc[0]
+            cells = []
+            for m in methods:
+                rm = [r for r in rc if r["integrator"] == m]
+                cells.append(f"{float(rm[0]['predicted_s']):.3g} / {float(rm[0]['measured_s']):.3g}" if rm else "")
+            out.append(f"| {c} | {float(r0['spectral_radius']):.4g} | {float(r0['stiffness_ratio']):.3g} | "
+                       f"{r0['fastest_state']} (tau {float(r0['fastest_tau_s']):.3g} s) | " + " | ".join(cells) + " |")
+        png = os.path.join(folder, name + ".png")
+        if os.path.exists(png):
+            out += ["", f"![{name}]({rel}/{name}.png)"]
+        out.append("")
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--results", default=os.path.join(ROOT, "results"))
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--minutes", type=float, default=None)
+    args = ap.parse_args()
+    res = args.results
+    out_path = args.out or os.path.join(res, "README.md")
+    out_dir = os.path.dirname(os.path.abspath(out_path))
+    lines = ["# pumasim results", "",
+             "Generated by `scripts/results.sh` (sweeps, stiffness tables, then `experiments/report.py`); "
+             "do not edit by hand."
+             + (f" The whole regeneration took {args.minutes:.0f} min on this machine (2 cores)."
+                if args.minutes else ""),
+             "Wall times are medians of repeated runs on a shared machine: compare them within one table; "
+             "right-hand-side evaluations do not depend on the machine.", "",
+             "Other results: `paper/README.md` (the paper's experiment), `dynamics_backends.md` (the dynamics "
+             "back-ends' cost).", ""]
+    summaries = []
+    for path in sorted(glob.glob(os.path.join(res, "*", "*_summary.json"))):
+        with open(path) as f:
+            summaries.append((json.load(f), os.path.dirname(path)))
+    groups = [("Work-precision on the paper's scenes", lambda s: not s["name"].startswith("stiff_")),
+              ("Stiff and extreme scenes", lambda s: s["name"].startswith("stiff_"))]
+    for title, keep in groups:
+        chosen = [(s, d) for s, d in summaries if keep(s)]
+        if not chosen:
+            continue
+        lines += [f"## {title}", ""]
+        for s, d in chosen:
+            lines += sweep_section(s, d, os.path.relpath(d, out_dir))
+    lines += stiffness_section(os.path.join(res, "stiffness"), os.path.relpath(os.path.join(res, "stiffness"),
+                                                                               out_dir))
+    tmp = out_path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, out_path)
+    print(f"report: {os.path.relpath(out_path, ROOT)}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,31 @@
+#!/bin/bash
+# CI's end-to-end check of the results pipeline (the full regeneration,
+# scripts/results.sh, takes longer than CI): every sweep file parses and its
+# reduced version runs and merges (first and last variants, two settings per
+# method, short horizon), the stiffness tables run on one case each, the
+# report is assembled -- all under build/, nothing under results/. A re-run
+# must find every run complete (resumability).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=/usr/bin/python3
+rm -rf build/sweeps-reduced build/stiffness-reduced
+for f in experiments/sweeps/*.toml; do
+  $PY experiments/sweep.py "$f" --reduced --jobs 2 > /dev/null
+done
+again=$($PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced | sed -n 1p)
+case "$again" in
+  *"32 runs in this share, 32 already complete"*) ;;
+  *) echo "re-run did not skip the complete runs: $again" >&2; exit 1 ;;
+esac
+# Shards 1/2 and 2/2 of a fresh sweep together complete it.
+rm -rf build/sweeps-reduced/stiff_sampling
+$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --shard 1/2 > /dev/null
+$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --shard 2/2 > /dev/null
+$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --merge > /dev/null
+$PY experiments/stiffness_table.py --reduced > /dev/null
+mkdir -p build/sweeps-reduced/results/stiffness
+cp build/stiffness-reduced/*.csv build/sweeps-reduced/results/stiffness/
+$PY experiments/report.py --results build/sweeps-reduced/results --out build/sweeps-reduced/README.md > /dev/null
+grep -q "Cheapest run per integrator" build/sweeps-reduced/README.md
+grep -q "Stiffness diagnostics" build/sweeps-reduced/README.md
+echo "sweep pipeline: ok"
