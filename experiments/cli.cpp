@@ -58,6 +58,9 @@ constexpr const char* kUsage =
     "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
     "      by state; each explicit method's largest stable step from its stability\n"
     "      region and, with --bisect, found on the scene\n"
+    "  conditioning <scene.toml> [--samples N] [--set section.key=value ...]\n"
+    "      cond(H) along the scene's reference (default 200 samples) and every\n"
+    "      back-end's forward-dynamics error there (tau from the reference's qdd)\n"
     "  integrators   lists the integrators\n"
 
     "  help       prints this text\n";
@@ -292,6 +295,7 @@ std::string unit_of(const std::string& state) {
   if (state.rfind("q", 0) == 0) return "rad";
   if (state.rfind("i_motor", 0) == 0) return "A";
   if (state.rfind("z_piv", 0) == 0) return "rad s";
+  if (state.rfind("e_", 0) == 0) return "J";
   return "-";
 }
 
@@ -367,6 +371,8 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   }
   csv << ",x [m],y [m],z [m]";
   if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm]";
+  const int led = L.e;  // the ledger's first state, -1 without
+  if (led >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
   csv << "\n";
   // The run only copies the state at each output (the wall time is the
   // simulation's); rows are formatted, with reference and kinematics, after.
@@ -386,6 +392,9 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   double max_err = 0, sum_sq = 0;
   long samples = 0;
   ReferenceSample ref;
+  // Energy ledger: residual of (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction),
+  // and the scale it is judged against (the largest term seen, kinetic energy included).
+  double E0 = 0, max_residual = 0, energy_scale = 0;
   char buf[40];
   auto num = [&](double v) { std::snprintf(buf, sizeof buf, ",%.17g", v); csv << buf; };
   for (std::size_t row = 0; row + m < saved.size(); row += static_cast<std::size_t>(m + 1)) {
@@ -406,6 +415,16 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       max_err = std::max(max_err, e);
       sum_sq += e * e;
       ++samples;
+    }
+    if (led >= 0) {
+      double kin = 0;
+      const double Em = plant.mechanical_energy(x, &kin), Eg = plant.magnetic_energy(x);
+      if (row == 0) E0 = Em + Eg;
+      const double res = (Em + Eg - E0) - (x[led] - x[led + 1] - x[led + 2]);
+      num(Em), num(Eg), num(res);
+      max_residual = std::max(max_residual, std::abs(res));
+      energy_scale = std::max({energy_scale, kin, Eg, std::abs(Em + Eg - E0), std::abs(x[led]),
+                               std::abs(x[led + 1]), std::abs(x[led + 2])});
     }
     csv << "\n";
   }
@@ -437,6 +456,12 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   json_number(js, samples ? 1e3 * max_err : std::nan(""));
   js << ",\n  \"rms_path_error_mm\": ";
   json_number(js, samples ? 1e3 * std::sqrt(sum_sq / samples) : std::nan(""));
+  if (led >= 0) {
+    js << ",\n  \"max_ledger_residual_J\": ";
+    json_number(js, max_residual);
+    js << ",\n  \"ledger_energy_scale_J\": ";
+    json_number(js, energy_scale);
+  }
   js << "\n}\n";
 
   utsname u{};
@@ -504,6 +529,44 @@ int cmd_stiffness(const std::vector<std::string>& args, std::ostream& out) {
   return kExitOk;
 }
 
+int cmd_conditioning(const std::vector<std::string>& args, std::ostream& out) {
+  const Options opt = Options::parse(args, 2, {"set", "samples"}, {});
+  const Scene sc = scene_argument(args, opt);
+  double samples = 200;
+  if (auto s = opt.get("samples")) {
+    samples = parse_double(*s, "--samples");
+    if (!(samples >= 1 && samples <= 100000) || samples != std::floor(samples)) {
+      throw UsageError("--samples: expected a whole number in [1, 100000]");
+    }
+  }
+  const ConditioningReport rep = analyse_conditioning(sc, static_cast<int>(samples));
+  out << "# conditioning of H along the reference of " << sc.name << " (" << sc.plant.n << " joints"
+      << (sc.rotor_inertia ? "" : ", rotor inertia removed") << "); back-ends' qdd error:\n"
+      << "# max_j |qdd_backend - qdd_ref| / max(max_j |qdd_ref|, 1 rad/s^2) for tau = ID(q, qd, qdd_ref)\n";
+  out << "t [s]";
+  for (int j = 0; j < sc.plant.n; ++j) out << "\tq" << j + 1 << " [rad]";
+  out << "\tcond(H)\tmin eig(H)";
+  for (const auto& b : rep.backends) out << "\t" << b;
+  out << "\n";
+  char buf[64];
+  for (const ConditioningSample& s : rep.samples) {
+    std::snprintf(buf, sizeof buf, "%.6g", s.t);
+    out << buf;
+    for (double v : s.q) {
+      std::snprintf(buf, sizeof buf, "\t%.6g", v);
+      out << buf;
+    }
+    std::snprintf(buf, sizeof buf, "\t%.6g\t%.6g", s.cond_H, s.min_eig_H);
+    out << buf;
+    for (double e : s.qdd_error) {
+      std::snprintf(buf, sizeof buf, "\t%.3g", e);
+      out << buf;
+    }
+    out << "\n";
+  }
+  return kExitOk;
+}
+
 int cmd_integrators(std::ostream& out) {
   for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
   return kExitOk;
@@ -526,6 +589,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     if (cmd == "run") return cmd_run(args, out, err);
     if (cmd == "integrators") return cmd_integrators(out);
     if (cmd == "stiffness") return cmd_stiffness(args, out);
+    if (cmd == "conditioning") return cmd_conditioning(args, out);
     if (cmd == "help" || cmd == "--help" || cmd == "-h") {
       out << kUsage;
       return kExitOk;

@@ -19,7 +19,7 @@ import subprocess
 import sys
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.path.join(ROOT, "build", "release", "bin", "pumasim")
+PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
 OUT = os.path.join(ROOT, "results", "paper")
 WORK = os.path.join(ROOT, "build", "paper_runs")
 PAPER_MAX_ERROR_MM = 0.65   # Sokolov & Toth 1999, sec. 6, slow run

@@ -70,6 +70,14 @@ def sweep_section(summary, folder, rel):
             else:
                 cells.append("–")
         out.append(f"| {n} | " + " | ".join(cells) + " |")
+    if rows and "max_ledger_residual_J" in rows[0]:
+        out += ["", "Energy ledger: largest residual of the balance (mechanical + magnetic energy change = input − "
+                "copper − friction) over the run, against the largest energy term [J]:", "",
+                "| integrator | setting | residual [J] | scale [J] |", "|---|---|---:|---:|"]
+        for r in rows:
+            if r["ok"] == "True" and r.get("max_ledger_residual_J"):
+                out.append(f"| {r['integrator']} | {r['setting']} | {float(r['max_ledger_residual_J']):.3g} | "
+                           f"{float(r['ledger_energy_scale_J']):.3g} |")
     out += ["", f"![{name}]({rel}/{name}.png)", ""]
     if summary.get("has_cost_plot"):
         out += [f"![{name} cost]({rel}/{name}_cost.png)", ""]
@@ -77,7 +85,7 @@ def sweep_section(summary, folder, rel):
 
 
 def stiffness_section(folder, rel):
-    files = sorted(glob.glob(os.path.join(folder, "*.csv")))
+    files = sorted(f for f in glob.glob(os.path.join(folder, "*.csv")) if not f.endswith("conditioning.csv"))
     if not files:
         return []
     out = ["## Stiffness diagnostics", "",
@@ -112,6 +120,27 @@ def stiffness_section(folder, rel):
     return out
 
 
+def conditioning_section(folder, rel):
+    path = os.path.join(folder, "conditioning.csv")
+    if not os.path.exists(path):
+        return []
+    rows = read_csv(path)
+    backends = [k[len("qdd_error_"):] for k in rows[0] if k.startswith("qdd_error_")]
+    out = ["## Singular and ill-conditioned poses", "",
+           "From `pumasim conditioning` (experiments/stiffness_table.py, `conditioning.csv`): the largest "
+           "cond(H) along each path, the smallest eigenvalue of H, the closest approach of the wrist to q5 = 0, "
+           "and each back-end's worst forward-dynamics error (relative to max(|qdd|, 1 rad/s^2)) for the "
+           "torque that produces the reference's acceleration.", "",
+           "| case | max cond(H) | min eig(H) | min abs(q5) [rad] | " + " | ".join(backends) + " |",
+           "|---|---:|---:|---:|" + "---:|" * len(backends)]
+    for r in rows:
+        out.append(f"| {r['case']} | {float(r['max_cond_H']):.3g} | {float(r['min_eig_H']):.3g} | "
+                   f"{r['min_abs_q5_rad'] or '–'} | " + " | ".join(r[f"qdd_error_{b}"] for b in backends) + " |")
+    if os.path.exists(os.path.join(folder, "conditioning.png")):
+        out += ["", f"![conditioning]({rel}/conditioning.png)"]
+    return out + [""]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--results", default=os.path.join(ROOT, "results"))
@@ -143,8 +172,9 @@ def main():
         lines += [f"## {title}", ""]
         for s, d in chosen:
             lines += sweep_section(s, d, os.path.relpath(d, out_dir))
-    lines += stiffness_section(os.path.join(res, "stiffness"), os.path.relpath(os.path.join(res, "stiffness"),
-                                                                               out_dir))
+    stiff_dir = os.path.join(res, "stiffness")
+    lines += stiffness_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
+    lines += conditioning_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
     tmp = out_path + ".tmp"
     with open(tmp, "w") as f:
         f.write("\n".join(lines) + "\n")

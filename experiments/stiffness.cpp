@@ -11,6 +11,7 @@
 #include "integrators/driver.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
+#include "models/backend.hpp"
 
 namespace pumasim {
 namespace {
@@ -122,6 +123,45 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
       }
     }
     rep.steps.push_back(b);
+  }
+  return rep;
+}
+
+ConditioningReport analyse_conditioning(const Scene& sc, int samples) {
+  if (!sc.plant.reference) throw std::invalid_argument("conditioning: the scene has no [reference] to follow");
+  if (samples < 1) throw std::invalid_argument("conditioning: expected at least one sample");
+  const PlantConfig& pc = sc.plant;
+  const int n = pc.n, dof = pc.robot.dof();
+  const RobotModel sim = n < dof ? lock_joints(pc.robot, n, pc.q_held.head(dof)) : pc.robot;
+  ConditioningReport rep;
+  std::vector<std::unique_ptr<DynamicsBackend>> bs;
+  for (const BackendInfo& b : backends()) {
+    if (!b.why_unsupported(sim).empty()) continue;
+    rep.backends.emplace_back(b.name);
+    bs.push_back(b.make(sim));
+  }
+  auto crba = find_backend("crba").make(sim);
+  Eigen::VectorXd q(n), qd(n), qdd(n), tau(n), out(n);
+  Eigen::MatrixXd H(n, n);
+  ReferenceSample r;
+  const double T = pc.reference->profile().duration();
+  for (int k = 0; k <= samples; ++k) {
+    ConditioningSample s;
+    s.t = T * k / samples;
+    pc.reference->eval(s.t, r);
+    q = r.q.head(n), qd = r.qd.head(n), qdd = r.qdd.head(n);
+    s.q.assign(q.data(), q.data() + n);
+    crba->mass_matrix(q, H);
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H, Eigen::EigenvaluesOnly).eigenvalues();
+    s.min_eig_H = ev.minCoeff();
+    s.cond_H = ev.maxCoeff() / ev.minCoeff();
+    crba->inverse_dynamics(q, qd, qdd, tau);
+    const double scale = std::max(qdd.lpNorm<Eigen::Infinity>(), 1.0);  // at rest qdd = 0: floor 1 rad/s^2
+    for (auto& b : bs) {
+      b->forward_dynamics(q, qd, tau, out);
+      s.qdd_error.push_back((out - qdd).lpNorm<Eigen::Infinity>() / scale);
+    }
+    rep.samples.push_back(std::move(s));
   }
   return rep;
 }

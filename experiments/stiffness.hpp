@@ -44,4 +44,24 @@ struct StiffnessReport {
 // that run's final state).
 StiffnessReport analyse_stiffness(const Scene& scene, double t_end, int samples, bool bisect);
 
+// Conditioning along a scene's reference: at each sample (q, qd, qdd) of the
+// reference for the simulated joints, cond(H) = its largest over smallest
+// eigenvalue, and each supported back-end's forward dynamics of the torque
+// tau = ID(q, qd, qdd) (CRBA's RNEA) against qdd: max_j |qdd_b - qdd| /
+// max(max_j |qdd|, 1 rad/s^2) -- the back-ends' agreement where H is
+// ill-conditioned.
+struct ConditioningSample {
+  double t = 0;
+  std::vector<double> q;
+  double cond_H = 0, min_eig_H = 0;
+  std::vector<double> qdd_error;  // per back-end, in the order of `backends`
+};
+
+struct ConditioningReport {
+  std::vector<std::string> backends;
+  std::vector<ConditioningSample> samples;
+};
+
+ConditioningReport analyse_conditioning(const Scene& scene, int samples);
+
 }  // namespace pumasim

@@ -8,7 +8,10 @@ feedback gains x1, x10, x100): the largest spectral radius of the plant
 Jacobian along 0.2 s of the run, the stiffness ratio, the fastest mode, and
 for each explicit fixed-step method the largest stable step predicted by its
 stability region beside the one found by bisection. Writes DIR/<table>.csv
-and DIR/<table>.png (default DIR = results/stiffness). --reduced: one case per
+and DIR/<table>.png (default DIR = results/stiffness). Then the conditioning
+table: `pumasim conditioning` along the paper's path, the path moved out to a
+nearly stretched arm, and the six-joint path through the wrist singularity,
+each with and without rotor inertia: DIR/conditioning.csv and .png. --reduced: one case per
 table, into build/stiffness-reduced (CI).
 """
 import argparse
@@ -61,6 +64,65 @@ def analyse(scene, sets, t_end):
     }, steps
 
 
+CONDITIONING = [
+    ("paper path, 3 joints", "paper_slow", []),
+    ("paper path, 3 joints, no rotor inertia", "paper_slow", ["scene.rotor_inertia=false"]),
+    ("path moved out, arm nearly stretched", "paper_slow", ["reference.start=[0.52, -0.25]"]),
+    ("path moved out, no rotor inertia", "paper_slow", ["reference.start=[0.52, -0.25]", "scene.rotor_inertia=false"]),
+    ("6 joints through the wrist singularity", "stiff_singular", []),
+    ("6 joints through the wrist singularity, no rotor inertia", "stiff_singular", ["scene.rotor_inertia=false"]),
+]
+
+
+def conditioning(out, reduced, plt):
+    rows, curves = [], []
+    for case, scene, sets in (CONDITIONING[:1] if reduced else CONDITIONING):
+        cmd = [PUMASIM, "conditioning", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
+               "--samples", "20" if reduced else "600"]
+        for x in sets:
+            cmd += ["--set", x]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        if p.returncode != 0:
+            sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
+        lines = [line for line in p.stdout.splitlines() if not line.startswith("#")]
+        head = lines[0].split("\t")
+        data = [dict(zip(head, (float(v) for v in line.split("\t")))) for line in lines[1:]]
+        backends = head[head.index("min eig(H)") + 1:]
+        worst = max(data, key=lambda r: r["cond(H)"])
+        row = {"case": case, "command": " ".join(["pumasim conditioning", scene] + [f"--set {x}" for x in sets]),
+               "max_cond_H": f"{worst['cond(H)']:.6g}", "t_at_max_s": f"{worst['t [s]']:.4g}",
+               "min_eig_H": f"{min(r['min eig(H)'] for r in data):.6g}"}
+        if "q5 [rad]" in head:
+            row["min_abs_q5_rad"] = f"{min(abs(r['q5 [rad]']) for r in data):.3g}"
+        else:
+            row["min_abs_q5_rad"] = ""
+        for b in backends:
+            row[f"qdd_error_{b}"] = f"{max(r[b] for r in data):.3g}"
+        rows.append(row)
+        curves.append((case, [r["t [s]"] for r in data], [r["cond(H)"] for r in data]))
+        print(f"conditioning {case}: max cond(H) {row['max_cond_H']}", flush=True)
+    keys = []
+    for r in rows:
+        keys += [k for k in r if k not in keys]
+    path = os.path.join(out, "conditioning.csv")
+    with open(path + ".tmp", "w", newline="") as f:
+        f.write("# pumasim conditioning <scene> --samples 600 [--set ...]: cond(H) along the reference and each "
+                "back-end's worst relative qdd error\n")
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(path + ".tmp", path)
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for case, t, c in curves:
+        ax.plot(t, c, lw=1, label=case)
+    ax.set(xlabel="t [s]", ylabel="cond(H)", yscale="log", title="Conditioning of H along the paths")
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "conditioning.png"), dpi=80)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--reduced", action="store_true")
@@ -104,6 +166,7 @@ def main():
         fig.tight_layout()
         fig.savefig(os.path.join(out, scene + ".png"), dpi=80)
         plt.close(fig)
+    conditioning(out, args.reduced, plt)
     print(f"stiffness tables: {os.path.relpath(out, ROOT)}/")
 
 

@@ -175,7 +175,9 @@ def execute(s, work, run):
         cmd += ["--set", o]
     if s["t_end"]:
         cmd += ["--t-end", repr(s["t_end"])]
-    if s["max_steps"] and tag not in ("reference", "check"):
+    # The budget is for adaptive methods (a fixed-step run's count is t_end/dt,
+    # known in advance) and not for the references.
+    if s["max_steps"] and tag not in ("reference", "check") and "--rtol" in opts:
         cmd += ["--max-steps", str(s["max_steps"])]
     walls = []
     for _ in range(repeats):
@@ -266,6 +268,9 @@ def merge(s, work, out_dir):
                 "steps": st["steps"], "rejected_steps": st["rejected_steps"], "restarts": st["restarts"],
                 "time_events": st["time_events"], "root_events": st["root_events"],
             })
+            if "max_ledger_residual_J" in st:  # scenes with the energy ledger
+                rows[-1]["max_ledger_residual_J"] = st["max_ledger_residual_J"]
+                rows[-1]["ledger_energy_scale_J"] = st["ledger_energy_scale_J"]
     limit = {}
     if s["limit_variant"]:
         lim = trajectory(os.path.join(work, slug(s["limit_variant"]), "reference"))
@@ -282,7 +287,10 @@ def merge(s, work, out_dir):
                     f"{' '.join([v['check'][0]] + v['check'][1])}: {a['ee_mm']:.3g} mm, {a['joint_rad']:.3g} rad"
                     + (f"; its reference vs {s['limit_variant']}'s: {limit[lab]['ee_mm']:.3g} mm" if limit else "")
                     + "\n")
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        keys = []
+        for r in rows:
+            keys += [k for k in r if k not in keys]
+        w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{x:.6g}" if isinstance(x, float) else x) for k, x in r.items()})
@@ -320,10 +328,13 @@ def merge(s, work, out_dir):
                 best = min(ok, key=lambda r: r["rhs_evaluations"])
                 cost.setdefault(n, []).append((v["value"], best["rhs_evaluations"], best["setting"],
                                                best["wall_time_median_s"]))
-    if nv > 1:
+    plottable = {n: [p for p in pts if isinstance(p[0], (int, float)) and math.isfinite(p[0]) and p[0] > 0]
+                 for n, pts in cost.items()}
+    has_cost_plot = nv > 1 and any(len(p) > 1 for p in plottable.values())
+    if has_cost_plot:
         fig, ax = plt.subplots(figsize=(7, 4.5))
-        for n, pts in sorted(cost.items()):
-            if isinstance(pts[0][0], (int, float)):
+        for n, pts in sorted(plottable.items()):
+            if pts:
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", ms=3, lw=1, color=colors[n], label=n)
         ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)",
                title=f"{s['title']}: cost to reach {s['target_mm']:g} mm")
@@ -339,7 +350,7 @@ def merge(s, work, out_dir):
                "runs": len(rows), "failed": sum(1 for r in rows if not r["ok"]),
                "cost_to_target": {n: [{"value": p[0], "rhs": p[1], "setting": p[2], "wall_s": p[3]} for p in pts]
                                   for n, pts in cost.items()},
-               "has_cost_plot": nv > 1}
+               "has_cost_plot": has_cost_plot}
     with open(os.path.join(out_dir, name + "_summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     return summary

@@ -101,6 +101,7 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   int next = 2 * n;
   if (is_electrical(cfg_)) layout_.i = next, next += n;
   if (cfg_.controller == ControllerMode::kContinuous) layout_.z = next, next += n;
+  if (cfg_.energy_ledger) layout_.e = next, next += 3;
   layout_.size = next;
   const auto add = [&](const char* prefix) {
     for (int j = 0; j < n; ++j) layout_.names.push_back(prefix + std::to_string(j + 1));
@@ -109,6 +110,9 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   add("qd");
   if (layout_.i >= 0) add("i_motor");
   if (layout_.z >= 0) add("z_piv");
+  if (layout_.e >= 0) {
+    for (const char* name : {"e_in", "e_copper", "e_friction"}) layout_.names.emplace_back(name);
+  }
 
   wd_ = std::make_unique<Workspace<double>>(n);
   wd_->backend = find_backend(cfg_.backend).make(model_);
@@ -170,6 +174,7 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
     w.qd[j] = x[layout_.qd + j];
   }
   controller(t, x, w);
+  S p_in(0), p_cu(0), p_f(0);  // energy ledger: power in, copper and friction losses [W]
   // Drive: amplifier and motor.
   for (int j = 0; j < n; ++j) {
     if (!cfg_.drive) {
@@ -189,6 +194,10 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
       i = (ea - S(M.torque_constant) * wm) / R;
     }
     w.tm[j] = S(M.torque_constant) * i;
+    if (layout_.e >= 0) {
+      p_in += ea * i;
+      p_cu += R * i * i;
+    }
   }
   // Friction and the joint torques.
   const bool hybrid = hybrid_ && friction_on_;
@@ -200,6 +209,7 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
     w.applied[j] = need_bias ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
     const S tf = friction_on_ ? friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]) : S(0);
     w.tau[j] = S(Z) * (w.tm[j] - tf);
+    if (layout_.e >= 0) p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
   if (!hybrid) {
     w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
@@ -232,6 +242,11 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
   for (int j = 0; j < n; ++j) {
     xdot[layout_.q + j] = w.qd[j];
     xdot[layout_.qd + j] = w.qdd[j];
+  }
+  if (layout_.e >= 0) {
+    xdot[layout_.e] = p_in;
+    xdot[layout_.e + 1] = p_cu;
+    xdot[layout_.e + 2] = p_f;
   }
   if (layout_.z >= 0) {
     const ReferenceSample& r = current_reference(t);
@@ -418,6 +433,32 @@ void Plant::initial_state(double* x) {
   }
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
   settle_modes(0.0, x);  // hybrid joints start stuck unless already pushed past Fs
+}
+
+double Plant::mechanical_energy(const double* x, double* kinetic) {
+  const int n = layout_.n;
+  Eigen::VectorXd q(n), qd(n);
+  for (int j = 0; j < n; ++j) q[j] = x[layout_.q + j], qd[j] = x[layout_.qd + j];
+  Eigen::MatrixXd H(n, n);
+  wd_->backend->mass_matrix(q, H);
+  // V = -sum_j m_j g . p_cj over the simulated links (held links merged into the last).
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  double V = 0;
+  for (int j = 0; j < n; ++j) {
+    T = T * dh_transform(model_, j, q[j]);
+    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * model_.joints[j].com + T.topRightCorner<3, 1>();
+    V -= model_.joints[j].mass * model_.gravity.dot(c);
+  }
+  const double T_kin = 0.5 * qd.dot(H * qd);
+  if (kinetic) *kinetic = T_kin;
+  return T_kin + V;
+}
+
+double Plant::magnetic_energy(const double* x) const {
+  if (layout_.i < 0) return 0.0;
+  double E = 0;
+  for (int j = 0; j < layout_.n; ++j) E += 0.5 * cfg_.motor[j].inductance * x[layout_.i + j] * x[layout_.i + j];
+  return E;
 }
 
 Eigen::Vector3d Plant::tool_position(const double* x) const {

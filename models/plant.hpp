@@ -48,6 +48,10 @@ struct PlantConfig {
   std::vector<PivParams> piv;
   std::shared_ptr<const Reference> reference;  // what a controller follows
   Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
+  // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
+  // (electrical input e_a i, copper loss (R0 + R) i^2, friction loss
+  // tau_f w_m, summed over the joints), integrated with the rest.
+  bool energy_ledger = false;
 };
 
 struct StateLayout {
@@ -56,8 +60,9 @@ struct StateLayout {
   int qd = 0;
   int i = -1;
   int z = -1;
+  int e = -1;     // energy ledger: e_in, e_copper, e_friction
   int size = 0;
-  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1..
+  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1.., e_in, e_copper, e_friction
   int index(const std::string& name) const;  // -1 if absent
 };
 
@@ -103,6 +108,13 @@ class Plant {
   void on_root(int joint, double t, double* x);
   void settle_modes(double t, double* x);
   SlipMode slip_mode(int joint) const { return mode_[static_cast<std::size_t>(joint)]; }
+
+  // Stored energy at x [J]: mechanical (1/2 qd' H qd + V(q), rotor inertia
+  // included) and magnetic (1/2 La i^2). With the ledger, the balance
+  //   (mechanical + magnetic)(t) - (mechanical + magnetic)(0) = e_in - e_copper - e_friction
+  // holds exactly for the ODE; its residual measures the integration error.
+  double mechanical_energy(const double* x, double* kinetic = nullptr);
+  double magnetic_energy(const double* x) const;
 
   // Flange position for the state x (held joints included) [m].
   Eigen::Vector3d tool_position(const double* x) const;

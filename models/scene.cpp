@@ -88,6 +88,9 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   } catch (const ConfigError& e) {
     throw ConfigError(s.where("robot") + e.what());
   }
+  sc.rotor_inertia = s.boolean_or("rotor_inertia", true);
+  pc.energy_ledger = s.boolean_or("energy_ledger", false);
+  if (!sc.rotor_inertia) pc.robot = without_rotor_inertia(pc.robot);
   const int dof = pc.robot.dof();
   const int n = read_int(s, "joints", 1, dof);
   pc.n = n;
@@ -271,6 +274,8 @@ std::string resolved_toml(const Scene& sc) {
   toml::table scene{{"name", sc.name},
                     {"robot", sc.robot_spec},
                     {"joints", n},
+                    {"rotor_inertia", sc.rotor_inertia},
+                    {"energy_ledger", pc.energy_ledger},
                     {"backend", pc.backend},
                     {"duration", sc.duration},
                     {"output_interval", sc.output_interval}};

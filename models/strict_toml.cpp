@@ -187,6 +187,14 @@ std::string StrictTable::string_or(std::string_view key, std::string fallback,
   return string(key, choices);
 }
 
+bool StrictTable::boolean_or(std::string_view key, bool fallback) {
+  if (!lookup(key)) return fallback;
+  const toml::node& node = require(key);
+  const auto v = node.value<bool>();
+  if (!node.is_boolean() || !v) fail(key, "true or false", describe(node));
+  return *v;
+}
+
 std::vector<double> StrictTable::numbers(std::string_view key, int size, Bounds bounds) {
   const toml::node& node = require(key);
   const std::string expected =

@@ -53,6 +53,7 @@ class StrictTable {
   double number(std::string_view key, Bounds bounds = Bounds::any());
   double number_or(std::string_view key, double fallback, Bounds bounds = Bounds::any());
   std::string string(std::string_view key, const std::vector<std::string>& choices = {});
+  bool boolean_or(std::string_view key, bool fallback);
   std::string string_or(std::string_view key, std::string fallback,
                         const std::vector<std::string>& choices = {});
   // An array of numbers; `size` < 0 accepts any length.

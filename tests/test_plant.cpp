@@ -254,6 +254,39 @@ TEST(Reference, ContinuousThroughTheWristSingularityAndBeyondPi) {
   EXPECT_GT(q6_max, M_PI);  // ... and the roll goes past pi
 }
 
+// The energy ledger: for the ODE the balance (mechanical + magnetic)(t) -
+// (...)(0) = e_in - e_copper - e_friction holds exactly (power balance of the
+// motor equation and the rigid body, friction's power tau_f w_m), so with a
+// tight tolerance its residual is a tiny fraction of the energies exchanged
+// -- and it shrinks with the tolerance. Leaving out any one term (copper loss,
+// friction loss, the magnetic energy) breaks it by far more.
+TEST(Plant, EnergyLedgerClosesToTheTolerance) {
+  auto residual = [](double rtol, double& scale) {
+    const Scene sc = load_scene(scene_path("paper_slow_viscous"), {"scene.energy_ledger=true"});
+    Plant plant(sc.plant);
+    const int e = plant.layout().e;
+    EXPECT_GE(e, 0);
+    IntegratorOptions o;
+    o.rtol = rtol, o.atol = rtol * 1e-3;
+    auto integ = make_integrator("cvode-bdf", o);
+    double E0 = 0, worst = 0;
+    bool first = true;
+    scale = 0;
+    run_plant(plant, *integ, 3.0, 0.01, [&](double, const double* x) {
+      const double E = plant.mechanical_energy(x) + plant.magnetic_energy(x);
+      if (first) E0 = E, first = false;
+      worst = std::max(worst, std::abs(E - E0 - (x[e] - x[e + 1] - x[e + 2])));
+      scale = std::max({scale, x[e], x[e + 1], x[e + 2]});
+    });
+    return worst;
+  };
+  double scale_tight, scale_loose;
+  const double tight = residual(1e-10, scale_tight), loose = residual(1e-5, scale_loose);
+  EXPECT_GT(scale_tight, 1.0);  // joules exchanged: the test is not vacuous
+  EXPECT_LT(tight, 1e-8 * scale_tight) << tight << " of " << scale_tight;
+  EXPECT_LT(tight, loose);
+}
+
 Scene smooth_paper_scene() {
   Scene sc = load_scene(scene_path("paper_slow"));
   for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};

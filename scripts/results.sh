@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Regenerates results/README.md and everything it reads: every sweep in
+# experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
+# back-ends inside the ODE, the stiff scenes), the stiffness tables, and the
+# report. About 25 minutes on 2 cores (the report's header has the measured
+# time). Runs already complete under build/sweeps/ are skipped: delete that
+# folder for a fresh run. Uses a private copy of the pumasim binary, so that
+# rebuilding meanwhile does not change the program under measurement.
+#
+#   scripts/results.sh [--jobs N]      (default: the number of cores)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+if [ "${1:-}" = "--jobs" ]; then jobs=$2; fi
+scripts/build.sh > /dev/null
+mkdir -p build/results-bin
+cp build/release/bin/pumasim build/results-bin/pumasim
+export PUMASIM=$PWD/build/results-bin/pumasim
+start=$(date +%s)
+for f in experiments/sweeps/*.toml; do
+  /usr/bin/python3 experiments/sweep.py "$f" --jobs "$jobs"
+done
+/usr/bin/python3 experiments/stiffness_table.py
+minutes=$(( ($(date +%s) - start + 30) / 60 ))
+/usr/bin/python3 experiments/report.py --minutes "$minutes"
