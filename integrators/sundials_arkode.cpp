@@ -67,6 +67,7 @@ class Arkode final : public Integrator {
     if (sys_ == &sys && mem_ && n == n_) {
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       check(ARKStepReInit(mem_, fe(), fi(), t0, y_), "ARKStepReInit");
+      base_ = {};  // the re-initialisation restarts SUNDIALS' counters
       ++stats_.restarts;
     } else {
       release();

@@ -35,10 +35,11 @@ inline std::string largest_weighted_errors(const OdeSystem& sys, N_Vector ele, N
 }
 
 // SUNDIALS counts from its last (re)initialisation: add what `now` counted
-// since `base` to `total`, across restarts.
+// since `base` to `total`, across restarts. The caller zeroes `base` at every
+// re-initialisation (inferring it from a falling step count missed every
+// interval longer than the one before, and under-counted runs with events).
 inline void accumulate_since_reinit(IntegratorStats& total, IntegratorStats& base,
                                     const IntegratorStats& now) {
-  if (now.steps < base.steps) base = {};  // counters restarted
   total.steps += now.steps - base.steps;
   total.rhs_evaluations += now.rhs_evaluations - base.rhs_evaluations;
   total.jacobian_evaluations += now.jacobian_evaluations - base.jacobian_evaluations;

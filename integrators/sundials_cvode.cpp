@@ -56,6 +56,7 @@ class Cvode final : public Integrator {
     if (sys_ == &sys && mem_ && n == n_) {  // same system: CVodeReInit keeps the set-up
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       check(CVodeReInit(mem_, t0, y_), "CVodeReInit");
+      base_ = {};  // the re-initialisation restarts SUNDIALS' counters
       ++stats_.restarts;
     } else {
       release();
