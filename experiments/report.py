@@ -54,8 +54,8 @@ def sweep_section(summary, folder, rel):
     integrators = sorted({r["integrator"] for r in rows})
     target = summary["target_mm"]
     out += [f"Cheapest run per integrator and variant whose end effector stays within {target:g} mm of the "
-            "reference: RHS evaluations (setting); `fail` if every setting failed, `–` if none was accurate "
-            "enough.", "",
+            "reference: RHS evaluations (setting; median wall time); `fail` if every setting failed, `–` if "
+            "none was accurate enough.", "",
             "| integrator | " + " | ".join(variants) + " |", "|---|" + "---:|" * len(variants)]
     for n in integrators:
         cells = []
@@ -64,7 +64,8 @@ def sweep_section(summary, folder, rel):
             good = [r for r in rs if r["ok"] == "True" and float(r["max_ee_error_mm"]) <= target]
             if good:
                 b = min(good, key=lambda r: float(r["rhs_evaluations"]))
-                cells.append(f"{fmt_int(b['rhs_evaluations'])} ({b['setting']})")
+                cells.append(f"{fmt_int(b['rhs_evaluations'])} ({b['setting']}; "
+                             f"{1e3 * float(b['wall_time_median_s']):.3g} ms)")
             elif rs and all(r["ok"] != "True" for r in rs):
                 cells.append("fail")
             else:

@@ -26,11 +26,13 @@ T_END = 0.2
 KP = [18.2583, 7.27722, 6.65612]
 KI = [172.081, 68.5862, 62.7325]
 KV = [0.252963, 0.066542, 0.0559978]
+KVFF = [0.309963, 0.123542, 0.112998]
 
 
 def gains(k):
     f = lambda v: "[" + ", ".join(f"{x * k:.6g}" for x in v) + "]"  # noqa: E731
-    return [f"controller.kp={f(KP)}", f"controller.ki={f(KI)}", f"controller.kv={f(KV)}"]
+    kvff = "[" + ", ".join(f"{a * k + (b - a):.6g}" for a, b in zip(KV, KVFF)) + "]"
+    return [f"controller.kp={f(KP)}", f"controller.ki={f(KI)}", f"controller.kv={f(KV)}", f"controller.kvff={kvff}"]
 
 
 TABLES = {

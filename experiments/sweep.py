@@ -175,10 +175,12 @@ def execute(s, work, run):
         cmd += ["--set", o]
     if s["t_end"]:
         cmd += ["--t-end", repr(s["t_end"])]
-    # The budget is for adaptive methods (a fixed-step run's count is t_end/dt,
-    # known in advance) and not for the references.
+    # The sweep's budget is for adaptive methods and not for the references;
+    # a fixed-step run's count is t_end / dt, known in advance: no budget.
     if s["max_steps"] and tag not in ("reference", "check") and "--rtol" in opts:
         cmd += ["--max-steps", str(s["max_steps"])]
+    if "--dt" in opts:  # no budget: the step count is t_end / dt
+        cmd += ["--max-steps", "0"]
     walls = []
     for _ in range(repeats):
         p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)

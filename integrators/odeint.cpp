@@ -69,6 +69,13 @@ class OdeintBase : public Integrator {
     const double span = std::max(1.0, std::abs(t_stop));
     if (h_ <= 0) h_ = std::min(1e-4, std::max(t_stop - t_, 0.0));
     while (t_ < t_stop) {
+      // A stop closer than rounding (a sample grid k * period computed apart
+      // from the time reached) is reached: a step of 1e-18 s would drag the
+      // step-size controller down to an underflow.
+      if (t_stop - t_ <= 1e-12 * span) {
+        t_ = t_stop;
+        break;
+      }
       double h = std::min(h_, t_stop - t_);
       const bool last = h >= t_stop - t_;
       const double t_before = t_;
@@ -76,7 +83,7 @@ class OdeintBase : public Integrator {
       if (try_step(h)) {
         ++stats_.steps;
         if (last && t_ >= t_before + (t_stop - t_before) * (1 - 1e-12)) t_ = t_stop;
-        if (!(last && h_ < h)) h_ = h;  // keep the controller's proposal unless shortened
+        if (!last) h_ = h;  // after a step shortened to reach t_stop, the earlier proposal stands
         if (const std::string bad = non_finite_components(*sys_, t_, data()); !bad.empty()) {
           return {Outcome::kFailed, -1, std::string(name()) + ": " + bad};
         }

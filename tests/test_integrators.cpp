@@ -262,6 +262,23 @@ TEST_P(EveryIntegrator, StatisticsAccumulateAcrossRestarts) {
   EXPECT_EQ(integ->stats().restarts, 50) << name();
 }
 
+// Stops one rounding apart (an output time and a sample time computed on
+// different grids): each is reached without a step-size collapse, and the
+// solution stays accurate. (Found: odeint's Dormand-Prince failed with a step
+// size underflow at a 10 kHz servo rate.)
+TEST_P(EveryIntegrator, PassesStopsOneRoundingApart) {
+  Linear sys(-1.0);
+  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-8, 1e-12) : fixed(1e-3));
+  const double x0 = 1.0;
+  integ->reset(sys, 0.0, &x0);
+  for (int k = 1; k <= 100; ++k) {
+    const double t1 = k * 0.01, t2 = std::nextafter(t1, 2.0);
+    ASSERT_EQ(integ->advance_to(t1).status, Outcome::kReached) << name() << " t = " << t1;
+    ASSERT_EQ(integ->advance_to(t2).status, Outcome::kReached) << name() << " t = " << t2;
+  }
+  EXPECT_NEAR(integ->state()[0], std::exp(-1.0), caps().order == 1 ? 1e-3 : 1e-6) << name();
+}
+
 // y' = (a + ib) y as the real system [a -b; b a].
 class Rotating final : public OdeSystem {
  public:
