@@ -93,6 +93,10 @@ class Integrator {
 // A crossing is a strict sign change, or a non-zero value reaching zero;
 // leaving zero (where an event was just handled) is not one.
 int first_crossing(const std::vector<double>& g_old, const std::vector<double>& g_new);
+// The same rule for one root function.
+inline bool crossed(double before, double after) {
+  return (before > 0 && after <= 0) || (before < 0 && after >= 0);
+}
 
 // "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.
 std::string non_finite_components(const OdeSystem& sys, double t, const double* x);

@@ -123,8 +123,7 @@ class OdeintBase : public Integrator {
       int k = -1;
       frac = 2.0;
       for (int i = 0; i < m; ++i) {
-        const std::vector<double> o{g0[i]}, w{g1[i]};
-        if (first_crossing(o, w) < 0) continue;
+        if (!crossed(g0[i], g1[i])) continue;
         const double f = g0[i] / (g0[i] - g1[i]);
         if (f < frac) frac = f, k = i;
       }

@@ -35,7 +35,7 @@ Outcome Integrator::advance_to(double t) {
 
 int first_crossing(const std::vector<double>& g_old, const std::vector<double>& g_new) {
   for (std::size_t k = 0; k < g_old.size(); ++k) {
-    if ((g_old[k] > 0 && g_new[k] <= 0) || (g_old[k] < 0 && g_new[k] >= 0)) return static_cast<int>(k);
+    if (crossed(g_old[k], g_new[k])) return static_cast<int>(k);
   }
   return -1;
 }
