@@ -465,7 +465,10 @@ class BadScene : public ::testing::Test {
     const auto at = text.find(from);
     ASSERT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
-    const auto path = std::filesystem::temp_directory_path() / "pumasim_bad_scene.toml";
+    // One file per test: CTest runs the tests in parallel processes.
+    const auto path = std::filesystem::temp_directory_path() /
+                      (std::string("pumasim_bad_scene_") +
+                       ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".toml");
     std::ofstream(path) << text;
     std::ostringstream out, err;
     const int status = run_cli({"check", path.string()}, out, err);
