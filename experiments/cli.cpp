@@ -48,11 +48,14 @@ constexpr const char* kUsage =
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N] [--set section.key=value ...]\n"
+    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N] [--late-events]\n"
+    "      [--set section.key=value ...]\n"
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
     "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
-    "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5\n"
+    "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5.\n"
+    "      --late-events: do not stop at controller samples and set-point updates;\n"
+    "      apply them late, at the next output (shows what stepping over them does)\n"
     "  stiffness <scene.toml> [--t-end X] [--samples N] [--bisect] [--set section.key=value ...]\n"
     "      eigenvalues of the plant Jacobian along a run (default 20 samples over\n"
     "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
@@ -313,7 +316,7 @@ std::string shell_line(const char* cmd) {
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   const Options opt = Options::parse(args, 2, {"set", "integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
                                                "max-steps"},
-                                     {"exact-jacobian"});
+                                     {"exact-jacobian", "late-events"});
   Scene sc = scene_argument(args, opt);
   if (auto b = opt.get("backend")) {
     const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
@@ -388,7 +391,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
-  }, max_steps);
+  }, max_steps, !opt.flags.count("late-events"));
   double max_err = 0, sum_sq = 0;
   long samples = 0;
   ReferenceSample ref;
@@ -444,6 +447,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   js << ",\n  \"atol\": ";
   json_number(js, adaptive ? io.atol : std::nan(""));
   js << ",\n  \"exact_jacobian\": " << (io.exact_jacobian ? "true" : "false");
+  js << ",\n  \"late_events\": " << (opt.flags.count("late-events") ? "true" : "false");
   js << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations
      << ",\n  \"jacobian_evaluations\": " << st.jacobian_evaluations << ",\n  \"linear_solves\": " << st.linear_solves
      << ",\n  \"rejected_steps\": " << st.rejected_steps << ",\n  \"nonlinear_iterations\": " << st.nonlinear_iterations

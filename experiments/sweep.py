@@ -153,7 +153,7 @@ def run_list(s):
         runs.append((f"{vdir}/check", v, "check", *v["check"], 1))
         for name, settings, extra in s["methods"]:
             for kind, value, opts in settings:
-                tag = f"{name}_{kind}{value:g}"
+                tag = f"{name}_{kind}{value:g}" + ("_" + slug(" ".join(o.lstrip("-") for o in extra)) if extra else "")
                 runs.append((f"{vdir}/{tag}", v, tag, name, opts + extra, s["repeats"]))
     return sorted(runs, key=lambda r: r[0])
 

@@ -8,7 +8,7 @@
 namespace pumasim {
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps) {
+                    const Observer& observe, long max_steps, bool stop_at_events) {
   const auto start = std::chrono::steady_clock::now();
   PlantSystem sys(plant);
   std::vector<double> x(plant.size());
@@ -22,7 +22,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   while (t < t_end - eps) {
     const double t_out = std::min(k_out * output_interval, t_end);
     const double t_event = plant.next_time_event(t);
-    const double stop = std::min(t_out, t_event);
+    const double stop = stop_at_events ? std::min(t_out, t_event) : t_out;
     const Outcome o = integrator.advance_to(stop);
     t = integrator.time();
     const double* xs = integrator.state();
@@ -46,9 +46,13 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       continue;
     }
     if (t >= t_event - eps) {
-      plant.on_time_event(t_event, x.data());
+      // Stopping at events, exactly one is due here; otherwise every event
+      // passed since the last stop, each applied now (late).
+      for (double te = t_event; te <= t + eps; te = plant.next_time_event(te)) {
+        plant.on_time_event(te, x.data());
+        ++res.time_events;
+      }
       integrator.reset(sys, t, x.data());
-      ++res.time_events;
     }
     if (t >= t_out - eps) {
       if (observe) observe(t, x.data());

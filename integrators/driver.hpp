@@ -44,7 +44,11 @@ using Observer = std::function<void(double t, const double* x)>;
 // Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
 // every multiple of output_interval reached. A run that needs more than
 // max_steps steps in all (0: no limit) ends as a reported failure.
+// stop_at_events = false shows what goes wrong when an integrator steps over
+// the controller's sample instants: the driver stops only at outputs and
+// roots, and applies the time events that passed meanwhile there, late, in
+// order, with the state it has then.
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps = 0);
+                    const Observer& observe, long max_steps = 0, bool stop_at_events = true);
 
 }  // namespace pumasim

@@ -13,10 +13,11 @@ for f in experiments/sweeps/*.toml; do
   $PY experiments/sweep.py "$f" --reduced --jobs 2 > /dev/null
 done
 again=$($PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced | sed -n 1p)
-case "$again" in
-  *"32 runs in this share, 32 already complete"*) ;;
-  *) echo "re-run did not skip the complete runs: $again" >&2; exit 1 ;;
-esac
+# "<name>: N runs in this share, M already complete": a re-run must find M = N.
+read -r total done_ <<< "$(sed -E 's/.*: ([0-9]+) runs in this share, ([0-9]+) already complete.*/\1 \2/' <<< "$again")"
+if [ -z "$total" ] || [ "$total" != "$done_" ]; then
+  echo "re-run did not skip the complete runs: $again" >&2; exit 1
+fi
 # Shards 1/2 and 2/2 of a fresh sweep together complete it.
 rm -rf build/sweeps-reduced/stiff_sampling
 $PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --shard 1/2 > /dev/null

@@ -2,8 +2,8 @@
 # Regenerates results/README.md and everything it reads: every sweep in
 # experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
 # back-ends inside the ODE, the stiff scenes), the stiffness tables, and the
-# report. About 25 minutes on 2 cores (the report's header has the measured
-# time of the last full regeneration). Runs already complete under build/sweeps/ are skipped: delete that
+# report. A fresh run takes about 20 minutes on 2 cores (the report's header
+# states how long its last run took). Runs already complete under build/sweeps/ are skipped: delete that
 # folder for a fresh run. Uses a private copy of the pumasim binary, so that
 # rebuilding meanwhile does not change the program under measurement.
 #
