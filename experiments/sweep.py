@@ -186,7 +186,10 @@ def execute(s, work, run):
         p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
         if p.returncode == 2:  # bad input: the sweep file is wrong, not the method
             raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
-        with open(os.path.join(out, "stats.json")) as f:
+        stats = os.path.join(out, "stats.json")
+        if not os.path.exists(stats):  # pumasim itself failed (a crash, not a reported failure)
+            raise SweepError(f"{' '.join(cmd)}: exit status {p.returncode}, no stats.json: {p.stderr.strip()}")
+        with open(stats) as f:
             st = json.load(f)
         walls.append(st["wall_time_s"])
         if not st["ok"]:

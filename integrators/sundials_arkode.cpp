@@ -122,8 +122,7 @@ class Arkode final : public Integrator {
       if (flag == ARK_ROOT_RETURN) {
         check(ARKStepGetRootInfo(mem_, rootsfound_.data()), "ARKStepGetRootInfo");
         out.status = Outcome::kRoot;
-        out.root = static_cast<int>(std::find_if(rootsfound_.begin(), rootsfound_.end(),
-                                                 [](int r) { return r != 0; }) - rootsfound_.begin());
+        out.root = detail::first_root_found(rootsfound_);
       } else if (flag < 0) {
         out.status = Outcome::kFailed;
         out.message = failure(flag);

@@ -34,6 +34,12 @@ inline std::string largest_weighted_errors(const OdeSystem& sys, N_Vector ele, N
   return msg;
 }
 
+// The index of the first root function SUNDIALS reports as found.
+inline int first_root_found(const std::vector<int>& rootsfound) {
+  return static_cast<int>(std::find_if(rootsfound.begin(), rootsfound.end(), [](int r) { return r != 0; }) -
+                          rootsfound.begin());
+}
+
 // SUNDIALS counts from its last (re)initialisation: add what `now` counted
 // since `base` to `total`, across restarts. The caller zeroes `base` at every
 // re-initialisation (inferring it from a falling step count missed every

@@ -103,8 +103,7 @@ class Cvode final : public Integrator {
       if (flag == CV_ROOT_RETURN) {
         check(CVodeGetRootInfo(mem_, rootsfound_.data()), "CVodeGetRootInfo");
         out.status = Outcome::kRoot;
-        out.root = static_cast<int>(std::find_if(rootsfound_.begin(), rootsfound_.end(),
-                                                 [](int r) { return r != 0; }) - rootsfound_.begin());
+        out.root = detail::first_root_found(rootsfound_);
       } else if (flag < 0) {
         out.status = Outcome::kFailed;
         out.message = failure(flag);

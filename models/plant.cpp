@@ -441,17 +441,9 @@ double Plant::mechanical_energy(const double* x, double* kinetic) {
   for (int j = 0; j < n; ++j) q[j] = x[layout_.q + j], qd[j] = x[layout_.qd + j];
   Eigen::MatrixXd H(n, n);
   wd_->backend->mass_matrix(q, H);
-  // V = -sum_j m_j g . p_cj over the simulated links (held links merged into the last).
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  double V = 0;
-  for (int j = 0; j < n; ++j) {
-    T = T * dh_transform(model_, j, q[j]);
-    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * model_.joints[j].com + T.topRightCorner<3, 1>();
-    V -= model_.joints[j].mass * model_.gravity.dot(c);
-  }
   const double T_kin = 0.5 * qd.dot(H * qd);
   if (kinetic) *kinetic = T_kin;
-  return T_kin + V;
+  return T_kin + potential_energy(model_, q);  // the simulated links, held ones merged into the last
 }
 
 double Plant::magnetic_energy(const double* x) const {

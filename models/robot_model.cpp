@@ -53,6 +53,17 @@ Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q) {
          homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, J.d));
 }
 
+double potential_energy(const RobotModel& model, const Eigen::VectorXd& q) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  double V = 0;
+  for (int j = 0; j < model.dof(); ++j) {
+    T = T * dh_transform(model, j, q[j]);
+    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * model.joints[j].com + T.topRightCorner<3, 1>();
+    V -= model.joints[j].mass * model.gravity.dot(c);
+  }
+  return V;
+}
+
 RobotModel without_rotor_inertia(RobotModel model) {
   for (auto& j : model.joints) j.rotor_inertia = 0.0;
   model.name += " (no rotor inertia)";

@@ -64,6 +64,10 @@ struct RobotModel {
 // Homogeneous transform of DH row j (0-based) at joint angle q: frame j-1 -> frame j.
 Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q);
 
+// Potential energy of gravity V(q) = -sum_j m_j g . p_cj(q) [J] (a rotor turns
+// about its own axis: no potential of its own).
+double potential_energy(const RobotModel& model, const Eigen::VectorXd& q);
+
 // The same model with every rotor inertia set to zero (rigid links only).
 RobotModel without_rotor_inertia(RobotModel model);
 

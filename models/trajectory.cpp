@@ -202,10 +202,9 @@ void Reference::eval(double t, ReferenceSample& out) const {
   const Eigen::Vector3d a = ddp * sd * sd + dp * sdd;
   // Joint positions: the IK's branch nearest the table's angles at this s.
   const double L = path_.length();
-  const std::size_t k = branch_.empty() ? 0
-                        : static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
+  const auto k = static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
   Eigen::Matrix<double, 6, 1> q;
-  const bool ok = joint_angles(p, branch_.empty() ? q_held_ : branch_[k], !branch_.empty(), q);
+  const bool ok = joint_angles(p, branch_[k], true, q);
   if (!ok) {
     throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
                              std::to_string(p.y()) + ", " + std::to_string(p.z()) +

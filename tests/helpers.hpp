@@ -22,18 +22,6 @@ inline double rel_err(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double
   return (a - b).norm() / std::max(a.norm(), floor);
 }
 
-// Potential energy V(q) = -sum_j m_j g . p_cj(q), from the DH transforms.
-inline double potential_energy(const RobotModel& m, const Eigen::VectorXd& q) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  double V = 0;
-  for (int j = 0; j < m.dof(); ++j) {
-    T = T * dh_transform(m, j, q[j]);
-    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * m.joints[j].com + T.topRightCorner<3, 1>();
-    V -= m.joints[j].mass * m.gravity.dot(c);
-  }
-  return V;
-}
-
 // The registered back-ends that can describe `m` (all but generated ones
 // made for another arm).
 inline std::vector<BackendInfo> supported(const RobotModel& m) {

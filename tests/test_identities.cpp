@@ -116,7 +116,7 @@ TEST(Identities, GravityIsTheGradientOfPotentialEnergy) {
           Eigen::VectorXd qp = q, qm = q;
           qp[k] += step;
           qm[k] -= step;
-          grad[k] = (testing::potential_energy(m, qp) - testing::potential_energy(m, qm)) / (2 * step);
+          grad[k] = (potential_energy(m, qp) - potential_energy(m, qm)) / (2 * step);
         }
         EXPECT_LT(rel_err(g, grad, 1e-6), 1e-7) << info.name << " " << m.name;
       }
@@ -140,7 +140,7 @@ TEST(Identities, EnergyIsConservedInTorqueFreeMotion) {
       Eigen::MatrixXd H(n, n);
       auto energy = [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv) {
         b->mass_matrix(qq, H);
-        return 0.5 * vv.dot(H * vv) + testing::potential_energy(m, qq);
+        return 0.5 * vv.dot(H * vv) + potential_energy(m, qq);
       };
       auto accel = [&](const Eigen::VectorXd& qq, const Eigen::VectorXd& vv) {
         Eigen::VectorXd a(n);
@@ -149,7 +149,7 @@ TEST(Identities, EnergyIsConservedInTorqueFreeMotion) {
       };
       const double E0 = energy(q, qd);
       b->mass_matrix(q, H);
-      const double scale = 0.5 * qd.dot(H * qd) + std::abs(testing::potential_energy(m, q));
+      const double scale = 0.5 * qd.dot(H * qd) + std::abs(potential_energy(m, q));
       const double dt = 1e-4;
       double worst = 0;
       for (int step = 0; step < 10000; ++step) {

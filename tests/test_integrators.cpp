@@ -353,13 +353,19 @@ TEST(IntegratorRegistry, UnknownNameListsTheValidOnes) {
   }
 }
 
-// The driver on the plant: a sampled controller makes every integrator stop
-// at each servo instant; the fixed-step and the adaptive answers agree.
-TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
+// paper_slow with viscous friction and the PIV sampled at 1 kHz.
+Scene sampled_paper_scene() {
   Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
   for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
   sc.plant.controller = ControllerMode::kSampled;
   sc.plant.servo_period = 1e-3;
+  return sc;
+}
+
+// The driver on the plant: a sampled controller makes every integrator stop
+// at each servo instant; the fixed-step and the adaptive answers agree.
+TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
+  const Scene sc = sampled_paper_scene();
   const double T = 0.2;
   std::vector<double> a, b;
   for (const char* name : {"rk4", "cvode-bdf"}) {
@@ -382,10 +388,7 @@ TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
 // with outputs every 10 samples the same 200 samples are applied, but late,
 // and the answer moves by far more than the integrator's error.
 TEST(Driver, LateEventsAreExactOnlyWhenTheStopsFallOnTheSamples) {
-  Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
-  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
-  sc.plant.controller = ControllerMode::kSampled;
-  sc.plant.servo_period = 1e-3;
+  const Scene sc = sampled_paper_scene();
   const double T = 0.2;
   auto run = [&](double output_interval, bool stop_at_events) {
     Plant plant(sc.plant);
