@@ -53,6 +53,9 @@ constexpr const char* kUsage =
     "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
     "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
+    "      --atol is per unit of each state's typical magnitude: angles 1 rad, speeds\n"
+    "      1 rad/s, currents the stall current at full command, PIV integrals their\n"
+    "      full range, energies 1 J (stats.json lists the resulting atol per state).\n"
     "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5.\n"
     "      --late-events: do not stop at controller samples and set-point updates;\n"
     "      apply them late, at the next output (shows what stepping over them does)\n"
@@ -446,6 +449,12 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   json_number(js, adaptive ? io.rtol : std::nan(""));
   js << ",\n  \"atol\": ";
   json_number(js, adaptive ? io.atol : std::nan(""));
+  js << ",\n  \"atol_per_component\": {";  // atol * the plant's typical magnitude of each state
+  for (int k = 0; k < plant.size(); ++k) {
+    js << (k ? ", " : "") << '"' << plant.layout().names[static_cast<std::size_t>(k)] << "\": ";
+    json_number(js, adaptive ? io.atol * plant.tolerance_scale(k) : std::nan(""));
+  }
+  js << "}";
   js << ",\n  \"exact_jacobian\": " << (io.exact_jacobian ? "true" : "false");
   js << ",\n  \"late_events\": " << (opt.flags.count("late-events") ? "true" : "false");
   js << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations

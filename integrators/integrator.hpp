@@ -10,7 +10,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-#include <vector>
 
 #include <Eigen/Core>
 
@@ -31,6 +30,11 @@ class OdeSystem {
     for (int k = 0; k < size(); ++k) fe[k] = 0.0;
   }
   virtual std::string state_name(int i) const { return std::string("x").append(std::to_string(i + 1)); }
+  // The adaptive methods' absolute tolerance per component: atol_i =
+  // atol * tolerance_scale(i), so that one --atol means the same thing for
+  // states of different units and sizes (an angle, a current, an integral).
+  // A component's scale is a typical magnitude of it; the default is 1.
+  virtual double tolerance_scale(int /*i*/) const { return 1.0; }
   // Root functions g(t, x): the integrators that find roots stop where one changes sign.
   virtual int num_roots() const { return 0; }
   virtual void roots(double /*t*/, const double* /*x*/, double* /*g*/) {}
@@ -41,7 +45,7 @@ struct IntegratorSettings;  // models/scene.hpp: name, dt, rtol, atol
 struct IntegratorOptions {
   double dt = 5e-4;             // fixed-step methods [s]
   double rtol = 1e-6;           // adaptive methods
-  double atol = 1e-8;
+  double atol = 1e-8;           // times the system's tolerance_scale(i) per component
   bool exact_jacobian = false;  // implicit methods: the system's exact Jacobian, not differences
   long max_steps = 50'000'000;  // per advance_to; beyond it, a reported failure
 };

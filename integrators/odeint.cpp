@@ -13,7 +13,10 @@
 // changes sign, the zero is located by the Illinois variant of regula falsi,
 // each trial point one step of the method itself from the step's start (no
 // interpolant needed, so the located state has the method's own accuracy);
-// the run stops just past the zero, like CVODE.
+// the run stops just past the zero, like CVODE. Absolute tolerances per
+// component (atol * the system's tolerance_scale): dopri5 through its own
+// error checker; rosenbrock4's controller takes one atol, so it integrates
+// the scaled state y_i = x_i / scale_i, whose error test is the same.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -167,9 +170,33 @@ class OdeintBase : public Integrator {
   std::vector<double> g_, g_new_, x_start_;
 };
 
+// odeint's default error test, max_i |err_i| / (atol_i + rtol (|x_i| + |h| |x'_i|)),
+// with one absolute tolerance per component.
+class ComponentErrorChecker {
+ public:
+  using value_type = double;
+  using algebra_type = odeint::range_algebra;
+  using operations_type = odeint::default_operations;
+  ComponentErrorChecker() = default;
+  ComponentErrorChecker(std::vector<double> atol, double rtol) : atol_(std::move(atol)), rtol_(rtol) {}
+  template <class State, class Deriv, class Err, class Time>
+  double error(algebra_type&, const State& x_old, const Deriv& dxdt_old, Err& x_err, Time dt) const {
+    double e = 0.0;
+    for (std::size_t i = 0; i < atol_.size(); ++i) {
+      const double sk = atol_[i] + rtol_ * (std::abs(x_old[i]) + std::abs(dt) * std::abs(dxdt_old[i]));
+      e = std::max(e, std::abs(x_err[i]) / sk);
+    }
+    return e;
+  }
+
+ private:
+  std::vector<double> atol_;
+  double rtol_ = 0.0;
+};
+
 class Dopri5 final : public OdeintBase {
   using State = std::vector<double>;
-  using Stepper = odeint::controlled_runge_kutta<odeint::runge_kutta_dopri5<State>>;
+  using Stepper = odeint::controlled_runge_kutta<odeint::runge_kutta_dopri5<State>, ComponentErrorChecker>;
 
  public:
   using OdeintBase::OdeintBase;
@@ -191,11 +218,12 @@ class Dopri5 final : public OdeintBase {
       ++stats_.rhs_evaluations;
     };
   }
-  void load(const double* x0, int n) override { x_.assign(x0, x0 + n); }
-  void fresh_stepper() override {
-    stepper_ = Stepper(odeint::default_error_checker<double, odeint::range_algebra, odeint::default_operations>(
-        opt_.atol, opt_.rtol));
+  void load(const double* x0, int n) override {
+    x_.assign(x0, x0 + n);
+    atol_.resize(n);
+    for (int i = 0; i < n; ++i) atol_[i] = opt_.atol * sys_->tolerance_scale(i);
   }
+  void fresh_stepper() override { stepper_ = Stepper(ComponentErrorChecker(atol_, opt_.rtol)); }
   bool try_step(double& h) override { return stepper_.try_step(odeint_system(), x_, t_, h) == odeint::success; }
   const double* data() const override { return x_.data(); }
   void step_from(const double* x0, double t0, double h, double* out) override {
@@ -208,7 +236,7 @@ class Dopri5 final : public OdeintBase {
   void set_state(const double* x) override { std::copy(x, x + x_.size(), x_.begin()); }
 
  private:
-  State x_, xin_, xout_;
+  State x_, xin_, xout_, atol_;
   Stepper stepper_;
 };
 
@@ -229,62 +257,69 @@ class Rosenbrock4 final : public OdeintBase {
     c.uses_jacobian = true;
     return c;
   }
-  const double* state() const override { return &x_[0]; }
+  const double* state() const override { return x_.data(); }
 
  protected:
-  // The (f, Jacobian) pair odeint's implicit steppers take, over uBLAS types.
+  // The (f, Jacobian) pair odeint's implicit steppers take, over uBLAS types,
+  // for the scaled state y = x / s: y' = f(s y) / s, dy'/dy = S^-1 J S.
   auto odeint_system() {
     const int n = static_cast<int>(x_.size());
-    auto f = [this, n](const Vec& x, Vec& dx, double t) {
-      std::copy(x.begin(), x.end(), xt_.begin());
+    auto f = [this, n](const Vec& y, Vec& dy, double t) {
+      for (int r = 0; r < n; ++r) xt_[r] = s_[r] * y[r];
       sys_->rhs(t, xt_.data(), f1_.data());
       ++stats_.rhs_evaluations;
-      dx.resize(n);
-      std::copy(f1_.begin(), f1_.end(), dx.begin());
+      dy.resize(n);
+      for (int r = 0; r < n; ++r) dy[r] = f1_[r] / s_[r];
     };
-    auto jac = [this, n](const Vec& x, Mat& J, double t, Vec& dfdt) {
-      std::copy(x.begin(), x.end(), xt_.begin());
+    auto jac = [this, n](const Vec& y, Mat& J, double t, Vec& dfdt) {
+      for (int r = 0; r < n; ++r) xt_[r] = s_[r] * y[r];
       sys_->jacobian(t, xt_.data(), Jd_);
       ++stats_.jacobian_evaluations;
       J.resize(n, n);
       for (int r = 0; r < n; ++r)
-        for (int c = 0; c < n; ++c) J(r, c) = Jd_(r, c);
+        for (int c = 0; c < n; ++c) J(r, c) = Jd_(r, c) * s_[c] / s_[r];
       // Explicit time dependence by a forward difference in t.
       const double dt = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(t));
       sys_->rhs(t, xt_.data(), f0_.data());
       sys_->rhs(t + dt, xt_.data(), f1_.data());
       stats_.rhs_evaluations += 2;
       dfdt.resize(n);
-      for (int r = 0; r < n; ++r) dfdt[r] = (f1_[r] - f0_[r]) / dt;
+      for (int r = 0; r < n; ++r) dfdt[r] = (f1_[r] - f0_[r]) / dt / s_[r];
     };
     return std::make_pair(f, jac);
   }
   void load(const double* x0, int n) override {
-    x_.resize(n);
-    std::copy(x0, x0 + n, x_.begin());
+    s_.resize(n);
+    for (int i = 0; i < n; ++i) s_[i] = sys_->tolerance_scale(i);
+    x_.resize(n), y_.resize(n);
     f0_.resize(n), f1_.resize(n), xt_.resize(n);
+    set_state(x0);
   }
   // rosenbrock4_controller is not assignable (const coefficients): rebuilt on reset.
   void fresh_stepper() override { stepper_ = std::make_unique<Stepper>(opt_.atol, opt_.rtol); }
   bool try_step(double& h) override {
-    const bool ok = stepper_->try_step(odeint_system(), x_, t_, h) == odeint::success;
+    const bool ok = stepper_->try_step(odeint_system(), y_, t_, h) == odeint::success;
     ++stats_.linear_solves;  // one LU factorisation per attempted step
+    if (ok)
+      for (std::size_t i = 0; i < x_.size(); ++i) x_[i] = s_[i] * y_[i];
     return ok;
   }
-  const double* data() const override { return &x_[0]; }
+  const double* data() const override { return x_.data(); }
   void step_from(const double* x0, double t0, double h, double* out) override {
     const int n = static_cast<int>(x_.size());
-    Vec xin(n), xout(n);
-    std::copy(x0, x0 + n, xin.begin());
-    stepper_->stepper().do_step(odeint_system(), xin, t0, xout, h);
+    Vec yin(n), yout(n);
+    for (int i = 0; i < n; ++i) yin[i] = x0[i] / s_[i];
+    stepper_->stepper().do_step(odeint_system(), yin, t0, yout, h);
     ++stats_.linear_solves;
-    std::copy(xout.begin(), xout.end(), out);
+    for (int i = 0; i < n; ++i) out[i] = s_[i] * yout[i];
   }
-  void set_state(const double* x) override { std::copy(x, x + x_.size(), x_.begin()); }
+  void set_state(const double* x) override {
+    for (std::size_t i = 0; i < x_.size(); ++i) x_[i] = x[i], y_[i] = x[i] / s_[i];
+  }
 
  private:
-
-  Vec x_;
+  Vec y_;                                  // the state integrated: x / s
+  std::vector<double> x_, s_;              // x = s y, and the scales
   std::unique_ptr<Stepper> stepper_;
   std::vector<double> f0_, f1_, xt_;
   Eigen::MatrixXd Jd_;

@@ -80,7 +80,9 @@ class Arkode final : public Integrator {
       if (!mem_) throw std::runtime_error("arkode: ARKStepCreate failed");
       check(ARKStepSetUserData(mem_, this), "ARKStepSetUserData");
       check(ARKStepSetErrHandlerFn(mem_, &Arkode::on_error, this), "ARKStepSetErrHandlerFn");
-      check(ARKStepSStolerances(mem_, opt_.rtol, opt_.atol), "ARKStepSStolerances");
+      check(detail::set_absolute_tolerances(sys, opt_.atol, ctx_,
+                                            [&](N_Vector a) { return ARKStepSVtolerances(mem_, opt_.rtol, a); }),
+            "ARKStepSVtolerances");
       check(ARKStepSetMaxNumSteps(mem_, opt_.max_steps), "ARKStepSetMaxNumSteps");
       if (kind_ != Kind::kErk) {
         A_ = SUNDenseMatrix(n, n, ctx_);

@@ -34,6 +34,18 @@ inline std::string largest_weighted_errors(const OdeSystem& sys, N_Vector ele, N
   return msg;
 }
 
+// The absolute tolerances atol * sys.tolerance_scale(i), handed to `set`
+// (CVodeSVtolerances, ARKStepSVtolerances: both keep a copy); its flag.
+template <class Set>
+int set_absolute_tolerances(const OdeSystem& sys, double atol, SUNContext ctx, Set set) {
+  N_Vector v = N_VNew_Serial(sys.size(), ctx);
+  double* a = N_VGetArrayPointer(v);
+  for (int i = 0; i < sys.size(); ++i) a[i] = atol * sys.tolerance_scale(i);
+  const int flag = set(v);
+  N_VDestroy(v);
+  return flag;
+}
+
 // The index of the first root function SUNDIALS reports as found.
 inline int first_root_found(const std::vector<int>& rootsfound) {
   return static_cast<int>(std::find_if(rootsfound.begin(), rootsfound.end(), [](int r) { return r != 0; }) -

@@ -69,7 +69,9 @@ class Cvode final : public Integrator {
       check(CVodeInit(mem_, &Cvode::rhs, t0, y_), "CVodeInit");
       check(CVodeSetUserData(mem_, this), "CVodeSetUserData");
       check(CVodeSetErrHandlerFn(mem_, &Cvode::on_error, this), "CVodeSetErrHandlerFn");
-      check(CVodeSStolerances(mem_, opt_.rtol, opt_.atol), "CVodeSStolerances");
+      check(detail::set_absolute_tolerances(sys, opt_.atol, ctx_,
+                                            [&](N_Vector a) { return CVodeSVtolerances(mem_, opt_.rtol, a); }),
+            "CVodeSVtolerances");
       check(CVodeSetMaxNumSteps(mem_, opt_.max_steps), "CVodeSetMaxNumSteps");
       A_ = SUNDenseMatrix(n, n, ctx_);
       LS_ = SUNLinSol_Dense(y_, A_, ctx_);

@@ -113,6 +113,19 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   if (layout_.e >= 0) {
     for (const char* name : {"e_in", "e_copper", "e_friction"}) layout_.names.emplace_back(name);
   }
+  // Typical magnitudes (tolerance_scale): angles 1 rad, speeds 1 rad/s; a
+  // current its stall value at full command, min(K_A u_max, V_max) / (R0 + R);
+  // a PIV integral its full range, integral_limit / |Ki|; energies 1 J.
+  scale_.assign(static_cast<std::size_t>(layout_.size), 1.0);
+  for (int j = 0; j < n; ++j) {
+    if (layout_.i >= 0) {
+      const AmplifierParams& A = cfg_.amplifier[j];
+      const double v = std::min(A.gain * cfg_.piv[j].output_limit, A.voltage_limit);
+      const double r = A.output_resistance + cfg_.motor[j].resistance;
+      if (v > 0 && r > 0 && std::isfinite(v / r)) scale_[layout_.i + j] = v / r;
+    }
+    if (layout_.z >= 0 && cfg_.piv[j].ki != 0) scale_[layout_.z + j] = cfg_.piv[j].integral_limit / std::abs(cfg_.piv[j].ki);
+  }
 
   wd_ = std::make_unique<Workspace<double>>(n);
   wd_->backend = find_backend(cfg_.backend).make(model_);

@@ -76,6 +76,9 @@ class Plant {
   const StateLayout& layout() const { return layout_; }
   const PlantConfig& config() const { return cfg_; }
   int size() const { return layout_.size; }
+  // A typical magnitude of state component i, in its unit (the integrators'
+  // absolute tolerance is atol times this).
+  double tolerance_scale(int i) const { return scale_[static_cast<std::size_t>(i)]; }
 
   // x(0): on the reference at rest, currents and integrals in equilibrium
   // with gravity; also (re)starts the discrete state at t = 0.
@@ -135,6 +138,7 @@ class Plant {
 
   PlantConfig cfg_;
   StateLayout layout_;
+  std::vector<double> scale_;  // tolerance_scale per component
   RobotModel model_;  // the simulated joints (held links merged)
   std::unique_ptr<Workspace<double>> wd_;
   std::unique_ptr<Workspace<Dual>> wj_;

@@ -279,6 +279,44 @@ TEST_P(EveryIntegrator, PassesStopsOneRoundingApart) {
   EXPECT_NEAR(integ->state()[0], std::exp(-1.0), caps().order == 1 ? 1e-3 : 1e-6) << name();
 }
 
+// Two decays, x0' = -x0 from 1 and x1' = -20 x1 from 1e-9, with x1's
+// tolerance scale 1e-9 (or 1, `scaled` false): the absolute tolerance must
+// follow the scale, or the small, fast component is left unresolved.
+class TwoScales final : public OdeSystem {
+ public:
+  explicit TwoScales(bool scaled) : scaled_(scaled) {}
+  int size() const override { return 2; }
+  void rhs(double, const double* x, double* f) override { f[0] = -x[0], f[1] = -20.0 * x[1]; }
+  void jacobian(double, const double*, Eigen::MatrixXd& J) override {
+    J.setZero(2, 2), J(0, 0) = -1.0, J(1, 1) = -20.0;
+  }
+  bool has_exact_jacobian() const override { return true; }
+  double tolerance_scale(int i) const override { return i == 1 && scaled_ ? 1e-9 : 1.0; }
+
+ private:
+  bool scaled_;
+};
+
+// Per-component absolute tolerance (atol times the system's tolerance_scale):
+// with the scale, the 1e-9-sized component is as accurate, relatively, as the
+// rtol asks (within the factor 100 of ConvergesAtItsOrder); with scale 1 its
+// error is left to atol = 1e-8, far above its size, and is much larger.
+TEST_P(EveryIntegrator, AbsoluteToleranceFollowsEachComponentsScale) {
+  if (!caps().adaptive) GTEST_SKIP() << name() << " has a fixed step";
+  const double rtol = 1e-6, T = 0.2, exact = 1e-9 * std::exp(-20.0 * T);
+  double rel[2];
+  for (bool scaled : {true, false}) {
+    TwoScales sys(scaled);
+    auto integ = make_integrator(name(), tol(rtol, 1e-2 * rtol));
+    const double x0[2] = {1.0, 1e-9};
+    integ->reset(sys, 0.0, x0);
+    ASSERT_EQ(integ->advance_to(T).status, Outcome::kReached) << name();
+    rel[scaled ? 0 : 1] = std::abs(integ->state()[1] - exact) / exact;
+  }
+  EXPECT_LT(rel[0], 100 * rtol) << name();
+  EXPECT_GT(rel[1], 10 * rel[0]) << name();
+}
+
 // y' = (a + ib) y as the real system [a -b; b a].
 class Rotating final : public OdeSystem {
  public:
