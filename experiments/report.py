@@ -50,6 +50,16 @@ def sweep_section(summary, folder, rel):
                           if lab != lim)
         out += [f"Distance of each variant's reference solution to the `{lim}` one (max end-effector "
                 f"distance): {cells}.", ""]
+    if summary.get("creep"):
+        st = summary["stuck_variant"]
+        out += [f"Creep while stuck: over the intervals in which the `{st}` model holds a joint at exactly zero "
+                f"speed (the outputs 2 samples in from each end; {summary['creep'][st]['stuck_time_s']:.3g} s of "
+                "joint-time in all), the largest motion of that joint in each variant's reference solution:", "",
+                "| variant | motion [rad] | joint | interval [s] |", "|---|---:|---|---|"]
+        for lab, c in summary["creep"].items():
+            out.append(f"| {lab} | {c['rad']:.3g} | {c['joint'] or '–'} | "
+                       + (f"{c['from_s']:.2f}–{c['to_s']:.2f}" if c["joint"] else "–") + " |")
+        out.append("")
     variants = [v["label"] for v in summary["variants"]]
     integrators = sorted({r["integrator"] for r in rows})
     target = summary["target_mm"]

@@ -77,7 +77,7 @@ def load_sweep(path, reduced):
     sw = need(doc, "sweep", dict, "(top level)")
     for k in sw:
         if k not in {"name", "title", "scene", "folder", "t_end", "reduced_t_end", "repeats", "x", "target_mm",
-                     "findings", "set", "max_steps", "limit_variant"}:
+                     "findings", "set", "max_steps", "limit_variant", "stuck_variant"}:
             raise SweepError(f"{path}: unknown key 'sweep.{k}'")
     s = {
         "name": need(sw, "name", str, "sweep"),
@@ -92,6 +92,7 @@ def load_sweep(path, reduced):
         "folder": sw.get("folder", sw["name"]),
         "max_steps": int(sw.get("max_steps", 0)),
         "limit_variant": sw.get("limit_variant"),
+        "stuck_variant": sw.get("stuck_variant"),
         "file": os.path.relpath(path, ROOT),
     }
 
@@ -114,8 +115,9 @@ def load_sweep(path, reduced):
                               "reference": method_of(v["reference"], f"variant[{k}].reference")
                               if "reference" in v else s["reference"],
                               "check": method_of(v["check"], f"variant[{k}].check") if "check" in v else s["check"]})
-    if s["limit_variant"] and s["limit_variant"] not in [v["label"] for v in s["variants"]]:
-        raise SweepError(f"{path}: sweep.limit_variant: expected one of the variants' labels")
+    for key in ("limit_variant", "stuck_variant"):
+        if s[key] and s[key] not in [v["label"] for v in s["variants"]]:
+            raise SweepError(f"{path}: sweep.{key}: expected one of the variants' labels")
     methods = []
     for k, m in enumerate(need(doc, "method", list, "(top level)")):
         names = need(m, "integrator", list, f"method[{k}]")
@@ -135,6 +137,10 @@ def load_sweep(path, reduced):
         s["variants"] = [s["variants"][0]] + ([s["variants"][-1]] if len(s["variants"]) > 1 else [])
         s["methods"] = [(n, st[:2], ex) for n, st, ex in methods]
         s["repeats"] = 1
+        labels = [v["label"] for v in s["variants"]]
+        for key in ("limit_variant", "stuck_variant"):
+            if s[key] not in labels:
+                s[key] = None
         if "reduced_t_end" in sw:
             s["t_end"] = float(sw["reduced_t_end"])
     return s
@@ -228,6 +234,48 @@ def compare(ref, run):
     return max(d), math.sqrt(sum(e * e for e in d) / n), dq, final
 
 
+STUCK_MARGIN = 2  # output samples trimmed from each end of a stuck interval
+
+
+def stuck_intervals(run):
+    """Per joint, the output-sample index ranges [a, b] over which the joint
+    speed is exactly zero at every sample (the hybrid model holds a stuck
+    joint at exactly zero speed), trimmed by STUCK_MARGIN samples at each end
+    so that a model breaking away a little earlier or later is not counted."""
+    out = {}
+    n = len(run["t"])
+    for h in run:
+        if not re.fullmatch(r"qd\d+", h):
+            continue
+        qd, k, ivs = run[h], 0, []
+        while k < n - 1:
+            if qd[k] == 0.0 and qd[k + 1] == 0.0:
+                a = k
+                while k < n - 1 and qd[k + 1] == 0.0:
+                    k += 1
+                if k - STUCK_MARGIN > a + STUCK_MARGIN:
+                    ivs.append((a + STUCK_MARGIN, k - STUCK_MARGIN))
+            k += 1
+        out["q" + h[2:]] = ivs
+    return out
+
+
+def creep(run, held):
+    """Largest motion (max - min of the angle) of a joint of `run` over an
+    interval in which the exact model holds that joint stuck: {rad, joint,
+    from_s, to_s}, and the stuck time examined."""
+    worst = {"rad": 0.0, "joint": None, "from_s": math.nan, "to_s": math.nan}
+    total = 0.0
+    for q, ivs in held.items():
+        for a, b in ivs:
+            seg = run[q][a:b + 1]
+            total += run["t"][b] - run["t"][a]
+            if max(seg) - min(seg) >= worst["rad"]:
+                worst = {"rad": max(seg) - min(seg), "joint": q, "from_s": run["t"][a], "to_s": run["t"][b]}
+    worst["stuck_time_s"] = total
+    return worst
+
+
 def merge(s, work, out_dir):
     import matplotlib
     matplotlib.use("Agg")
@@ -282,6 +330,11 @@ def merge(s, work, out_dir):
         for v in s["variants"]:
             ee, _, dq, _ = compare(lim, trajectory(os.path.join(work, slug(v["label"]), "reference")))
             limit[v["label"]] = {"ee_mm": ee, "joint_rad": dq}
+    held_creep = {}
+    if s["stuck_variant"]:
+        held = stuck_intervals(trajectory(os.path.join(work, slug(s["stuck_variant"]), "reference")))
+        for v in s["variants"]:
+            held_creep[v["label"]] = creep(trajectory(os.path.join(work, slug(v["label"]), "reference")), held)
     name = s["name"]
     with open(os.path.join(out_dir, name + ".csv"), "w", newline="") as f:
         f.write(f"# sweep {s['file']}: scene {s['scene']}, reference {' '.join([s['reference'][0]] + s['reference'][1])}, "
@@ -291,6 +344,8 @@ def merge(s, work, out_dir):
             f.write(f"# {lab}: reference {' '.join([v['reference'][0]] + v['reference'][1])} vs cross-check "
                     f"{' '.join([v['check'][0]] + v['check'][1])}: {a['ee_mm']:.3g} mm, {a['joint_rad']:.3g} rad"
                     + (f"; its reference vs {s['limit_variant']}'s: {limit[lab]['ee_mm']:.3g} mm" if limit else "")
+                    + (f"; creep where {s['stuck_variant']} holds a joint stuck: {held_creep[lab]['rad']:.3g} rad"
+                       if held_creep else "")
                     + "\n")
         keys = []
         for r in rows:
@@ -351,6 +406,7 @@ def merge(s, work, out_dir):
     summary = {"name": name, "title": s["title"], "file": s["file"], "scene": s["scene"], "x": s["x"],
                "target_mm": s["target_mm"], "findings": s["findings"], "agreement": agreement,
                "limit_variant": s["limit_variant"], "distance_to_limit": limit,
+               "stuck_variant": s["stuck_variant"], "creep": held_creep,
                "variants": [{"label": v["label"], "value": v["value"]} for v in s["variants"]],
                "runs": len(rows), "failed": sum(1 for r in rows if not r["ok"]),
                "cost_to_target": {n: [{"value": p[0], "rhs": p[1], "setting": p[2], "wall_s": p[3]} for p in pts]

@@ -29,4 +29,14 @@ cp build/stiffness-reduced/*.csv build/sweeps-reduced/results/stiffness/
 $PY experiments/report.py --results build/sweeps-reduced/results --out build/sweeps-reduced/README.md > /dev/null
 grep -q "Cheapest run per integrator" build/sweeps-reduced/README.md
 grep -q "Stiffness diagnostics" build/sweeps-reduced/README.md
+# Creep: the model that defines the stuck intervals does not move in them (an
+# identity), and there are such intervals (the arm starts at rest, stuck).
+$PY - <<'PY'
+import json, sys
+s = json.load(open("build/sweeps-reduced/results/stiff_stick_slip/stiff_stick_slip_summary.json"))
+c = s["creep"][s["stuck_variant"]]
+if not (c["stuck_time_s"] > 0 and c["rad"] == 0.0):
+    sys.exit(f"creep of the stuck model itself: {c}")
+PY
+grep -q "Creep while stuck" build/sweeps-reduced/README.md
 echo "sweep pipeline: ok"
