@@ -376,7 +376,10 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     for (int j = 0; j < n; ++j) csv << ",q_ref" << j + 1 << " [rad]";
   }
   csv << ",x [m],y [m],z [m]";
-  if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm]";
+  if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
+  if (sc.plant.drive) {
+    for (int j = 0; j < n; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
+  }
   const int led = L.e;  // the ledger's first state, -1 without
   if (led >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
   csv << "\n";
@@ -384,19 +387,31 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   // simulation's); rows are formatted, with reference and kinematics, after.
   const int m = plant.size();
   std::vector<double> saved;  // [t, x...] per output
+  const bool drive = sc.plant.drive;
+  std::vector<double> signals;  // [u, e_a, i] per joint per output
+  std::vector<DriveSignals> now(static_cast<std::size_t>(n));
+  if (drive) signals.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * 3 * n));
   saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
   const bool tty = isatty(STDERR_FILENO);
   auto last_progress = std::chrono::steady_clock::now();
   const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
     saved.push_back(t);
     saved.insert(saved.end(), x, x + m);
+    if (drive) {  // with the discrete state of this instant (held outputs and set-points)
+      plant.drive_signals(t, x, now.data());
+      for (const DriveSignals& d : now) signals.insert(signals.end(), {d.u, d.ea, d.i});
+    }
     if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
   }, max_steps, !opt.flags.count("late-events"));
-  double max_err = 0, sum_sq = 0;
-  long samples = 0;
+  double max_err = 0, sum_sq = 0, max_dev = 0, sum_sq_dev = 0;
+  long samples = 0, rows = 0;
+  // Drive signals at the outputs: peaks, and the outputs at which the
+  // controller's DAC or the amplifier is at its limit.
+  std::vector<double> peak_u(n, 0.0), peak_ea(n, 0.0), peak_i(n, 0.0);
+  std::vector<long> saturated(n, 0);
   ReferenceSample ref;
   // Energy ledger: residual of (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction),
   // and the scale it is judged against (the largest term seen, kinetic energy included).
@@ -406,21 +421,41 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   for (std::size_t row = 0; row + m < saved.size(); row += static_cast<std::size_t>(m + 1)) {
     const double t = saved[row];
     const double* x = &saved[row + 1];
+    ++rows;
     std::snprintf(buf, sizeof buf, "%.17g", t);
     csv << buf;
     for (int i = 0; i < m; ++i) num(x[i]);
     const Eigen::Vector3d p = plant.tool_position(x);
     if (sc.plant.reference) {
-      sc.plant.reference->eval(std::min(t, sc.plant.reference->profile().duration()), ref);
+      sc.plant.reference->eval(std::min(t, sc.plant.reference->timing().duration()), ref);
       for (int j = 0; j < n; ++j) num(ref.q[j]);
     }
     num(p.x()), num(p.y()), num(p.z());
     if (sc.plant.reference) {
       const double e = (p - ref.p).norm();
-      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e);
+      // Deviation: the distance to the geometric path, whatever the timing
+      // (a joint-space interpolation leaves the path between via-points).
+      const double dev = sc.plant.reference->path().distance(p);
+      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e), num(1e3 * dev);
       max_err = std::max(max_err, e);
       sum_sq += e * e;
+      max_dev = std::max(max_dev, dev);
+      sum_sq_dev += dev * dev;
       ++samples;
+    }
+    if (drive) {
+      for (int j = 0; j < n; ++j) {
+        const double* sg = &signals[static_cast<std::size_t>(3 * ((rows - 1) * n + j))];
+        const DriveSignals d{sg[0], sg[1], sg[2]};
+        num(d.u), num(d.ea);
+        peak_u[j] = std::max(peak_u[j], std::abs(d.u));
+        peak_ea[j] = std::max(peak_ea[j], std::abs(d.ea));
+        peak_i[j] = std::max(peak_i[j], std::abs(d.i));
+        const double u_lim = sc.plant.piv[j].output_limit, v_lim = sc.plant.amplifier[j].voltage_limit;
+        if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(sc.plant.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
+          ++saturated[j];
+        }
+      }
     }
     if (led >= 0) {
       double kin = 0;
@@ -469,6 +504,26 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   json_number(js, samples ? 1e3 * max_err : std::nan(""));
   js << ",\n  \"rms_path_error_mm\": ";
   json_number(js, samples ? 1e3 * std::sqrt(sum_sq / samples) : std::nan(""));
+  js << ",\n  \"max_path_deviation_mm\": ";
+  json_number(js, samples ? 1e3 * max_dev : std::nan(""));
+  js << ",\n  \"rms_path_deviation_mm\": ";
+  json_number(js, samples ? 1e3 * std::sqrt(sum_sq_dev / samples) : std::nan(""));
+  js << ",\n  \"reference_duration_s\": ";
+  json_number(js, sc.plant.reference ? sc.plant.reference->timing().duration() : std::nan(""));
+  if (sc.plant.drive) {
+    auto list = [&](const char* key, auto value) {
+      js << ",\n  \"" << key << "\": [";
+      for (int j = 0; j < n; ++j) {
+        js << (j ? ", " : "");
+        json_number(js, value(j));
+      }
+      js << "]";
+    };
+    list("peak_controller_output_V", [&](int j) { return peak_u[j]; });
+    list("peak_voltage_V", [&](int j) { return peak_ea[j]; });
+    list("peak_current_A", [&](int j) { return peak_i[j]; });
+    list("saturated_fraction", [&](int j) { return rows ? static_cast<double>(saturated[j]) / rows : 0.0; });
+  }
   if (led >= 0) {
     js << ",\n  \"max_ledger_residual_J\": ";
     json_number(js, max_residual);

@@ -144,7 +144,7 @@ ConditioningReport analyse_conditioning(const Scene& sc, int samples) {
   Eigen::VectorXd q(n), qd(n), qdd(n), tau(n), out(n);
   Eigen::MatrixXd H(n, n);
   ReferenceSample r;
-  const double T = pc.reference->profile().duration();
+  const double T = pc.reference->timing().duration();
   for (int k = 0; k <= samples; ++k) {
     ConditioningSample s;
     s.t = T * k / samples;

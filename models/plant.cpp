@@ -32,11 +32,11 @@ struct Plant::Workspace {
   using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
   using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
   std::unique_ptr<BasicDynamicsBackend<S>> backend;
-  Vec q, qd, u, tau, qdd, h, tm, applied;
+  Vec q, qd, u, ea, tau, qdd, h, tm, applied;
   Mat H, Hc;
   Cholesky<S, Eigen::Dynamic> chol;
   explicit Workspace(int n)
-      : q(n), qd(n), u(n), tau(n), qdd(n), h(n), tm(n), applied(n), H(n, n), Hc(n, n), chol(n) {}
+      : q(n), qd(n), u(n), ea(n), tau(n), qdd(n), h(n), tm(n), applied(n), H(n, n), Hc(n, n), chol(n) {}
 };
 
 namespace {
@@ -192,12 +192,14 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
   for (int j = 0; j < n; ++j) {
     if (!cfg_.drive) {
       w.tm[j] = S(0);
+      w.ea[j] = S(0);
       continue;
     }
     const AmplifierParams& A = cfg_.amplifier[j];
     const MotorParams& M = cfg_.motor[j];
     const S wm = S(cfg_.robot.joints[j].gear_ratio) * w.qd[j];
     const S ea = saturate(S(A.gain) * w.u[j], A.voltage_limit);
+    w.ea[j] = ea;
     const S R = S(A.output_resistance + M.resistance);
     S i;
     if (layout_.i >= 0) {
@@ -475,9 +477,11 @@ Eigen::Vector3d Plant::tool_position(const double* x) const {
   return p;
 }
 
-double Plant::controller_output(double t, const double* x, int j) {
+void Plant::drive_signals(double t, const double* x, DriveSignals* out) {
   eval(t, x, ftmp_.data(), *wd_);
-  return wd_->u[j];
+  for (int j = 0; j < layout_.n; ++j) {
+    out[j] = {wd_->u[j], wd_->ea[j], cfg_.drive ? wd_->tm[j] / cfg_.motor[j].torque_constant : 0.0};
+  }
 }
 
 }  // namespace pumasim

@@ -54,6 +54,12 @@ struct PlantConfig {
   bool energy_ledger = false;
 };
 
+struct DriveSignals {
+  double u = 0;   // controller output (DAC) [V]
+  double ea = 0;  // amplifier output voltage [V]
+  double i = 0;   // motor current [A]
+};
+
 struct StateLayout {
   int n = 0;      // simulated joints
   int q = 0;      // offsets of the blocks; -1 when absent
@@ -123,8 +129,10 @@ class Plant {
   Eigen::Vector3d tool_position(const double* x) const;
   // The reference the controller currently uses (held set-point or at t).
   const ReferenceSample& reference_at(double t);
-  // Controller output u [V] and motor current [A] of joint j at (t, x).
-  double controller_output(double t, const double* x, int j);
+  // Controller output, amplifier output voltage and motor current of every
+  // simulated joint at (t, x), with the current discrete state (held outputs
+  // and set-points: call it at the instant, not after the run).
+  void drive_signals(double t, const double* x, DriveSignals* out);
 
  private:
   template <class S>

@@ -6,6 +6,7 @@
 
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
+#include "models/time_optimal.hpp"
 
 namespace pumasim {
 namespace {
@@ -210,8 +211,29 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
       seg.finish();
       r.segments.push_back(p);
     }
-    for (const auto& row : read_rows(*rt, "profile", 2)) r.profile.emplace_back(row[0], row[1]);
-    r.max_speed = rt->number("max_speed", kPositive);
+    r.timing = rt->string_or("timing", "table", {"table", "trapezoid", "scurve", "quintic", "time-optimal"});
+    if (r.timing == "table") {
+      for (const auto& row : read_rows(*rt, "profile", 2)) r.profile.emplace_back(row[0], row[1]);
+      if (rt->has("max_speed") == rt->has("traversal_time")) {
+        rt->fail(rt->has("max_speed") ? "traversal_time" : "max_speed",
+                 "exactly one of max_speed and traversal_time (the table's duration)", "both or neither");
+      }
+      r.max_speed = rt->number_or("max_speed", 0.0, kPositive);
+      r.traversal_time = rt->number_or("traversal_time", 0.0, kPositive);
+    } else if (r.timing != "time-optimal") {
+      r.traversal_time = rt->number("traversal_time", kPositive);
+      if (r.timing != "quintic") r.blend = rt->number_or("blend", r.blend, {0.0, 0.5, true});
+      if (r.timing == "scurve") r.jerk_fraction = rt->number_or("jerk_fraction", r.jerk_fraction, {0.0, 0.5, true});
+    }
+    const std::string interp = rt->string_or("interpolation", "cartesian", {"cartesian", "joint-cubic", "joint-quintic"});
+    r.interpolation = interp == "cartesian"   ? Interpolation::kCartesian
+                      : interp == "joint-cubic" ? Interpolation::kJointCubic
+                                                : Interpolation::kJointQuintic;
+    if (r.interpolation != Interpolation::kCartesian) {
+      const double v = rt->number_or("via_segments", r.via_segments, {1.0, 1e5});
+      if (v != std::floor(v)) rt->fail("via_segments", "a whole number >= 1", std::to_string(v));
+      r.via_segments = static_cast<int>(v);
+    }
     r.config.right_arm = rt->string_or("arm", "right", {"right", "left"}) == "right";
     r.config.elbow_up = rt->string_or("elbow", "up", {"up", "down"}) == "up";
     r.config.wrist_flip = rt->string_or("wrist", "noflip", {"noflip", "flip"}) == "flip";
@@ -226,13 +248,46 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
         rt->fail("orientation", "a rotation matrix (orthonormal, determinant +1)", "another matrix");
       }
     }
+    std::optional<StrictTable> plan = root.optional_table("planning");
+    if (plan && r.timing != "time-optimal") {
+      root.fail("planning", "[planning] only with reference.timing = \"time-optimal\"", "timing \"" + r.timing + "\"");
+    }
+    if (r.timing == "time-optimal") {
+      if (!pc.drive) rt->fail("timing", "a drive ([amplifier], [motor]) whose limits the time-optimal timing uses", "no drive");
+      const toml::table none;
+      StrictTable empty(none, sc.file, "planning");
+      StrictTable& pt = plan ? *plan : empty;
+      r.voltage_fraction = pt.number_or("voltage_fraction", r.voltage_fraction, {0.0, 1.0, true});
+      r.current_limit = pt.per_joint_or("current_limit", n, std::numeric_limits<double>::infinity(), kPositive);
+      r.joint_speed_limit = pt.per_joint_or("joint_speed_limit", n, std::numeric_limits<double>::infinity(), kPositive);
+      const double g = pt.number_or("grid", r.grid, {10.0, 1e6});
+      if (g != std::floor(g)) pt.fail("grid", "a whole number >= 10", std::to_string(g));
+      r.grid = static_cast<int>(g);
+      pt.finish();
+    }
     try {
       Path path(r.start, r.heading, r.height, r.segments);
-      SpeedProfile profile(r.profile, path.length(), r.max_speed);
-      auto ref = std::make_shared<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation,
-                                             path, profile);
+      const double L = path.length();
+      std::optional<Timing> timing;
+      if (r.timing == "table") {
+        timing = r.max_speed > 0 ? Timing::table(r.profile, L, r.max_speed)
+                                 : Timing::table_with_duration(r.profile, L, r.traversal_time);
+      } else if (r.timing == "trapezoid") {
+        timing = Timing::trapezoid(L, r.traversal_time, r.blend);
+      } else if (r.timing == "scurve") {
+        timing = Timing::scurve(L, r.traversal_time, r.blend, r.jerk_fraction);
+      } else if (r.timing == "quintic") {
+        timing = Timing::quintic(L, r.traversal_time);
+      } else {
+        const PlanningSetup setup = time_optimal_setup(pc, n, r);
+        timing = setup.planner->plan(*setup.unit, r.grid);
+      }
+      auto ref = std::make_shared<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation, path, *timing,
+                                             r.interpolation, r.via_segments);
       // (The constructor checks the whole path: reach, joint limits, branch.)
       pc.reference = ref;
+    } catch (const ConfigError&) {
+      throw;
     } catch (const std::exception& e) {
       throw ConfigError(rt->where() + e.what());
     }
@@ -256,7 +311,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   }
   if (!has_duration) {
     if (!pc.reference) root.fail("scene", "a duration (no reference to take it from)", "none");
-    sc.duration = pc.reference->profile().duration();
+    sc.duration = pc.reference->timing().duration();
   }
   root.finish();
   try {
@@ -265,6 +320,25 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
     throw ConfigError(path + ": " + e.what());
   }
   return sc;
+}
+
+PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r) {
+  PlanningSetup out;
+  const Path path(r.start, r.heading, r.height, r.segments);
+  out.unit = std::make_unique<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation, path,
+                                         Timing::unit_speed(path.length()));
+  DriveLimits lim;
+  for (int j = 0; j < n; ++j) {
+    lim.voltage.push_back(r.voltage_fraction *
+                          std::min(pc.amplifier[j].gain * pc.piv[j].output_limit, pc.amplifier[j].voltage_limit));
+  }
+  lim.current = r.current_limit;
+  lim.joint_speed = r.joint_speed_limit;
+  const RobotModel sim = n < pc.robot.dof() ? lock_joints(pc.robot, n, pc.q_held.head(pc.robot.dof())) : pc.robot;
+  std::vector<FrictionParams> fr = pc.friction;
+  if (fr.empty()) fr.assign(n, FrictionParams{});
+  out.planner = std::make_unique<TimeOptimalPlanner>(sim, pc.backend, pc.amplifier, pc.motor, fr, lim);
+  return out;
 }
 
 std::string resolved_toml(const Scene& sc) {
@@ -340,17 +414,39 @@ std::string resolved_toml(const Scene& sc) {
     for (int i = 0; i < 3; ++i) {
       orient.push_back(toml::array{r.orientation(i, 0), r.orientation(i, 1), r.orientation(i, 2)});
     }
-    doc.insert("reference",
-               toml::table{{"height", r.height},
-                           {"start", toml::array{r.start.x(), r.start.y()}},
-                           {"heading", r.heading},
-                           {"segments", segs},
-                           {"profile", prof},
-                           {"max_speed", r.max_speed},
-                           {"arm", r.config.right_arm ? "right" : "left"},
-                           {"elbow", r.config.elbow_up ? "up" : "down"},
-                           {"wrist", r.config.wrist_flip ? "flip" : "noflip"},
-                           {"orientation", orient}});
+    toml::table rt{{"height", r.height},
+                   {"start", toml::array{r.start.x(), r.start.y()}},
+                   {"heading", r.heading},
+                   {"segments", segs},
+                   {"timing", r.timing},
+                   {"arm", r.config.right_arm ? "right" : "left"},
+                   {"elbow", r.config.elbow_up ? "up" : "down"},
+                   {"wrist", r.config.wrist_flip ? "flip" : "noflip"},
+                   {"orientation", orient}};
+    if (r.timing == "table") {
+      rt.insert("profile", prof);
+      if (r.max_speed > 0) rt.insert("max_speed", r.max_speed);
+    }
+    if (r.traversal_time > 0) rt.insert("traversal_time", r.traversal_time);
+    if (r.timing == "trapezoid" || r.timing == "scurve") rt.insert("blend", r.blend);
+    if (r.timing == "scurve") rt.insert("jerk_fraction", r.jerk_fraction);
+    const Interpolation ip = r.interpolation;
+    rt.insert("interpolation", ip == Interpolation::kCartesian   ? "cartesian"
+                               : ip == Interpolation::kJointCubic ? "joint-cubic"
+                                                                  : "joint-quintic");
+    if (ip != Interpolation::kCartesian) rt.insert("via_segments", r.via_segments);
+    doc.insert("reference", rt);
+    if (r.timing == "time-optimal") {
+      auto limits = [&](const std::vector<double>& v) {
+        toml::array a;
+        for (double x : v) a.push_back(std::isfinite(x) ? x : std::numeric_limits<double>::infinity());
+        return a;
+      };
+      doc.insert("planning", toml::table{{"voltage_fraction", r.voltage_fraction},
+                                         {"current_limit", limits(r.current_limit)},
+                                         {"joint_speed_limit", limits(r.joint_speed_limit)},
+                                         {"grid", r.grid}});
+    }
   }
   if (!pc.reference) {
     doc.insert("initial", toml::table{{"q", to_array(std::vector<double>(pc.q0.data(), pc.q0.data() + n))}});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -49,61 +50,46 @@ void Path::eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector
   ddp = pc.curvature * Eigen::Vector3d(-std::sin(h), std::cos(h), 0);
 }
 
-SpeedProfile::SpeedProfile(std::vector<Eigen::Vector2d> shape, double path_length,
-                           double max_speed)
-    : vmax_(max_speed) {
-  if (shape.size() < 2 || shape.front().x() != 0.0 || shape.back().x() != 1.0) {
-    throw std::invalid_argument("speed profile: expected points from t/T = 0 to t/T = 1");
-  }
-  double area = 0, peak = 0;
-  for (std::size_t i = 1; i < shape.size(); ++i) {
-    if (!(shape[i].x() > shape[i - 1].x())) {
-      throw std::invalid_argument("speed profile: t/T must increase");
+double Path::distance(const Eigen::Vector3d& p) const {
+  const Eigen::Vector2d xy = p.head<2>();
+  double best = std::numeric_limits<double>::infinity();
+  for (const Piece& pc : pieces_) {
+    Eigen::Vector3d a, b, d1, d2;
+    eval(pc.s0, a, d1, d2);
+    eval(pc.s0 + pc.len, b, d1, d2);
+    double d = std::min((xy - a.head<2>()).norm(), (xy - b.head<2>()).norm());  // the ends
+    if (pc.curvature == 0.0) {
+      const Eigen::Vector2d dir(std::cos(pc.heading0), std::sin(pc.heading0));
+      const double u = (xy - pc.p0).dot(dir);
+      if (u > 0 && u < pc.len) d = std::min(d, (xy - pc.p0 - u * dir).norm());
+    } else {
+      // Arc points: c + (sin h, -cos h) / kappa with h = heading0 + kappa u.
+      const Eigen::Vector2d c = pc.p0 + Eigen::Vector2d(-std::sin(pc.heading0), std::cos(pc.heading0)) / pc.curvature;
+      const Eigen::Vector2d r = xy - c;
+      if (r.norm() > 0) {
+        const double sg = pc.curvature > 0 ? 1.0 : -1.0;
+        const double h = std::atan2(sg * r.x(), -sg * r.y());
+        double u = std::remainder(h - pc.heading0, 2 * M_PI) / pc.curvature;
+        if (u < 0) u += 2 * M_PI / std::abs(pc.curvature);
+        if (u < pc.len) d = std::min(d, std::abs(r.norm() - 1.0 / std::abs(pc.curvature)));
+      }
     }
-    area += 0.5 * (shape[i].y() + shape[i - 1].y()) * (shape[i].x() - shape[i - 1].x());
+    best = std::min(best, std::hypot(d, p.z() - height_));
   }
-  for (const auto& pt : shape) peak = std::max(peak, pt.y());
-  if (!(area > 0) || std::abs(peak - 1.0) > 1e-12) {
-    throw std::invalid_argument("speed profile: expected speeds v/v_max in [0, 1] with maximum 1");
-  }
-  // s(T) = v_max T area = L.
-  T_ = path_length / (max_speed * area);
-  double s = 0;
-  for (std::size_t i = 0; i < shape.size(); ++i) {
-    shape_.emplace_back(shape[i].x() * T_, shape[i].y() * max_speed);
-    if (i > 0) s += 0.5 * (shape_[i].y() + shape_[i - 1].y()) * (shape_[i].x() - shape_[i - 1].x());
-    s_at_.push_back(s);
-  }
-}
-
-void SpeedProfile::eval(double t, double& s, double& sd, double& sdd) const {
-  if (t <= 0) {
-    s = 0, sd = shape_.front().y(), sdd = 0;
-    return;
-  }
-  if (t >= T_) {
-    s = s_at_.back(), sd = 0, sdd = 0;
-    return;
-  }
-  std::size_t k = 0;
-  while (k + 2 < shape_.size() && t > shape_[k + 1].x()) ++k;
-  const double t0 = shape_[k].x(), v0 = shape_[k].y();
-  const double a = (shape_[k + 1].y() - v0) / (shape_[k + 1].x() - t0);
-  const double u = t - t0;
-  s = s_at_[k] + v0 * u + 0.5 * a * u * u;
-  sd = v0 + a * u;
-  sdd = a;
+  return best;
 }
 
 Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held,
-                     PumaConfig config, Eigen::Matrix3d R_fixed, Path path, SpeedProfile profile)
+                     PumaConfig config, Eigen::Matrix3d R_fixed, Path path, Timing timing,
+                     Interpolation interpolation, int via_segments)
     : robot_(std::move(robot)),
       n_(n),
       q_held_(q_held),
       config_(config),
       R_fixed_(R_fixed),
       path_(std::move(path)),
-      profile_(std::move(profile)) {
+      timing_(std::move(timing)),
+      interp_(interpolation) {
   if (const std::string why = puma_ik_unsupported(robot_); !why.empty()) {
     throw std::invalid_argument(why);
   }
@@ -146,6 +132,93 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
     branch_.push_back(q);
     prev = q;
   }
+  if (interp_ != Interpolation::kCartesian) {
+    if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
+    build_joint_spline(via_segments);
+  }
+}
+
+void Reference::build_joint_spline(int M) {
+  // Via-points at equal arc-length steps, at the times the timing law
+  // reaches them; q, qd, qdd there from the Cartesian reference.
+  knots_.resize(M + 1);
+  std::vector<ReferenceSample> via(M + 1);
+  for (int k = 0; k <= M; ++k) {
+    knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_.length() * k / M);
+    eval_cartesian(knots_[k], via[k]);
+  }
+  for (int k = 0; k < M; ++k) {
+    if (!(knots_[k + 1] > knots_[k])) throw std::invalid_argument("reference: via-points at the same time");
+  }
+  coef_.assign(M, Eigen::Matrix<double, 6, 6>::Zero());
+  for (int j = 0; j < n_; ++j) {
+    if (interp_ == Interpolation::kJointQuintic) {
+      // Hermite quintic on each piece: q, qd, qdd at both ends.
+      for (int k = 0; k < M; ++k) {
+        const double h = knots_[k + 1] - knots_[k];
+        const double q0 = via[k].q[j], v0 = via[k].qd[j], a0 = via[k].qdd[j];
+        const double q1 = via[k + 1].q[j], v1 = via[k + 1].qd[j], a1 = via[k + 1].qdd[j];
+        auto& c = coef_[k];
+        c(j, 0) = q0, c(j, 1) = v0, c(j, 2) = a0 / 2;
+        c(j, 3) = (20 * (q1 - q0) - (8 * v1 + 12 * v0) * h - (3 * a0 - a1) * h * h) / (2 * h * h * h);
+        c(j, 4) = (30 * (q0 - q1) + (14 * v1 + 16 * v0) * h + (3 * a0 - 2 * a1) * h * h) / (2 * std::pow(h, 4));
+        c(j, 5) = (12 * (q1 - q0) - 6 * (v1 + v0) * h + (a1 - a0) * h * h) / (2 * std::pow(h, 5));
+      }
+    } else {
+      // C2 cubic spline through the via-points, its end slopes clamped to the
+      // reference's end speeds: the knots' second derivatives m solve a
+      // tridiagonal system (Thomas algorithm; diagonally dominant).
+      std::vector<double> lo(M + 1), di(M + 1), up(M + 1), r(M + 1), m(M + 1);
+      auto hk = [&](int k) { return knots_[k + 1] - knots_[k]; };
+      auto slope = [&](int k) { return (via[k + 1].q[j] - via[k].q[j]) / hk(k); };
+      di[0] = 2 * hk(0), up[0] = hk(0), r[0] = 6 * (slope(0) - via[0].qd[j]);
+      for (int k = 1; k < M; ++k) {
+        lo[k] = hk(k - 1), di[k] = 2 * (hk(k - 1) + hk(k)), up[k] = hk(k);
+        r[k] = 6 * (slope(k) - slope(k - 1));
+      }
+      lo[M] = hk(M - 1), di[M] = 2 * hk(M - 1), r[M] = 6 * (via[M].qd[j] - slope(M - 1));
+      for (int k = 1; k <= M; ++k) {
+        const double w = lo[k] / di[k - 1];
+        di[k] -= w * up[k - 1];
+        r[k] -= w * r[k - 1];
+      }
+      m[M] = r[M] / di[M];
+      for (int k = M - 1; k >= 0; --k) m[k] = (r[k] - up[k] * m[k + 1]) / di[k];
+      for (int k = 0; k < M; ++k) {
+        const double h = hk(k);
+        auto& c = coef_[k];
+        c(j, 0) = via[k].q[j];
+        c(j, 1) = slope(k) - h * (2 * m[k] + m[k + 1]) / 6;
+        c(j, 2) = m[k] / 2;
+        c(j, 3) = (m[k + 1] - m[k]) / (6 * h);
+      }
+    }
+  }
+}
+
+void Reference::eval_joint_space(double t, ReferenceSample& out) const {
+  const double T = timing_.duration();
+  const double tc = std::clamp(t, 0.0, T);
+  // The piece [t_k, t_k+1) holding tc; the last one also holds T.
+  const auto after = std::upper_bound(knots_.begin(), knots_.end(), tc) - knots_.begin();
+  const std::size_t k = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
+  const double u = tc - knots_[k];
+  const auto& c = coef_[k];
+  Eigen::Matrix<double, 6, 1> q = q_held_, qd = Eigen::Matrix<double, 6, 1>::Zero(),
+                              qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int j = 0; j < n_; ++j) {
+    double p = c(j, 5), v = 5 * c(j, 5), a = 20 * c(j, 5);
+    for (int e = 4; e >= 0; --e) p = p * u + c(j, e);
+    for (int e = 4; e >= 1; --e) v = v * u + e * c(j, e);
+    for (int e = 4; e >= 2; --e) a = a * u + e * (e - 1) * c(j, e);
+    q[j] = p;
+    if (t > 0 && t < T) qd[j] = v, qdd[j] = a;
+  }
+  Eigen::Matrix<double, 6, 6> J;
+  jacobian(q, J);
+  out.q = q, out.qd = qd, out.qdd = qdd;
+  out.p = position(q);
+  out.v = J.topRows<3>() * qd;
 }
 
 bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near,
@@ -193,8 +266,16 @@ void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen:
 }
 
 void Reference::eval(double t, ReferenceSample& out) const {
+  if (interp_ == Interpolation::kCartesian) {
+    eval_cartesian(t, out);
+  } else {
+    eval_joint_space(t, out);
+  }
+}
+
+void Reference::eval_cartesian(double t, ReferenceSample& out) const {
   double s, sd, sdd;
-  profile_.eval(t, s, sd, sdd);
+  timing_.eval(t, s, sd, sdd);
   Eigen::Vector3d p, dp, ddp;
   path_.eval(s, p, dp, ddp);
   out.p = p;

@@ -4,9 +4,8 @@
 //
 // The path is drawn like a turtle: a start point and heading in the plane
 // z = height (base frame), then segments that go straight or turn along an arc,
-// so that the tangent is continuous everywhere. The speed profile is a
-// piecewise-linear shape v(t)/v_max over t/T; the duration T follows from the
-// path length and the maximum speed. The tracked point is the flange origin,
+// so that the tangent is continuous everywhere. A timing law (timing.hpp)
+// gives the arc length s(t). The tracked point is the flange origin,
 // which for the PUMA 560 (d6 = 0) is the wrist centre.
 #pragma once
 
@@ -17,6 +16,7 @@
 
 #include "models/kinematics.hpp"
 #include "models/robot_model.hpp"
+#include "models/timing.hpp"
 
 namespace pumasim {
 
@@ -32,6 +32,8 @@ class Path {
   double length() const { return total_; }
   // Position, first and second derivative with respect to the arc length s.
   void eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
+  // Distance from p to the nearest point of the path [m] (exact for lines and arcs).
+  double distance(const Eigen::Vector3d& p) const;
 
  private:
   struct Piece {
@@ -44,20 +46,13 @@ class Path {
   double height_, total_ = 0;
 };
 
-class SpeedProfile {
- public:
-  // shape: (t/T, v/v_max) points, t/T from 0 to 1 increasing, v/v_max in [0, 1] with max 1.
-  SpeedProfile(std::vector<Eigen::Vector2d> shape, double path_length, double max_speed);
-  double duration() const { return T_; }
-  double max_speed() const { return vmax_; }
-  // Arc length, speed and acceleration along the path at time t (held at the end after T).
-  void eval(double t, double& s, double& sd, double& sdd) const;
-
- private:
-  std::vector<Eigen::Vector2d> shape_;  // in seconds and m/s
-  std::vector<double> s_at_;            // arc length at each knot
-  double T_, vmax_;
-};
+// How the joints follow the path: through the closed-form inverse kinematics
+// at every instant (Cartesian timing), or by interpolating in joint space
+// between via-points of the path (the joint angles of the Cartesian reference
+// at the via-points' times): a C2 cubic spline (clamped to the reference's end
+// speeds), or quintic Hermite pieces matching the reference's q, qd, qdd at
+// each via-point. Between via-points the flange then leaves the path.
+enum class Interpolation { kCartesian, kJointCubic, kJointQuintic };
 
 struct ReferenceSample {
   Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
@@ -69,16 +64,24 @@ struct ReferenceSample {
 // keeps the orientation R_fixed.
 class Reference {
  public:
+  // via_segments: with joint-space interpolation, the via-points split the
+  // path into this many pieces of equal length (>= 1).
   Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held, PumaConfig config,
-            Eigen::Matrix3d R_fixed, Path path, SpeedProfile profile);
+            Eigen::Matrix3d R_fixed, Path path, Timing timing,
+            Interpolation interpolation = Interpolation::kCartesian, int via_segments = 0);
   const Path& path() const { return path_; }
-  const SpeedProfile& profile() const { return profile_; }
+  const Timing& timing() const { return timing_; }
+  Interpolation interpolation() const { return interp_; }
+  int simulated_joints() const { return n_; }
   // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
   void eval(double t, ReferenceSample& out) const;
   // The flange position for joint angles q (simulated joints first).
   Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
 
  private:
+  void eval_cartesian(double t, ReferenceSample& out) const;
+  void eval_joint_space(double t, ReferenceSample& out) const;
+  void build_joint_spline(int segments);
   // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
   // Its time derivative along qd (exact: one pass on dual numbers).
@@ -96,7 +99,12 @@ class Reference {
   PumaConfig config_;
   Eigen::Matrix3d R_fixed_;
   Path path_;
-  SpeedProfile profile_;
+  Timing timing_;
+  Interpolation interp_;
+  // Joint-space interpolation: knot times, and per piece the coefficients
+  // c(j, k) of (t - t_k)^k for each simulated joint j.
+  std::vector<double> knots_;
+  std::vector<Eigen::Matrix<double, 6, 6>> coef_;
   // Joint angles along the path, unwrapped by continuity, at equal steps of
   // arc length: the wrist solution, and the branch of a joint whose range
   // exceeds 2 pi (the PUMA's wrist roll), are chosen nearest these, so the

@@ -229,7 +229,7 @@ TEST(Reference, ContinuousThroughTheWristSingularityAndBeyondPi) {
   const Scene sc = load_scene(path.string());
   const Reference& ref = *sc.plant.reference;
   const RobotModel& m = sc.plant.robot;
-  const double T = ref.profile().duration(), h = 1e-4;
+  const double T = ref.timing().duration(), h = 1e-4;
   ReferenceSample a, b, c;
   double q5_min = 1e9, q5_max = -1e9, q6_max = -1e9;
   for (double t = h; t < T - h; t += 0.005) {
@@ -535,6 +535,22 @@ TEST_F(BadScene, WrongLengthPerJointArray) {
 }
 TEST_F(BadScene, PathOutOfReach) {
   expect_rejected("height = -0.15", "height = 1.5", "out of reach");
+}
+TEST_F(BadScene, UnknownTiming) {
+  expect_rejected("max_speed = 0.1", "max_speed = 0.1\ntiming = \"bang-bang\"",
+                  "reference.timing: expected one of \"table\", \"trapezoid\"");
+}
+TEST_F(BadScene, TableWithBothSpeedAndDuration) {
+  expect_rejected("max_speed = 0.1", "max_speed = 0.1\ntraversal_time = 24.0",
+                  "exactly one of max_speed and traversal_time");
+}
+TEST_F(BadScene, PlanningWithoutTimeOptimalTiming) {
+  expect_rejected("[reference]", "[planning]\nvoltage_fraction = 0.5\n\n[reference]",
+                  "[planning] only with reference.timing = \"time-optimal\"");
+}
+TEST_F(BadScene, ViaSegmentsNotWhole) {
+  expect_rejected("max_speed = 0.1", "max_speed = 0.1\ninterpolation = \"joint-cubic\"\nvia_segments = 2.5",
+                  "reference.via_segments: expected a whole number >= 1");
 }
 TEST_F(BadScene, UnknownBackend) {
   expect_rejected("backend = \"crba\"", "backend = \"newton\"", "scene.backend: expected one of: aba, crba");
