@@ -390,14 +390,18 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   const bool drive = sc.plant.drive;
   std::vector<double> signals;  // [u, e_a, i] per joint per output
   std::vector<DriveSignals> now(static_cast<std::size_t>(n));
-  if (drive) signals.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * 3 * n));
+  // A continuous controller on a continuous reference: the drive signals are
+  // a function of (t, x), computed after the run; otherwise (sampled output,
+  // held set-points) they are taken at each output instant, inside the run.
+  const bool held = drive && (sc.plant.controller == ControllerMode::kSampled || sc.plant.setpoint_interval > 0);
+  if (held) signals.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * 3 * n));
   saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
   const bool tty = isatty(STDERR_FILENO);
   auto last_progress = std::chrono::steady_clock::now();
   const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
     saved.push_back(t);
     saved.insert(saved.end(), x, x + m);
-    if (drive) {  // with the discrete state of this instant (held outputs and set-points)
+    if (held) {  // the controller's discrete state (held output or set-point) is only known now
       plant.drive_signals(t, x, now.data());
       for (const DriveSignals& d : now) signals.insert(signals.end(), {d.u, d.ea, d.i});
     }
@@ -444,9 +448,11 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       ++samples;
     }
     if (drive) {
+      if (!held) plant.drive_signals(t, x, now.data());
       for (int j = 0; j < n; ++j) {
-        const double* sg = &signals[static_cast<std::size_t>(3 * ((rows - 1) * n + j))];
-        const DriveSignals d{sg[0], sg[1], sg[2]};
+        const auto at = static_cast<std::size_t>(3 * ((rows - 1) * n + j));
+        const DriveSignals d = held ? DriveSignals{signals[at], signals[at + 1], signals[at + 2]}
+                                    : now[static_cast<std::size_t>(j)];
         num(d.u), num(d.ea);
         peak_u[j] = std::max(peak_u[j], std::abs(d.u));
         peak_ea[j] = std::max(peak_ea[j], std::abs(d.ea));

@@ -152,6 +152,39 @@ def conditioning_section(folder, rel):
     return out + [""]
 
 
+def planning_section(folder, rel):
+    path = os.path.join(folder, "planning.csv")
+    if not os.path.exists(path):
+        return []
+    rows = read_csv(path)
+    with open(os.path.join(folder, "summary.json")) as f:
+        summary = json.load(f)
+    joints = sorted({k.rsplit("_j", 1)[1] for k in rows[0] if k.startswith("peak_voltage_V_j")})
+    out = ["## Trajectory planning methods", "",
+           f"`experiments/planning.py` on `experiments/scenes/planning.toml` (the paper's path, arm, drives and "
+           f"controller; RK4 at 0.5 ms); table `{rel}/planning.csv`. The time-optimal timing under the drives' "
+           f"limits takes T_opt = {summary['t_opt_s']:.3g} s; every other method runs at the times listed and at "
+           f"T_opt. Joint-space splines pass through {summary['via_segments']} + 1 via-points timed by the "
+           "trapezoid. Tracking error: distance to where the reference is at that instant; path error: distance to "
+           "the geometric path. Peak amplifier voltage and motor current per joint (limit 40 V); saturated: the "
+           "largest share of outputs at which a joint's controller or amplifier is at its limit.", "",
+           summary["findings"], "",
+           "| method | T [s] | max tracking [mm] | max path [mm] | RMS path [mm] | peak e_a [V] | peak i [A] | "
+           "saturated |", "|---|---:|---:|---:|---:|---|---|---:|"]
+    for r in rows:
+        if r["ok"] != "True":
+            out.append(f"| {r['method']} | {float(r['traversal_time_s']):.3g} | fail: {r['failure']} | | | | | |")
+            continue
+        volts = " / ".join(f"{float(r['peak_voltage_V_j' + j]):.3g}" for j in joints)
+        amps = " / ".join(f"{float(r['peak_current_A_j' + j]):.3g}" for j in joints)
+        sat = max(float(r["saturated_share_j" + j]) for j in joints)
+        out.append(f"| {r['method']} | {float(r['traversal_time_s']):.3g} | {float(r['max_tracking_error_mm']):.3g} | "
+                   f"{float(r['max_path_deviation_mm']):.3g} | {float(r['rms_path_deviation_mm']):.3g} | {volts} | "
+                   f"{amps} | {100 * sat:.3g} % |")
+    out += ["", f"![planning]({rel}/planning.png)", "", f"![along the path]({rel}/planning_along_path.png)", ""]
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--results", default=os.path.join(ROOT, "results"))
@@ -183,6 +216,8 @@ def main():
         lines += [f"## {title}", ""]
         for s, d in chosen:
             lines += sweep_section(s, d, os.path.relpath(d, out_dir))
+    plan_dir = os.path.join(res, "planning")
+    lines += planning_section(plan_dir, os.path.relpath(plan_dir, out_dir))
     stiff_dir = os.path.join(res, "stiffness")
     lines += stiffness_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
     lines += conditioning_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))

@@ -3,8 +3,9 @@
 # scripts/results.sh, takes longer than CI): every sweep file parses and its
 # reduced version runs and merges (first and last variants, two settings per
 # method, short horizon), the stiffness tables run on one case each, the
-# report is assembled -- all under build/, nothing under results/. A re-run
-# must find every run complete (resumability).
+# planning comparison runs cut short, the report is assembled -- all under
+# build/, nothing under results/. A re-run must find every run complete
+# (resumability).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=/usr/bin/python3
@@ -26,9 +27,11 @@ $PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --merg
 $PY experiments/stiffness_table.py --reduced > /dev/null
 mkdir -p build/sweeps-reduced/results/stiffness
 cp build/stiffness-reduced/*.csv build/sweeps-reduced/results/stiffness/
+$PY experiments/planning.py --reduced --out build/sweeps-reduced/results/planning > /dev/null
 $PY experiments/report.py --results build/sweeps-reduced/results --out build/sweeps-reduced/README.md > /dev/null
 grep -q "Cheapest run per integrator" build/sweeps-reduced/README.md
 grep -q "Stiffness diagnostics" build/sweeps-reduced/README.md
+grep -q "Trajectory planning methods" build/sweeps-reduced/README.md
 # Creep: the model that defines the stuck intervals does not move in them (an
 # identity), and there are such intervals (the arm starts at rest, stuck).
 $PY - <<'PY'

@@ -3,9 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "experiments/cli.hpp"
 #include "models/scene.hpp"
 #include "models/time_optimal.hpp"
 #include "models/timing.hpp"
@@ -219,9 +223,46 @@ TEST(PathDistance, OffsetPointsAreTheirOffsetAway) {
       const double sk = path.length() * k / 200;
       bool inside = sk > 0.03 && sk < path.length() - 0.03;
       for (double joint : {0.2, 0.2 + 0.08 * M_PI, 0.4 + 0.08 * M_PI}) inside &= std::abs(sk - joint) > 0.03;
-      if (inside) EXPECT_NEAR(path.distance(off), std::hypot(d, 0.003), 1e-12) << k;
+      if (inside) {
+        EXPECT_NEAR(path.distance(off), std::hypot(d, 0.003), 1e-12) << k;
+      }
     }
   }
+}
+
+// `pumasim run` reports the path deviation and the drive's peaks: at every
+// output the distance to the path is at most the distance to the reference
+// point (which lies on the path), and no amplifier voltage exceeds its limit.
+TEST(RunReport, DeviationBelowTrackingErrorAndVoltagesWithinTheLimit) {
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_planning_run";
+  std::ostringstream out, err;
+  ASSERT_EQ(run_cli({"run", scene_path("planning"), "--set", "reference.timing=\"quintic\"", "--set",
+                     "reference.traversal_time=2.0", "--out", dir.string()},
+                    out, err),
+            0)
+      << err.str();
+  std::ifstream csv(dir / "trajectory.csv");
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> head;
+  for (std::stringstream ss(line); std::getline(ss, line, ',');) head.push_back(line.substr(0, line.find(" [")));
+  const auto col = [&](const std::string& h) { return std::find(head.begin(), head.end(), h) - head.begin(); };
+  const auto e = col("path_error"), d = col("path_deviation"), v = col("e_a2");
+  ASSERT_LT(d, static_cast<long>(head.size()));
+  ASSERT_LT(v, static_cast<long>(head.size()));
+  int rows = 0;
+  double peak = 0;
+  while (std::getline(csv, line)) {
+    std::vector<double> x;
+    for (std::stringstream ss(line); std::getline(ss, line, ',');) x.push_back(std::stod(line));
+    EXPECT_LE(x[d], x[e] + 1e-9) << "row " << rows;
+    EXPECT_LE(std::abs(x[v]), 40.0) << "row " << rows;
+    peak = std::max(peak, std::abs(x[v]));
+    ++rows;
+  }
+  EXPECT_GT(rows, 100);
+  EXPECT_GT(peak, 0.0);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

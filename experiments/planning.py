@@ -1,0 +1,160 @@
+#!/usr/bin/python3
+"""Trajectory planning methods compared on the paper's path.
+
+    /usr/bin/python3 experiments/planning.py [--out DIR] [--reduced]
+
+Scene experiments/scenes/planning.toml (the paper's arm, drives, friction and
+PIV controller, RK4 at 0.5 ms): the time-optimal timing under the drives'
+limits is planned first, which gives the shortest traversal time T_opt; then
+every method runs at the paper's T = 24 s, at 12, 6 and 3 s, and at T_opt:
+the paper's piecewise speed table, trapezoid, jerk-limited S-curve, quintic
+(Cartesian timing along the path), and joint-space cubic and quintic splines
+through 16 via-points timed by the trapezoid. The time-optimal timing runs at
+T_opt, planned with 80 % of the voltage range (the scene's default, the rest
+left to feedback) and with 100 %. Each run is `pumasim run --set ...`.
+
+Writes DIR (default results/planning/): planning.csv (every run: tracking and
+path errors, peak voltage and current per joint, the share of the outputs at
+which a drive saturates), planning.png (errors against traversal time, one
+line per method), planning_along_path.png (distance to the path along it, per
+method, at two traversal times) and summary.json for experiments/report.py.
+--reduced (CI): T = 24 s cut to 1 s and T_opt only, into build/planning-reduced/.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
+PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
+VIA = 16
+# Written after reading results/planning/planning.csv (regenerated with the rest).
+FINDINGS = """At the paper's T = 24 s every method tracks the path to about half a millimetre and no drive comes near a limit: the planning method hardly matters when the arm is slow. The joint-space splines are the exception that grows: between their 16 via-points the flange leaves the path by millimetres, whatever the tracking. As T falls, the Cartesian laws' errors grow with the accelerations they ask for; at 3 s the drives saturate (the table, with its steep ramps, first) and the errors jump by an order of magnitude. The time-optimal timing traverses the path in T_opt with the drives at the planned 80 % of their range and keeps the error near a millimetre, where every other law at that time saturates for much of the path and leaves it by centimetres. Planned with 100 % of the range it leaves no voltage for feedback and loses the path."""
+
+
+def run(out_dir, label, sets, t_end=None):
+    path = os.path.join(out_dir, "runs", label)
+    cmd = [PUMASIM, "run", SCENE, "--out", path, "--set", "scene.output_interval=0.002"]
+    for s in sets:
+        cmd += ["--set", s]
+    if t_end is not None:
+        cmd += ["--t-end", repr(t_end)]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode not in (0, 1):
+        sys.exit(f"planning: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
+    with open(os.path.join(path, "stats.json")) as f:
+        return json.load(f), path
+
+
+def along_path(run_dir):
+    with open(os.path.join(run_dir, "trajectory.csv")) as f:
+        rows = list(csv.reader(f))
+    head = [h.split(" [")[0] for h in rows[0]]
+    t, dev = head.index("t"), head.index("path_deviation")
+    return [float(r[t]) for r in rows[1:]], [float(r[dev]) for r in rows[1:]]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--reduced", action="store_true")
+    a = ap.parse_args()
+    out = a.out or os.path.join(ROOT, *(("build", "planning-reduced") if a.reduced else ("results", "planning")))
+    os.makedirs(out, exist_ok=True)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows, traces = [], {}
+    stats, path = run(out, "time-optimal_80pct", [], 1.0 if a.reduced else None)
+    t_opt = stats["reference_duration_s"]
+
+    def record(method, T, stats, path, note=""):
+        n = len(stats["peak_voltage_V"])
+        rows.append({
+            "method": method, "traversal_time_s": T, "ok": stats["ok"], "failure": stats["failure"],
+            "max_tracking_error_mm": stats["max_path_error_mm"], "rms_tracking_error_mm": stats["rms_path_error_mm"],
+            "max_path_deviation_mm": stats["max_path_deviation_mm"],
+            "rms_path_deviation_mm": stats["rms_path_deviation_mm"],
+            **{f"peak_voltage_V_j{j + 1}": stats["peak_voltage_V"][j] for j in range(n)},
+            **{f"peak_current_A_j{j + 1}": stats["peak_current_A"][j] for j in range(n)},
+            **{f"saturated_share_j{j + 1}": stats["saturated_fraction"][j] for j in range(n)},
+            "saturates": any(s > 0 for s in stats["saturated_fraction"]),
+            "wall_time_s": stats["wall_time_s"], "note": note,
+        })
+        traces[(method, T)] = path
+
+    record("time-optimal", t_opt, stats, path, "80 % of the voltage range planned")
+    if not a.reduced:
+        stats, path = run(out, "time-optimal_100pct", ["planning.voltage_fraction=1.0"])
+        record("time-optimal (100 %)", stats["reference_duration_s"], stats, path, "the whole voltage range planned")
+    times = [t_opt] if a.reduced else [24.0, 12.0, 6.0, 3.0, t_opt]
+    methods = {
+        "table (paper)": ['reference.timing="table"', f"reference.profile={PAPER_PROFILE}"],
+        "trapezoid": ['reference.timing="trapezoid"', "reference.blend=0.2"],
+        "S-curve": ['reference.timing="scurve"', "reference.blend=0.25", "reference.jerk_fraction=0.25"],
+        "quintic": ['reference.timing="quintic"'],
+        "joint cubic": ['reference.timing="trapezoid"', "reference.blend=0.2", 'reference.interpolation="joint-cubic"',
+                        f"reference.via_segments={VIA}"],
+        "joint quintic": ['reference.timing="trapezoid"', "reference.blend=0.2",
+                          'reference.interpolation="joint-quintic"', f"reference.via_segments={VIA}"],
+    }
+    for m, sets in methods.items():
+        for T in times:
+            label = f"{m.split(' (')[0].replace(' ', '-')}_T{T:.4g}"
+            stats, path = run(out, label, sets + [f"reference.traversal_time={T!r}"], 1.0 if a.reduced else None)
+            record(m, T, stats, path)
+        print(f"planning: {m} done", flush=True)
+
+    keys = list(rows[0].keys())
+    with open(os.path.join(out, "planning.csv"), "w", newline="") as f:
+        f.write(f"# experiments/planning.py on experiments/scenes/planning.toml; time-optimal T_opt = {t_opt:.6g} s\n")
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{x:.6g}" if isinstance(x, float) else x) for k, x in r.items()})
+
+    names = list(methods) + ["time-optimal"]
+    colors = {m: plt.cm.tab10(k) for k, m in enumerate(names)}
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, key, lab in ((axes[0], "max_tracking_error_mm", "max tracking error [mm]"),
+                         (axes[1], "max_path_deviation_mm", "max distance to the path [mm]")):
+        for m in names:
+            pts = sorted((r["traversal_time_s"], r[key]) for r in rows if r["method"] == m and r["ok"])
+            if pts:
+                ax.plot(*zip(*pts), "o-" if len(pts) > 1 else "*", ms=5 if len(pts) > 1 else 12, lw=1,
+                        color=colors[m], label=m)
+        ax.set(xscale="log", yscale="log", xlabel="traversal time T [s]", ylabel=lab)
+        ax.axvline(t_opt, color="k", lw=0.6, ls=":")
+        ax.grid(True, which="major", lw=0.3)
+    axes[1].legend(fontsize=7)
+    fig.suptitle("Planning methods on the paper's path (3 joints, RK4 0.5 ms); dotted: the time-optimal T", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "planning.png"), dpi=80)
+    plt.close(fig)
+
+    shown = [T for T in ([6.0, t_opt] if not a.reduced else [t_opt])]
+    fig, axes = plt.subplots(len(shown), 1, figsize=(10, 3.4 * len(shown)), squeeze=False)
+    for ax, T in zip(axes[:, 0], shown):
+        for m in names:
+            if (m, T) in traces:
+                t, d = along_path(traces[(m, T)])
+                ax.plot([x / T for x in t], [max(y, 1e-6) for y in d], lw=0.8, color=colors[m], label=m)
+        ax.set(yscale="log", xlabel="t / T", ylabel="distance to the path [mm]", title=f"T = {T:.3g} s")
+        ax.grid(True, which="major", lw=0.3)
+    axes[0, 0].legend(fontsize=7, ncol=4)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "planning_along_path.png"), dpi=80)
+    plt.close(fig)
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump({"t_opt_s": t_opt, "findings": FINDINGS, "via_segments": VIA, "times_s": times}, f, indent=1)
+    print(f"planning: {len(rows)} runs -> {out} (T_opt = {t_opt:.4g} s)")
+
+
+if __name__ == "__main__":
+    main()
