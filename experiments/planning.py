@@ -34,11 +34,11 @@ SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
 PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
 VIA = 16
 # Written after reading results/planning/planning.csv (regenerated with the rest).
-FINDINGS = """At the paper's T = 24 s every method tracks the path to about half a millimetre and no drive comes near a limit: the planning method hardly matters when the arm is slow. The joint-space splines are the exception that grows: between their 16 via-points the flange leaves the path by millimetres, whatever the tracking. As T falls, the Cartesian laws' errors grow with the accelerations they ask for; at 3 s the drives saturate (the table, with its steep ramps, first) and the errors jump by an order of magnitude. The time-optimal timing traverses the path in T_opt with the drives at the planned 80 % of their range and keeps the error near a millimetre, where every other law at that time saturates for much of the path and leaves it by centimetres. Planned with 100 % of the range it leaves no voltage for feedback and loses the path."""
+FINDINGS = """At the paper's T = 24 s every Cartesian law tracks the path to about half a millimetre with the drives far from their limits: the planning method hardly matters when the arm is slow. The joint-space splines through 16 via-points are the exception, and their error does not shrink with T: between via-points the flange leaves the path by millimetres with cubic pieces and by about a millimetre with quintic ones (which also match the path's rates at the via-points), whatever the tracking. As T falls the errors grow slowly until a drive saturates; the law with the highest peak speed for a given T saturates first (the quintic, at 3 s), the others follow near the time-optimal T. The time-optimal timing traverses the path in T_opt with the voltages within the 80 % planned plus what feedback adds, no saturation, and an error near a millimetre; every other law run in the same time saturates for about half the outputs and leaves the path by centimetres. Planned with the whole voltage range it is faster still, but then saturates almost throughout and loses the path: the margin for feedback is part of the plan."""
 
 
-def run(out_dir, label, sets, t_end=None):
-    path = os.path.join(out_dir, "runs", label)
+def run(runs_dir, label, sets, t_end=None):
+    path = os.path.join(runs_dir, label)
     cmd = [PUMASIM, "run", SCENE, "--out", path, "--set", "scene.output_interval=0.002"]
     for s in sets:
         cmd += ["--set", s]
@@ -66,12 +66,13 @@ def main():
     a = ap.parse_args()
     out = a.out or os.path.join(ROOT, *(("build", "planning-reduced") if a.reduced else ("results", "planning")))
     os.makedirs(out, exist_ok=True)
+    runs = os.path.join(ROOT, "build", "planning-reduced-runs" if a.reduced else "planning-runs")  # not committed
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     rows, traces = [], {}
-    stats, path = run(out, "time-optimal_80pct", [], 1.0 if a.reduced else None)
+    stats, path = run(runs, "time-optimal_80pct", [], 1.0 if a.reduced else None)
     t_opt = stats["reference_duration_s"]
 
     def record(method, T, stats, path, note=""):
@@ -91,7 +92,7 @@ def main():
 
     record("time-optimal", t_opt, stats, path, "80 % of the voltage range planned")
     if not a.reduced:
-        stats, path = run(out, "time-optimal_100pct", ["planning.voltage_fraction=1.0"])
+        stats, path = run(runs, "time-optimal_100pct", ["planning.voltage_fraction=1.0"])
         record("time-optimal (100 %)", stats["reference_duration_s"], stats, path, "the whole voltage range planned")
     times = [t_opt] if a.reduced else [24.0, 12.0, 6.0, 3.0, t_opt]
     methods = {
@@ -107,7 +108,7 @@ def main():
     for m, sets in methods.items():
         for T in times:
             label = f"{m.split(' (')[0].replace(' ', '-')}_T{T:.4g}"
-            stats, path = run(out, label, sets + [f"reference.traversal_time={T!r}"], 1.0 if a.reduced else None)
+            stats, path = run(runs, label, sets + [f"reference.traversal_time={T!r}"], 1.0 if a.reduced else None)
             record(m, T, stats, path)
         print(f"planning: {m} done", flush=True)
 

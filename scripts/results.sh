@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Regenerates results/README.md and everything it reads: every sweep in
 # experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
-# back-ends inside the ODE, the stiff scenes), the stiffness tables, and the
-# report. A fresh run takes about 20 minutes on 2 cores (the report's header
-# states how long its last run took). Runs already complete under build/sweeps/ are skipped: delete that
-# folder for a fresh run. Uses a private copy of the pumasim binary, so that
+# back-ends inside the ODE, the stiff scenes), the stiffness tables, the
+# planning methods (experiments/planning.py), and the report. A fresh run
+# takes about 20 minutes on 2 cores (the report's header states how long its
+# last run took). Runs already complete under build/sweeps/ are skipped:
+# delete that folder for a fresh run. Uses a private copy of the pumasim binary, so that
 # rebuilding meanwhile does not change the program under measurement.
 #
 #   scripts/results.sh [--jobs N]      (default: the number of cores)
@@ -25,5 +26,6 @@ for f in experiments/sweeps/*.toml; do
   /usr/bin/python3 experiments/sweep.py "$f" --jobs "$j"
 done
 /usr/bin/python3 experiments/stiffness_table.py
+/usr/bin/python3 experiments/planning.py
 minutes=$(( ($(date +%s) - start + 30) / 60 ))
 /usr/bin/python3 experiments/report.py --minutes "$minutes"
