@@ -169,6 +169,34 @@ TEST_F(PlannerOnTheScene, RespectsTheLimitsAndNothingFasterIsFeasible) {
   }
 }
 
+// Current and joint-speed limits (set in [planning]) hold along the planned
+// timing on the finer grid, within the same 1 %, and make it slower.
+TEST(PlannerLimits, CurrentAndSpeedLimitsHoldAndCostTime) {
+  const Scene free = load_scene(scene_path("planning"));
+  const Scene sc = load_scene(scene_path("planning"), {"planning.current_limit=4.0", "planning.joint_speed_limit=0.8"});
+  const Timing& tm = sc.plant.reference->timing();
+  EXPECT_GT(tm.duration(), free.plant.reference->timing().duration());
+  const PlanningSetup setup = time_optimal_setup(sc.plant, sc.plant.n, sc.reference);
+  const double L = setup.unit->path().length();
+  std::vector<double> s;
+  for (int k = 0; k <= 10 * sc.reference.grid; ++k) s.push_back(L * k / (10 * sc.reference.grid));
+  const PathDynamics d = setup.planner->path_dynamics(*setup.unit, s);
+  double worst_i = 0, worst_w = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    double ss, sd, sdd;
+    tm.eval(tm.time_at(s[i]), ss, sd, sdd);
+    for (int j = 0; j < sc.plant.n; ++j) {
+      double volts, amps;
+      setup.planner->drive_demand(d, static_cast<int>(i), j, sd, sdd, volts, amps);
+      worst_i = std::max(worst_i, std::abs(amps) / 4.0);
+      worst_w = std::max(worst_w, std::abs(d.dq[i][j]) * sd / 0.8);
+    }
+  }
+  EXPECT_LE(worst_i, 1.01);
+  EXPECT_LE(worst_w, 1.01);
+  EXPECT_GT(std::max(worst_i, worst_w), 0.99);  // one of them binds somewhere
+}
+
 // Joint-space interpolation: through the via-points exactly (the Cartesian
 // reference's angles there), off the path between them by an amount that
 // falls as the via-points get denser -- faster for the quintic, whose pieces
