@@ -323,9 +323,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   Scene sc = scene_argument(args, opt);
   if (auto b = opt.get("backend")) {
     const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
-    const RobotModel sim = sc.plant.n < sc.plant.robot.dof()
-                               ? lock_joints(sc.plant.robot, sc.plant.n, sc.plant.q_held.head(sc.plant.robot.dof()))
-                               : sc.plant.robot;
+    const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
     if (const std::string why = info.why_unsupported(sim); !why.empty()) throw UsageError("--backend: " + why);
     sc.plant.backend = *b;
   }
@@ -393,7 +391,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   // A continuous controller on a continuous reference: the drive signals are
   // a function of (t, x), computed after the run; otherwise (sampled output,
   // held set-points) they are taken at each output instant, inside the run.
-  const bool held = drive && (sc.plant.controller == ControllerMode::kSampled || sc.plant.setpoint_interval > 0);
+  const bool held = plant.holds_drive_state();
   if (held) signals.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * 3 * n));
   saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
   const bool tty = isatty(STDERR_FILENO);

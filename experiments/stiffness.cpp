@@ -131,8 +131,8 @@ ConditioningReport analyse_conditioning(const Scene& sc, int samples) {
   if (!sc.plant.reference) throw std::invalid_argument("conditioning: the scene has no [reference] to follow");
   if (samples < 1) throw std::invalid_argument("conditioning: expected at least one sample");
   const PlantConfig& pc = sc.plant;
-  const int n = pc.n, dof = pc.robot.dof();
-  const RobotModel sim = n < dof ? lock_joints(pc.robot, n, pc.q_held.head(dof)) : pc.robot;
+  const int n = pc.n;
+  const RobotModel sim = simulated_robot(pc.robot, n, pc.q_held);
   ConditioningReport rep;
   std::vector<std::unique_ptr<DynamicsBackend>> bs;
   for (const BackendInfo& b : backends()) {

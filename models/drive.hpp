@@ -4,6 +4,7 @@
 // motor speed w_m = Z qd, joint torque from the drive tau = Z (K i - tau_f).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -110,6 +111,11 @@ struct PivParams {
   double output_limit = 10.0;   // [V], DAC range
   double offset = 0.0;          // [V], SOFFS
 };
+
+// The largest amplifier output the controller can command: min(K_A u_max, V_max) [V].
+inline double command_voltage_range(const AmplifierParams& A, const PivParams& P) {
+  return std::min(A.gain * P.output_limit, A.voltage_limit);
+}
 
 template <class S>
 S saturate(const S& x, double limit) {

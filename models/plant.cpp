@@ -66,6 +66,10 @@ double next_on_grid(double t, double period) {
 
 }  // namespace
 
+RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held) {
+  return n < robot.dof() ? lock_joints(robot, n, q_held.head(robot.dof())) : robot;
+}
+
 Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   const int n = cfg_.n;
   if (cfg_.robot.dof() != 6 && cfg_.n != cfg_.robot.dof()) {
@@ -91,8 +95,7 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   if (cfg_.controller == ControllerMode::kSampled && !(cfg_.servo_period > 0)) {
     throw std::invalid_argument("plant: a sampled controller needs a servo period > 0");
   }
-  Eigen::VectorXd q_full = cfg_.q_held.head(cfg_.robot.dof());
-  model_ = n < cfg_.robot.dof() ? lock_joints(cfg_.robot, n, q_full) : cfg_.robot;
+  model_ = simulated_robot(cfg_.robot, n, cfg_.q_held);
 
   // State layout.
   layout_.n = n;
@@ -120,7 +123,7 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
   for (int j = 0; j < n; ++j) {
     if (layout_.i >= 0) {
       const AmplifierParams& A = cfg_.amplifier[j];
-      const double v = std::min(A.gain * cfg_.piv[j].output_limit, A.voltage_limit);
+      const double v = command_voltage_range(A, cfg_.piv[j]);
       const double r = A.output_resistance + cfg_.motor[j].resistance;
       if (v > 0 && r > 0 && std::isfinite(v / r)) scale_[layout_.i + j] = v / r;
     }

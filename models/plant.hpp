@@ -54,6 +54,10 @@ struct PlantConfig {
   bool energy_ledger = false;
 };
 
+// The model the plant simulates: the first n joints of `robot`, the others
+// held at q_held with their links riding on link n.
+RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held);
+
 struct DriveSignals {
   double u = 0;   // controller output (DAC) [V]
   double ea = 0;  // amplifier output voltage [V]
@@ -133,6 +137,11 @@ class Plant {
   // simulated joint at (t, x), with the current discrete state (held outputs
   // and set-points: call it at the instant, not after the run).
   void drive_signals(double t, const double* x, DriveSignals* out);
+  // True when the drive signals depend on a discrete state besides (t, x): a
+  // sampled controller's held output, or a held set-point.
+  bool holds_drive_state() const {
+    return cfg_.drive && (cfg_.controller == ControllerMode::kSampled || cfg_.setpoint_interval > 0);
+  }
 
  private:
   template <class S>

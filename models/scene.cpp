@@ -1,5 +1,6 @@
 #include "models/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -103,7 +104,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   pc.backend = s.string_or("backend", "crba");
   try {
     const BackendInfo& b = find_backend(pc.backend);
-    const RobotModel sim = n < dof ? lock_joints(pc.robot, n, pc.q_held.head(dof)) : pc.robot;
+    const RobotModel sim = simulated_robot(pc.robot, n, pc.q_held);
     if (const std::string why = b.why_unsupported(sim); !why.empty()) s.fail("backend", "a back-end that supports this robot", why);
   } catch (const std::invalid_argument& e) {
     s.fail("backend", "one of: " + backend_names(), "\"" + pc.backend + "\"");
@@ -225,10 +226,12 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
       if (r.timing != "quintic") r.blend = rt->number_or("blend", r.blend, {0.0, 0.5, true});
       if (r.timing == "scurve") r.jerk_fraction = rt->number_or("jerk_fraction", r.jerk_fraction, {0.0, 0.5, true});
     }
-    const std::string interp = rt->string_or("interpolation", "cartesian", {"cartesian", "joint-cubic", "joint-quintic"});
-    r.interpolation = interp == "cartesian"   ? Interpolation::kCartesian
-                      : interp == "joint-cubic" ? Interpolation::kJointCubic
-                                                : Interpolation::kJointQuintic;
+    const std::vector<Interpolation> interps{Interpolation::kCartesian, Interpolation::kJointCubic,
+                                             Interpolation::kJointQuintic};
+    std::vector<std::string> interp_names;
+    for (Interpolation i : interps) interp_names.emplace_back(to_string(i));
+    const std::string interp = rt->string_or("interpolation", interp_names[0], interp_names);
+    r.interpolation = interps[std::find(interp_names.begin(), interp_names.end(), interp) - interp_names.begin()];
     if (r.interpolation != Interpolation::kCartesian) {
       const double v = rt->number_or("via_segments", r.via_segments, {1.0, 1e5});
       if (v != std::floor(v)) rt->fail("via_segments", "a whole number >= 1", std::to_string(v));
@@ -329,12 +332,11 @@ PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSe
                                          Timing::unit_speed(path.length()));
   DriveLimits lim;
   for (int j = 0; j < n; ++j) {
-    lim.voltage.push_back(r.voltage_fraction *
-                          std::min(pc.amplifier[j].gain * pc.piv[j].output_limit, pc.amplifier[j].voltage_limit));
+    lim.voltage.push_back(r.voltage_fraction * command_voltage_range(pc.amplifier[j], pc.piv[j]));
   }
   lim.current = r.current_limit;
   lim.joint_speed = r.joint_speed_limit;
-  const RobotModel sim = n < pc.robot.dof() ? lock_joints(pc.robot, n, pc.q_held.head(pc.robot.dof())) : pc.robot;
+  const RobotModel sim = simulated_robot(pc.robot, n, pc.q_held);
   std::vector<FrictionParams> fr = pc.friction;
   if (fr.empty()) fr.assign(n, FrictionParams{});
   out.planner = std::make_unique<TimeOptimalPlanner>(sim, pc.backend, pc.amplifier, pc.motor, fr, lim);
@@ -430,16 +432,13 @@ std::string resolved_toml(const Scene& sc) {
     if (r.traversal_time > 0) rt.insert("traversal_time", r.traversal_time);
     if (r.timing == "trapezoid" || r.timing == "scurve") rt.insert("blend", r.blend);
     if (r.timing == "scurve") rt.insert("jerk_fraction", r.jerk_fraction);
-    const Interpolation ip = r.interpolation;
-    rt.insert("interpolation", ip == Interpolation::kCartesian   ? "cartesian"
-                               : ip == Interpolation::kJointCubic ? "joint-cubic"
-                                                                  : "joint-quintic");
-    if (ip != Interpolation::kCartesian) rt.insert("via_segments", r.via_segments);
+    rt.insert("interpolation", to_string(r.interpolation));
+    if (r.interpolation != Interpolation::kCartesian) rt.insert("via_segments", r.via_segments);
     doc.insert("reference", rt);
     if (r.timing == "time-optimal") {
       auto limits = [&](const std::vector<double>& v) {
         toml::array a;
-        for (double x : v) a.push_back(std::isfinite(x) ? x : std::numeric_limits<double>::infinity());
+        for (double x : v) a.push_back(x);  // inf: no limit (TOML has inf)
         return a;
       };
       doc.insert("planning", toml::table{{"voltage_fraction", r.voltage_fraction},

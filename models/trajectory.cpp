@@ -50,6 +50,15 @@ void Path::eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector
   ddp = pc.curvature * Eigen::Vector3d(-std::sin(h), std::cos(h), 0);
 }
 
+const char* to_string(Interpolation i) {
+  switch (i) {
+    case Interpolation::kCartesian: return "cartesian";
+    case Interpolation::kJointCubic: return "joint-cubic";
+    case Interpolation::kJointQuintic: return "joint-quintic";
+  }
+  return "?";
+}
+
 double Path::distance(const Eigen::Vector3d& p) const {
   const Eigen::Vector2d xy = p.head<2>();
   double best = std::numeric_limits<double>::infinity();

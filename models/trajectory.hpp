@@ -53,6 +53,8 @@ class Path {
 // speeds), or quintic Hermite pieces matching the reference's q, qd, qdd at
 // each via-point. Between via-points the flange then leaves the path.
 enum class Interpolation { kCartesian, kJointCubic, kJointQuintic };
+// "cartesian", "joint-cubic", "joint-quintic" (the scene's names).
+const char* to_string(Interpolation i);
 
 struct ReferenceSample {
   Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
