@@ -23,6 +23,11 @@ class OdeSystem {
   // df/dx; the default is forward differences.
   virtual void jacobian(double t, const double* x, Eigen::MatrixXd& J);
   virtual bool has_exact_jacobian() const { return false; }
+  // The explicit time dependence df/dt at (t, x), for the methods that use it
+  // (Rosenbrock): false if the system does not provide it, and the method
+  // then takes a difference in t. Problems with a known df/dt (Prothero-
+  // Robinson) supply it, so a method's order is tested without that noise.
+  virtual bool time_derivative(double /*t*/, const double* /*x*/, double* /*dfdt*/) { return false; }
   // IMEX split f = fe + fi (fe explicit, fi implicit). The default puts all of
   // f in the implicit part; systems with a natural split override it.
   virtual void rhs_split(double t, const double* x, double* fe, double* fi) {
@@ -58,7 +63,7 @@ struct IntegratorStats {
   long rejected_steps = 0;
   long nonlinear_iterations = 0;
   long restarts = 0;            // resets after events
-  double wall_time = 0.0;       // [s], of advance_to calls
+  double wall_time = 0.0;       // [s], of advance_to and step_toward calls
 };
 
 struct IntegratorCapabilities {
@@ -75,6 +80,20 @@ struct Outcome {
   std::string message;  // with kFailed: what, when, which components
 };
 
+// Stepping and dense output. An integrator takes its own steps; the caller
+// stops it only where the right-hand side changes (controller samples,
+// set-point updates, the reference's breakpoints, roots) and reads any other
+// time from the method's dense output, so an output grid never caps a step
+// nor changes a cost figure:
+//   step_toward(t_stop)  one step of the method (its own size; the last one
+//                        shortened to end exactly at t_stop), or a root or a
+//                        failure inside it;
+//   dense_state(t, x)    the state at any t of the last step,
+//                        [step_start(), time()], from the method's own
+//                        continuous extension (CVODE/ARKODE: GetDky; odeint:
+//                        the steppers' dense output; fixed-step methods:
+//                        their natural extensions, see fixed_step.cpp);
+//   advance_to(t)        steps until t (or a root or a failure).
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -82,15 +101,27 @@ class Integrator {
   virtual IntegratorCapabilities capabilities() const = 0;
   // (Re)start at (t0, x0): multistep history and step-size memory are dropped.
   virtual void reset(OdeSystem& sys, double t0, const double* x0) = 0;
-  // Advances to t (or to a root or failure before it); counts the wall time.
+  // Advances to t (or to a root or failure before it) in steps of the method;
+  // more than IntegratorOptions::max_steps steps in one call is a failure.
+  // Counts the wall time.
   Outcome advance_to(double t);
+  // One step toward t_stop (> time()); counts the wall time.
+  Outcome step_toward(double t_stop);
   virtual double time() const = 0;
   virtual const double* state() const = 0;
+  // The last step's start; dense_state is valid on [step_start(), time()].
+  virtual double step_start() const = 0;
+  virtual void dense_state(double t, double* x) = 0;
   const IntegratorStats& stats() const { return stats_; }
 
  protected:
-  virtual Outcome advance(double t) = 0;
+  explicit Integrator(long max_steps_per_call) : max_steps_per_call_(max_steps_per_call) {}
+  // One step of the method toward t_stop (never past it): the integrator's core.
+  virtual Outcome step(double t_stop) = 0;
   IntegratorStats stats_;
+
+ private:
+  long max_steps_per_call_;
 };
 
 // The first root function that crossed zero between two evaluations, or -1.

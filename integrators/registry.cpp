@@ -28,7 +28,23 @@ void OdeSystem::jacobian(double t, const double* x, Eigen::MatrixXd& J) {
 
 Outcome Integrator::advance_to(double t) {
   const auto start = std::chrono::steady_clock::now();
-  Outcome out = advance(t);
+  Outcome out;
+  for (long taken = 0; time() < t && out.status == Outcome::kReached; ++taken) {
+    if (taken >= max_steps_per_call_) {
+      out = {Outcome::kFailed, -1,
+             std::string(name()) + ": too many steps (" + std::to_string(max_steps_per_call_) + ") before t = " +
+                 std::to_string(t) + " s; stopped at t = " + std::to_string(time()) + " s"};
+      break;
+    }
+    out = step(t);
+  }
+  stats_.wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+Outcome Integrator::step_toward(double t_stop) {
+  const auto start = std::chrono::steady_clock::now();
+  Outcome out = step(t_stop);
   stats_.wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
@@ -72,23 +88,38 @@ std::string fastest_component(OdeSystem& sys, double t, const double* x) {
 
 namespace {
 
-// Sorted by name (checked below).
+// Sorted by name (checked below). Orders and stability intervals: Hairer,
+// Norsett & Wanner I (Euler, RK4: real intervals 2 and 2.7853; Adams-
+// Bashforth k = 2, 3, 4: 1, 6/11, 3/10, Sec. III.3); Dormand & Prince 1980
+// (DOPRI5: order 5, real interval about 3.3); Hairer & Wanner II, Sec. IV.7
+// (RODAS-type rosenbrock4: order 4, dense output order 3); the SUNDIALS 6.4
+// manuals (CVODE BDF 1-5 / Adams 1-12; ARKODE's order-4 tables, whose dense
+// output is ARKODE's Hermite interpolant, degree 3 by default).
+constexpr auto F = IntegratorKind::kFixedStep;
+constexpr auto A = IntegratorKind::kAdaptive;
 constexpr std::array<IntegratorInfo, 12> kIntegrators{{
-    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2},
-    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3},
-    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start): the paper's method", &detail::make_ab4},
+    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2},
+    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3},
+    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4},
     {"arkode-dirk", "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
-     &detail::make_arkode_dirk},
-    {"arkode-erk", "SUNDIALS ARKODE, explicit RK (order 4); adaptive", &detail::make_arkode_erk},
+     &detail::make_arkode_dirk, A, 4, false, true, 0, 0.0, 3},
+    {"arkode-erk", "SUNDIALS ARKODE, explicit RK (order 4); adaptive", &detail::make_arkode_erk, A, 4, false, false, 0,
+     0.0, 3},
     {"arkode-imex", "SUNDIALS ARKODE, additive IMEX RK (order 4): the system's stiff part implicit; adaptive",
-     &detail::make_arkode_imex},
-    {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams},
-    {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf},
-    {"euler", "forward Euler, fixed step", &detail::make_euler},
-    {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5},
-    {"odeint-rosenbrock4", "Boost.Odeint Rosenbrock 4, adaptive, linearly implicit, the system's Jacobian",
-     &detail::make_odeint_rosenbrock4},
-    {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4},
+     &detail::make_arkode_imex, A, 4, false, true, 0, 0.0, 3},
+    {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams, A, 12,
+     true, true, 0, 0.0, 12},
+    {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf, A, 5, true, true, 0,
+     0.0, 5},
+    {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1},
+    {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
+     false, false, 0, 0.0, 4},
+    {"odeint-rosenbrock4",
+     "Boost.Odeint Rosenbrock 4 (coefficients made consistent: d4 = -0.0362), adaptive, linearly implicit, the "
+     "system's Jacobian",
+     &detail::make_odeint_rosenbrock4, A, 4, false, true, 0, 0.0, 3},
+    {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4, F, 4, false, false, 4, 2.785293563405282,
+     3},
 }};
 
 }  // namespace

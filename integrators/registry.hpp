@@ -10,10 +10,24 @@
 
 namespace pumasim {
 
+// What a method is, as the conformance tests and the experiments read it:
+// adding an integrator is its file plus one registry line, and the typed
+// tests take their expectations from here (a method whose entry lacks what a
+// test needs fails that test).
+enum class IntegratorKind { kFixedStep, kAdaptive };
+
 struct IntegratorInfo {
   const char* name;
   const char* summary;
   std::unique_ptr<Integrator> (*make)(const IntegratorOptions& options);
+  IntegratorKind kind;
+  int order;                 // convergence order (variable-order methods: the highest they use)
+  bool variable_order;       // CVODE's BDF 1-5 and Adams 1-12
+  bool implicit;
+  int rhs_per_step;          // right-hand sides per step (fixed-step methods; 0: varies)
+  double real_stability;     // explicit methods: the stability interval on the negative real axis,
+                             // h lambda in [-real_stability, 0] (closed forms); 0: implicit, or not one number
+  int dense_order;           // order of the dense output (continuous extension) over a step
 };
 
 // All integrators, sorted by name.

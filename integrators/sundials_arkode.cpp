@@ -39,7 +39,7 @@ enum class Kind { kErk, kDirk, kImex };
 
 class Arkode final : public Integrator {
  public:
-  Arkode(const IntegratorOptions& o, Kind kind) : opt_(o), kind_(kind) {
+  Arkode(const IntegratorOptions& o, Kind kind) : Integrator(o.max_steps), opt_(o), kind_(kind) {
     if (!(o.rtol > 0) || !(o.atol > 0)) throw std::invalid_argument("arkode: expected rtol > 0 and atol > 0");
     if (o.exact_jacobian && kind != Kind::kDirk) {
       throw std::invalid_argument(std::string(name()) + ": the exact Jacobian (of the whole f) serves "
@@ -88,6 +88,12 @@ class Arkode final : public Integrator {
         A_ = SUNDenseMatrix(n, n, ctx_);
         LS_ = SUNLinSol_Dense(y_, A_, ctx_);
         check(ARKStepSetLinearSolver(mem_, LS_, A_), "ARKStepSetLinearSolver");
+        // The implicit stages' Newton iterations start from ARKODE's maximum-
+        // order predictor (the dense-output interpolant), not the default
+        // trivial one: with the trivial predictor, ARKODE 6.4's error on a
+        // non-autonomous problem (Prothero-Robinson, tests/test_conformance.cpp)
+        // grew as rtol fell (2.2e-5, 4.1e-5, 1.6e-4 at rtol 1e-4, 1e-6, 1e-8).
+        check(ARKStepSetPredictorMethod(mem_, 1), "ARKStepSetPredictorMethod");
         if (kind_ == Kind::kDirk) {  // see the note at the top
           check(ARKStepSetTableNum(mem_, ARKODE_ARK436L2SA_DIRK_6_3_4, ARKODE_ERK_NONE), "ARKStepSetTableNum");
         }
@@ -110,15 +116,33 @@ class Arkode final : public Integrator {
   double time() const override { return t_; }
   const double* state() const override { return N_VGetArrayPointer(y_); }
 
+  // ARKODE's interpolant is valid over its last internal step [tcur - hu, tcur].
+  double step_start() const override {
+    double tcur = t_, hu = 0;
+    ARKStepGetCurrentTime(mem_, &tcur);
+    ARKStepGetLastStep(mem_, &hu);
+    return std::min(t_, tcur - hu);
+  }
+  void dense_state(double t, double* x) override {
+    if (t >= t_) {
+      std::copy(state(), state() + static_cast<int>(N_VGetLength_Serial(y_)), x);
+      return;
+    }
+    N_Vector v = N_VMake_Serial(N_VGetLength_Serial(y_), x, ctx_);
+    check(ARKStepGetDky(mem_, t, 0, v), "ARKStepGetDky");
+    N_VDestroy(v);
+  }
+
  protected:
-  Outcome advance(double t_stop) override {
+  // One internal step (ARK_ONE_STEP) that does not pass t_stop.
+  Outcome step(double t_stop) override {
     Outcome out;
     if (t_stop > t_) {
       check(ARKStepSetStopTime(mem_, t_stop), "ARKStepSetStopTime");
       error_.clear();
       pending_ = nullptr;
       double t = t_;
-      const int flag = ARKStepEvolve(mem_, t_stop, y_, &t, ARK_NORMAL);
+      const int flag = ARKStepEvolve(mem_, t_stop, y_, &t, ARK_ONE_STEP);
       if (pending_) std::rethrow_exception(pending_);
       t_ = t;
       if (flag == ARK_ROOT_RETURN) {

@@ -34,7 +34,7 @@ namespace {
 
 class Cvode final : public Integrator {
  public:
-  Cvode(const IntegratorOptions& o, int method) : opt_(o), method_(method) {
+  Cvode(const IntegratorOptions& o, int method) : Integrator(o.max_steps), opt_(o), method_(method) {
     if (!(o.rtol > 0) || !(o.atol > 0)) throw std::invalid_argument("cvode: expected rtol > 0 and atol > 0");
     if (SUNContext_Create(nullptr, &ctx_) != 0) throw std::runtime_error("cvode: SUNContext_Create failed");
   }
@@ -92,14 +92,15 @@ class Cvode final : public Integrator {
     t_ = t0;
   }
 
-  Outcome advance(double t_stop) override {
+  // One internal step (CV_ONE_STEP) that does not pass t_stop.
+  Outcome step(double t_stop) override {
     Outcome out;
     if (t_stop > t_) {
       check(CVodeSetStopTime(mem_, t_stop), "CVodeSetStopTime");
       error_.clear();
       pending_ = nullptr;
       double t = t_;
-      const int flag = CVode(mem_, t_stop, y_, &t, CV_NORMAL);
+      const int flag = CVode(mem_, t_stop, y_, &t, CV_ONE_STEP);
       if (pending_) std::rethrow_exception(pending_);
       t_ = t;
       if (flag == CV_ROOT_RETURN) {
@@ -113,6 +114,22 @@ class Cvode final : public Integrator {
     }
     collect_stats();
     return out;
+  }
+  // CVODE's interpolant is valid over its last internal step [tcur - hu, tcur].
+  double step_start() const override {
+    double tcur = t_, hu = 0;
+    CVodeGetCurrentTime(mem_, &tcur);
+    CVodeGetLastStep(mem_, &hu);
+    return std::min(t_, tcur - hu);
+  }
+  void dense_state(double t, double* x) override {
+    if (t >= t_) {
+      std::copy(state(), state() + n_, x);
+      return;
+    }
+    N_Vector v = N_VMake_Serial(n_, x, ctx_);
+    check(CVodeGetDky(mem_, t, 0, v), "CVodeGetDky");
+    N_VDestroy(v);
   }
 
   double time() const override { return t_; }

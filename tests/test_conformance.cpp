@@ -1,0 +1,223 @@
+// Conformance of every integrator of the registry, with the expectations taken
+// from its registry entry (kind, order, dense-output order): a wrong
+// coefficient in any method must fail here.
+//
+//  - Order on a non-autonomous problem with a known solution and a supplied
+//    df/dt (Prothero & Robinson 1974, "On the stability and accuracy of
+//    one-step methods for solving stiff systems of ODEs", Math. Comp. 28,
+//    with a second, coupled component): fixed-step methods by halving the
+//    step, adaptive ones by the slope of log(error) against log(steps). An
+//    autonomous test (y' = -y) cannot see the df/dt coefficients: Boost 1.74's
+//    rosenbrock4 passed it with a wrong d4 and is first order here.
+//  - Tolerance proportionality of the adaptive methods: the error falls with
+//    rtol, by a factor between 10^0.5 and 10^1.5 per decade on average.
+//  - Dense output: states between steps, read from the method's continuous
+//    extension, converge at the method's order (fixed step) or stay within the
+//    tolerance (adaptive).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "integrators/integrator.hpp"
+#include "integrators/registry.hpp"
+
+namespace pumasim {
+namespace {
+
+// y0' = lambda (y0 - phi(t)) + phi'(t), phi = sin t;  y1' = y0 - y1.
+// y0(0) = 0, y1(0) = 1/2: y0 = sin t, y1 = (sin t - cos t) / 2 + e^-t.
+class ProtheroRobinson final : public OdeSystem {
+ public:
+  explicit ProtheroRobinson(double lambda) : lambda_(lambda) {}
+  int size() const override { return 2; }
+  void rhs(double t, const double* y, double* f) override {
+    f[0] = lambda_ * (y[0] - std::sin(t)) + std::cos(t);
+    f[1] = y[0] - y[1];
+  }
+  void jacobian(double, const double*, Eigen::MatrixXd& J) override {
+    J.resize(2, 2);
+    J << lambda_, 0, 1, -1;
+  }
+  bool has_exact_jacobian() const override { return true; }
+  bool time_derivative(double t, const double*, double* dfdt) override {
+    dfdt[0] = -lambda_ * std::cos(t) - std::sin(t);
+    dfdt[1] = 0;
+    return true;
+  }
+  static void exact(double t, double* y) {
+    y[0] = std::sin(t);
+    y[1] = 0.5 * (std::sin(t) - std::cos(t)) + std::exp(-t);
+  }
+
+ private:
+  double lambda_;
+};
+
+constexpr double kLambda = -5.0;  // moderately stiff: every explicit method is stable at the steps used
+constexpr double kT = 6.0;
+
+double error_at(const double* y, double t) {
+  double e[2];
+  ProtheroRobinson::exact(t, e);
+  return std::max(std::abs(y[0] - e[0]), std::abs(y[1] - e[1]));
+}
+
+struct RunOutcome {
+  double error;  // max over components at kT
+  long steps;
+};
+
+RunOutcome solve(const IntegratorInfo& info, const IntegratorOptions& o) {
+  ProtheroRobinson sys(kLambda);
+  auto integ = info.make(o);
+  double y0[2];
+  ProtheroRobinson::exact(0.0, y0);
+  integ->reset(sys, 0.0, y0);
+  const Outcome out = integ->advance_to(kT);
+  EXPECT_EQ(out.status, Outcome::kReached) << info.name << ": " << out.message;
+  return {error_at(integ->state(), kT), integ->stats().steps};
+}
+
+IntegratorOptions with_dt(double dt) {
+  IntegratorOptions o;
+  o.dt = dt;
+  return o;
+}
+
+IntegratorOptions with_rtol(double rtol) {
+  IntegratorOptions o;
+  o.rtol = rtol;
+  o.atol = rtol;
+  return o;
+}
+
+class Conformance : public ::testing::TestWithParam<std::string> {
+ protected:
+  const IntegratorInfo& info() const { return find_integrator(GetParam()); }
+};
+
+// The registry entry says what the method is; the method agrees.
+TEST_P(Conformance, RegistryEntryDescribesTheMethod) {
+  const IntegratorInfo& i = info();
+  const IntegratorCapabilities c = i.make(with_dt(1e-3))->capabilities();
+  EXPECT_EQ(c.adaptive, i.kind == IntegratorKind::kAdaptive) << i.name;
+  EXPECT_EQ(c.order, i.order) << i.name;
+  EXPECT_EQ(c.implicit, i.implicit) << i.name;
+  EXPECT_GE(i.order, 1) << i.name;
+  EXPECT_GE(i.dense_order, 1) << i.name << ": no dense-output order in the registry entry";
+  if (i.kind == IntegratorKind::kFixedStep) {
+    EXPECT_GE(i.rhs_per_step, 1) << i.name << ": a fixed-step entry needs its right-hand sides per step";
+    EXPECT_GT(i.real_stability, 0.0) << i.name << ": an explicit fixed-step entry needs its stability interval";
+  }
+}
+
+// Fixed step: the error at T falls as dt^p, p the registry's order (within
+// 0.3, on dt = 0.02 -> 0.01 -> 0.005). Adaptive: over rtol 1e-5 ... 1e-9, the
+// least-squares slope of -log(error) against log(steps) is at least the
+// order - 1 (variable-order methods: at least 2), i.e. clearly above first order.
+TEST_P(Conformance, ConvergesAtItsOrderOnProtheroRobinson) {
+  const IntegratorInfo& i = info();
+  if (i.kind == IntegratorKind::kFixedStep) {
+    const double e1 = solve(i, with_dt(0.02)).error, e2 = solve(i, with_dt(0.01)).error,
+                 e3 = solve(i, with_dt(0.005)).error;
+    EXPECT_NEAR(std::log2(e1 / e2), i.order, 0.3) << i.name << " errors " << e1 << " " << e2;
+    EXPECT_NEAR(std::log2(e2 / e3), i.order, 0.3) << i.name << " errors " << e2 << " " << e3;
+    return;
+  }
+  std::vector<double> lx, ly;
+  for (double rtol : {1e-5, 1e-6, 1e-7, 1e-8, 1e-9}) {
+    const RunOutcome r = solve(i, with_rtol(rtol));
+    lx.push_back(std::log(static_cast<double>(r.steps)));
+    ly.push_back(-std::log(r.error));
+  }
+  const double n = static_cast<double>(lx.size());
+  double mx = 0, my = 0;
+  for (std::size_t k = 0; k < lx.size(); ++k) mx += lx[k] / n, my += ly[k] / n;
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < lx.size(); ++k) sxy += (lx[k] - mx) * (ly[k] - my), sxx += (lx[k] - mx) * (lx[k] - mx);
+  const double slope = sxy / sxx;
+  const double least = i.variable_order ? 2.0 : i.order - 1.0;
+  EXPECT_GE(slope, least) << i.name << ": observed order " << slope << " (steps " << std::exp(lx.front()) << " ... "
+                          << std::exp(lx.back()) << ")";
+  EXPECT_LE(slope, i.order + 2.0) << i.name << ": observed order " << slope;
+}
+
+// Adaptive: error against rtol 1e-4 ... 1e-8 (atol = rtol); the slope of
+// log(error) against log(rtol) lies in [0.5, 1.5] (proportional: 1), and the
+// error never exceeds 100 rtol.
+TEST_P(Conformance, ErrorIsProportionalToTheTolerance) {
+  const IntegratorInfo& i = info();
+  if (i.kind != IntegratorKind::kAdaptive) return;  // a fixed step has no tolerance to be proportional to
+  std::vector<double> lx, ly;
+  for (double rtol : {1e-4, 1e-5, 1e-6, 1e-7, 1e-8}) {
+    const RunOutcome r = solve(i, with_rtol(rtol));
+    EXPECT_LT(r.error, 100 * rtol) << i.name << " rtol " << rtol;
+    lx.push_back(std::log10(rtol));
+    ly.push_back(std::log10(r.error));
+  }
+  const double slope = (ly.back() - ly.front()) / (lx.back() - lx.front());
+  EXPECT_GE(slope, 0.5) << i.name;
+  EXPECT_LE(slope, 1.5) << i.name;
+}
+
+// Dense output between steps. Fixed step: the error of the state read at
+// t = 1.3 + dt/3 (never a step's end) falls at the method's order when dt is
+// halved. Adaptive: every state read on a 0.01 s grid is within 100 rtol of
+// the exact solution, and reading them does not change the step count.
+TEST_P(Conformance, DenseOutputHasTheMethodsAccuracy) {
+  const IntegratorInfo& i = info();
+  ProtheroRobinson sys(kLambda);
+  double y0[2], y[2];
+  ProtheroRobinson::exact(0.0, y0);
+  if (i.kind == IntegratorKind::kFixedStep) {
+    std::vector<double> errs;
+    for (double dt : {0.02, 0.01, 0.005}) {
+      auto integ = i.make(with_dt(dt));
+      integ->reset(sys, 0.0, y0);
+      const double t_read = 1.3 + dt / 3;
+      while (integ->time() < t_read) ASSERT_EQ(integ->step_toward(kT).status, Outcome::kReached) << i.name;
+      ASSERT_LT(integ->step_start(), t_read) << i.name;
+      integ->dense_state(t_read, y);
+      errs.push_back(error_at(y, t_read));
+    }
+    EXPECT_NEAR(std::log2(errs[0] / errs[1]), i.order, 0.3) << i.name << " " << errs[0] << " " << errs[1];
+    EXPECT_NEAR(std::log2(errs[1] / errs[2]), i.order, 0.3) << i.name << " " << errs[1] << " " << errs[2];
+    return;
+  }
+  const double rtol = 1e-7;
+  auto integ = i.make(with_rtol(rtol));
+  integ->reset(sys, 0.0, y0);
+  double worst = 0;
+  long reads = 0;
+  int k = 1;
+  while (integ->time() < kT) {
+    ASSERT_EQ(integ->step_toward(kT).status, Outcome::kReached) << i.name;
+    for (; 0.01 * k <= integ->time() && 0.01 * k <= kT; ++k) {
+      ASSERT_GE(0.01 * k, integ->step_start() - 1e-12) << i.name;
+      integ->dense_state(0.01 * k, y);
+      worst = std::max(worst, error_at(y, 0.01 * k));
+      ++reads;
+    }
+  }
+  EXPECT_GT(reads, integ->stats().steps) << i.name << ": most reads should fall inside steps";
+  EXPECT_LT(worst, 100 * rtol) << i.name;
+  EXPECT_EQ(integ->stats().steps, solve(i, with_rtol(rtol)).steps) << i.name;
+}
+
+std::vector<std::string> all_names() {
+  std::vector<std::string> v;
+  for (const auto& i : integrators()) v.emplace_back(i.name);
+  return v;
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(all_names()), [](const auto& info) {
+  std::string s = info.param;
+  for (char& c : s)
+    if (c == '-') c = '_';
+  return s;
+});
+
+}  // namespace
+}  // namespace pumasim
