@@ -8,29 +8,41 @@
 namespace pumasim {
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps, bool stop_at_events) {
+                    const Observer& observe, long max_steps, Stops stops) {
   const auto start = std::chrono::steady_clock::now();
   PlantSystem sys(plant);
-  std::vector<double> x(plant.size());
+  std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
   integrator.reset(sys, 0.0, x.data());
   RunResult res;
   if (observe) observe(0.0, x.data());
   const double eps = 1e-12 * std::max(1.0, t_end);
+  const bool stop_at_events = stops != Stops::kOutputsLateEvents;
+  const bool stop_at_outputs = stops != Stops::kEvents;
   long k_out = 1;
+  auto output_time = [&] { return std::min(k_out * output_interval, t_end); };
   double t = 0.0;
+  // The next time event not yet applied (initial_state applied those at 0).
+  double t_event = plant.next_time_event(0.0);
   while (t < t_end - eps) {
-    const double t_out = std::min(k_out * output_interval, t_end);
-    const double t_event = plant.next_time_event(t);
-    const double stop = stop_at_events ? std::min(t_out, t_event) : t_out;
-    const Outcome o = integrator.advance_to(stop);
+    double stop = t_end;
+    if (stop_at_events) stop = std::min(stop, t_event);
+    if (stop_at_outputs) stop = std::min(stop, output_time());
+    const Outcome o = integrator.step_toward(stop);
     t = integrator.time();
-    const double* xs = integrator.state();
     if (o.status == Outcome::kFailed) {
       res.ok = false;
       res.failure = o.message;
       break;
     }
+    // Outputs inside the step, from the method's dense output; one at the
+    // step's end waits until the events there are applied.
+    for (double to = output_time(); to < t - eps; to = output_time()) {
+      integrator.dense_state(to, xo.data());
+      if (observe) observe(to, xo.data());
+      ++k_out;
+    }
+    const double* xs = integrator.state();
     x.assign(xs, xs + plant.size());
     if (max_steps > 0 && integrator.stats().steps > max_steps) {
       res.ok = false;
@@ -39,22 +51,22 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
                     fastest_component(sys, t, x.data());
       break;
     }
+    bool restart = false;
     if (o.status == Outcome::kRoot) {
       plant.on_root(o.root, t, x.data());
-      integrator.reset(sys, t, x.data());
       ++res.root_events;
-      continue;
-    }
-    if (t >= t_event - eps) {
+      restart = true;
+    } else if (t >= t_event - eps && (stop_at_events || t >= output_time() - eps)) {
       // Stopping at events, exactly one is due here; otherwise every event
       // passed since the last stop, each applied now (late).
-      for (double te = t_event; te <= t + eps; te = plant.next_time_event(te)) {
-        plant.on_time_event(te, x.data());
+      for (; t_event <= t + eps; t_event = plant.next_time_event(t_event)) {
+        plant.on_time_event(t_event, x.data());
         ++res.time_events;
       }
-      integrator.reset(sys, t, x.data());
+      restart = true;
     }
-    if (t >= t_out - eps) {
+    if (restart) integrator.reset(sys, t, x.data());
+    if (t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps) {
       if (observe) observe(t, x.data());
       ++k_out;
     }

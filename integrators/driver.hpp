@@ -1,8 +1,11 @@
-// The one integration loop: any integrator on the plant, stopping exactly at
-// output times, controller samples, set-point updates and (for integrators
-// that find them) friction roots; the plant updates its discrete state at
+// The one integration loop: any integrator on the plant, stopping exactly
+// where the right-hand side changes -- controller samples, set-point updates,
+// the reference's breakpoints (the plant's time events) and, for integrators
+// that find them, friction roots; the plant updates its discrete state at
 // each such stop and the integrator restarts there (CVodeReInit, a fresh
-// multistep history). A failure ends the run as a reported result.
+// multistep history). Outputs in between come from the integrator's dense
+// output, so the output grid changes neither the steps nor the cost. A
+// failure ends the run as a reported result.
 #pragma once
 
 #include <functional>
@@ -42,14 +45,19 @@ struct RunResult {
 
 using Observer = std::function<void(double t, const double* x)>;
 
+// How the driver stops the integrator.
+enum class Stops {
+  kEvents,             // at time events and roots only; outputs from the dense output (the default)
+  kEventsAndOutputs,   // also at every output time (the old behaviour: the output grid caps the step)
+  kOutputsLateEvents,  // at outputs and roots only: time events that passed are applied late, at the
+                       // next output, in order, with the state then (shows what stepping over samples does)
+};
+
 // Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
-// every multiple of output_interval reached. A run that needs more than
-// max_steps steps in all (0: no limit) ends as a reported failure.
-// stop_at_events = false shows what goes wrong when an integrator steps over
-// the controller's sample instants: the driver stops only at outputs and
-// roots, and applies the time events that passed meanwhile there, late, in
-// order, with the state it has then.
+// every multiple of output_interval reached. An output at an event's instant
+// sees the state after the event. A run that needs more than max_steps steps
+// in all (0: no limit) ends as a reported failure.
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps = 0, bool stop_at_events = true);
+                    const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents);
 
 }  // namespace pumasim

@@ -150,7 +150,7 @@ Plant::~Plant() = default;
 const ReferenceSample& Plant::current_reference(double t) {
   if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ref_held_;
   if (t != ref_time_) {
-    cfg_.reference->eval(t, ref_now_);
+    cfg_.reference->eval(t, ref_now_, ref_segment_);
     ref_time_ = t;
   }
   return ref_now_;
@@ -328,6 +328,11 @@ double Plant::next_time_event(double t) const {
   if (cfg_.reference && cfg_.setpoint_interval > 0 && cfg_.controller != ControllerMode::kNone) {
     next = std::min(next, next_on_grid(t, cfg_.setpoint_interval));
   }
+  // Where the continuously followed reference has a kink, f(t, x) has one:
+  // a stop there keeps every step within a smooth piece.
+  if (cfg_.reference && cfg_.setpoint_interval == 0 && cfg_.controller != ControllerMode::kNone) {
+    next = std::min(next, cfg_.reference->next_breakpoint(t));
+  }
   return next;
 }
 
@@ -351,6 +356,10 @@ void Plant::sample_controller(double t, const double* x) {
 
 void Plant::on_time_event(double t, double* x) {
   if (cfg_.controller == ControllerMode::kNone) return;
+  if (cfg_.reference) {  // the reference's smooth piece from here on
+    ref_segment_ = cfg_.reference->segment_after(t);
+    ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  }
   if (cfg_.reference && cfg_.setpoint_interval > 0 && on_grid(t, cfg_.setpoint_interval)) {
     cfg_.reference->eval(t, ref_held_);
   }
@@ -413,6 +422,7 @@ void Plant::settle_modes(double t, double* x) {
 void Plant::initial_state(double* x) {
   const int n = layout_.n;
   ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  ref_segment_ = 0;
   std::fill(u_held_.begin(), u_held_.end(), 0.0);
   std::fill(integral_.begin(), integral_.end(), 0.0);
   std::fill(mode_.begin(), mode_.end(), SlipMode::kStuck);
@@ -472,12 +482,16 @@ double Plant::magnetic_energy(const double* x) const {
 }
 
 Eigen::Vector3d Plant::tool_position(const double* x) const {
-  Eigen::Matrix<double, 6, 1> q = cfg_.q_held;
-  for (int j = 0; j < layout_.n; ++j) q[j] = x[layout_.q + j];
   Eigen::Matrix3d R;
   Eigen::Vector3d p;
-  forward_kinematics<double>(cfg_.robot, q, R, p);
+  tool_pose(x, R, p);
   return p;
+}
+
+void Plant::tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const {
+  Eigen::Matrix<double, 6, 1> q = cfg_.q_held;
+  for (int j = 0; j < layout_.n; ++j) q[j] = x[layout_.q + j];
+  forward_kinematics<double>(cfg_.robot, q, R, p);
 }
 
 void Plant::drive_signals(double t, const double* x, DriveSignals* out) {

@@ -131,6 +131,8 @@ class Plant {
 
   // Flange position for the state x (held joints included) [m].
   Eigen::Vector3d tool_position(const double* x) const;
+  // Flange frame for the state x: orientation R (base frame) and position p [m].
+  void tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const;
   // The reference the controller currently uses (held set-point or at t).
   const ReferenceSample& reference_at(double t);
   // Controller output, amplifier output voltage and motor current of every
@@ -162,6 +164,7 @@ class Plant {
   // Discrete state.
   ReferenceSample ref_held_{}, ref_now_{};
   double ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  int ref_segment_ = 0;  // the reference's smooth piece since the last time event (Reference::eval)
   std::vector<double> u_held_, integral_;
   std::vector<SlipMode> mode_;
   std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch

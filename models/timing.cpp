@@ -156,18 +156,38 @@ void Timing::eval(double t, double& s, double& sd, double& sdd) const {
     s = 0, sd = pieces_.front().v0, sdd = 0;
     return;
   }
-  if (t > T_) {
-    s = L_, sd = 0, sdd = 0;
-    return;
-  }
+  eval_piece(piece(t), t, s, sd, sdd);
+}
+
+int Timing::piece(double t) const {
+  if (pieces_.empty()) return 0;
+  if (t > T_) return pieces();
   // The last piece starting at or before t.
   const auto it = std::upper_bound(pieces_.begin(), pieces_.end(), t,
                                    [](double x, const Piece& p) { return x < p.t0; });
-  const Piece& p = *(it == pieces_.begin() ? it : it - 1);
+  return static_cast<int>((it == pieces_.begin() ? it : it - 1) - pieces_.begin());
+}
+
+void Timing::eval_piece(int k, double t, double& s, double& sd, double& sdd) const {
+  if (pieces_.empty()) return eval(t, s, sd, sdd);  // quintic: one piece, held after T (C2 there)
+  if (k >= pieces()) {
+    s = L_, sd = 0, sdd = 0;
+    return;
+  }
+  const Piece& p = pieces_[static_cast<std::size_t>(k)];
   const double u = t - p.t0;
   s = p.s0 + p.v0 * u + p.a0 * u * u / 2 + p.j * u * u * u / 6;
   sd = p.v0 + p.a0 * u + p.j * u * u / 2;
   sdd = p.a0 + p.j * u;
+}
+
+std::vector<double> Timing::breakpoints() const {
+  std::vector<double> out;
+  for (const Piece& pc : pieces_) {
+    if (pc.t0 > 0 && pc.t0 < T_) out.push_back(pc.t0);
+  }
+  out.push_back(T_);
+  return out;
 }
 
 double Timing::time_at(double s_target) const {

@@ -51,8 +51,17 @@ class Timing {
   const std::string& kind() const { return kind_; }
   // s, ds/dt, d2s/dt2 at t; held at 0 before 0 and at L after T. Allocation-free.
   void eval(double t, double& s, double& sd, double& sdd) const;
+  // The same from one smooth piece (its polynomial continued past its ends):
+  // piece(t) gives the piece holding t; at a breakpoint, piece k's value is the
+  // limit from inside piece k (pieces() = the hold at L after T).
+  int piece(double t) const;
+  int pieces() const { return static_cast<int>(pieces_.size()); }
+  void eval_piece(int k, double t, double& s, double& sd, double& sdd) const;
   // The time at which s is reached (s in [0, L]; by bisection).
   double time_at(double s) const;
+  // The instants in (0, T] where s(t) is not infinitely differentiable: the
+  // ends of the constant-jerk pieces, and T (held at L after it).
+  std::vector<double> breakpoints() const;
 
  private:
   struct Builder;

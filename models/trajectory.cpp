@@ -34,9 +34,17 @@ Path::Path(Eigen::Vector2d start, double heading, double height, std::vector<Pat
 
 void Path::eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const {
   s = std::clamp(s, 0.0, total_);
+  eval_piece(piece(s), s, p, dp, ddp);
+}
+
+int Path::piece(double s) const {
   std::size_t k = 0;
   while (k + 1 < pieces_.size() && s > pieces_[k].s0 + pieces_[k].len) ++k;
-  const Piece& pc = pieces_[k];
+  return static_cast<int>(k);
+}
+
+void Path::eval_piece(int k, double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const {
+  const Piece& pc = pieces_[static_cast<std::size_t>(k)];
   const double u = s - pc.s0, h = pc.heading0 + pc.curvature * u;
   Eigen::Vector2d xy;
   if (pc.curvature == 0.0) {
@@ -57,6 +65,14 @@ const char* to_string(Interpolation i) {
     case Interpolation::kJointQuintic: return "joint-quintic";
   }
   return "?";
+}
+
+std::vector<double> Path::breaks() const {
+  std::vector<double> out;
+  for (std::size_t k = 1; k < pieces_.size(); ++k) {
+    if (pieces_[k].curvature != pieces_[k - 1].curvature) out.push_back(pieces_[k].s0);
+  }
+  return out;
 }
 
 double Path::distance(const Eigen::Vector3d& p) const {
@@ -144,7 +160,43 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
   if (interp_ != Interpolation::kCartesian) {
     if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
     build_joint_spline(via_segments);
+    breakpoints_.assign(knots_.begin() + 1, knots_.end());
+  } else {
+    breakpoints_ = timing_.breakpoints();
+    for (double s : path_.breaks()) breakpoints_.push_back(timing_.time_at(s));
   }
+  std::sort(breakpoints_.begin(), breakpoints_.end());
+  // One instant for breakpoints that coincide to rounding (a piece of the
+  // timing law ending where a path piece does).
+  seg_tol_ = 1e-12 * std::max(1.0, timing_.duration());
+  breakpoints_.erase(std::unique(breakpoints_.begin(), breakpoints_.end(),
+                                 [this](double a, double b) { return b - a <= seg_tol_; }),
+                     breakpoints_.end());
+  for (std::size_t k = 0; k <= breakpoints_.size(); ++k) {
+    const double a = k == 0 ? 0.0 : breakpoints_[k - 1];
+    const double mid = k < breakpoints_.size() ? 0.5 * (a + breakpoints_[k]) : a + 1.0;
+    if (interp_ == Interpolation::kCartesian) {
+      double s, sd, sdd;
+      timing_.eval(mid, s, sd, sdd);
+      seg_timing_.push_back(timing_.piece(mid));
+      seg_path_.push_back(path_.piece(std::clamp(s, 0.0, path_.length())));
+    } else {
+      const auto after = std::upper_bound(knots_.begin(), knots_.end(), std::min(mid, timing_.duration()));
+      seg_timing_.push_back(static_cast<int>(std::clamp<std::ptrdiff_t>(after - knots_.begin() - 1, 0,
+                                                                        std::ssize(coef_) - 1)));
+      seg_path_.push_back(0);
+    }
+  }
+}
+
+double Reference::next_breakpoint(double t) const {
+  const auto it = std::upper_bound(breakpoints_.begin(), breakpoints_.end(), t);
+  return it == breakpoints_.end() ? std::numeric_limits<double>::infinity() : *it;
+}
+
+int Reference::segment_after(double t) const {
+  return static_cast<int>(std::upper_bound(breakpoints_.begin(), breakpoints_.end(), t + seg_tol_) -
+                          breakpoints_.begin());
 }
 
 void Reference::build_joint_spline(int M) {
@@ -154,7 +206,7 @@ void Reference::build_joint_spline(int M) {
   std::vector<ReferenceSample> via(M + 1);
   for (int k = 0; k <= M; ++k) {
     knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_.length() * k / M);
-    eval_cartesian(knots_[k], via[k]);
+    eval_cartesian(knots_[k], via[k], -1);
   }
   for (int k = 0; k < M; ++k) {
     if (!(knots_[k + 1] > knots_[k])) throw std::invalid_argument("reference: via-points at the same time");
@@ -205,12 +257,14 @@ void Reference::build_joint_spline(int M) {
   }
 }
 
-void Reference::eval_joint_space(double t, ReferenceSample& out) const {
+void Reference::eval_joint_space(double t, ReferenceSample& out, int segment) const {
   const double T = timing_.duration();
   const double tc = std::clamp(t, 0.0, T);
-  // The piece [t_k, t_k+1) holding tc; the last one also holds T.
+  // The piece [t_k, t_k+1) holding tc (or the segment's); the last one also holds T.
   const auto after = std::upper_bound(knots_.begin(), knots_.end(), tc) - knots_.begin();
-  const std::size_t k = static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
+  const std::size_t k =
+      segment >= 0 ? static_cast<std::size_t>(seg_timing_[static_cast<std::size_t>(segment)])
+                   : static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
   const double u = tc - knots_[k];
   const auto& c = coef_[k];
   Eigen::Matrix<double, 6, 1> q = q_held_, qd = Eigen::Matrix<double, 6, 1>::Zero(),
@@ -221,7 +275,9 @@ void Reference::eval_joint_space(double t, ReferenceSample& out) const {
     for (int e = 4; e >= 1; --e) v = v * u + e * c(j, e);
     for (int e = 4; e >= 2; --e) a = a * u + e * (e - 1) * c(j, e);
     q[j] = p;
-    if (t > 0 && t < T) qd[j] = v, qdd[j] = a;
+    // Moving inside (0, T); with a segment, up to its ends (the hold after T is the last).
+    const bool moving = segment >= 0 ? segment < std::ssize(breakpoints_) && t > 0 : t > 0 && t < T;
+    if (moving) qd[j] = v, qdd[j] = a;
   }
   Eigen::Matrix<double, 6, 6> J;
   jacobian(q, J);
@@ -274,19 +330,29 @@ void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen:
     for (int c = 0; c < 6; ++c) Jdot(r, c) = JJ(r, c).deriv();
 }
 
-void Reference::eval(double t, ReferenceSample& out) const {
+void Reference::eval(double t, ReferenceSample& out, int segment) const {
+  const int m = static_cast<int>(breakpoints_.size());
+  const bool inside = segment >= 0 && segment <= m &&
+                      (segment == 0 || t >= breakpoints_[static_cast<std::size_t>(segment - 1)] - seg_tol_) &&
+                      (segment == m || t <= breakpoints_[static_cast<std::size_t>(segment)] + seg_tol_);
+  if (!inside) segment = -1;
   if (interp_ == Interpolation::kCartesian) {
-    eval_cartesian(t, out);
+    eval_cartesian(t, out, segment);
   } else {
-    eval_joint_space(t, out);
+    eval_joint_space(t, out, segment);
   }
 }
 
-void Reference::eval_cartesian(double t, ReferenceSample& out) const {
+void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) const {
   double s, sd, sdd;
-  timing_.eval(t, s, sd, sdd);
   Eigen::Vector3d p, dp, ddp;
-  path_.eval(s, p, dp, ddp);
+  if (segment < 0) {
+    timing_.eval(t, s, sd, sdd);
+    path_.eval(s, p, dp, ddp);
+  } else {
+    timing_.eval_piece(seg_timing_[static_cast<std::size_t>(segment)], t, s, sd, sdd);
+    path_.eval_piece(seg_path_[static_cast<std::size_t>(segment)], s, p, dp, ddp);
+  }
   out.p = p;
   out.v = dp * sd;
   const Eigen::Vector3d a = ddp * sd * sd + dp * sdd;

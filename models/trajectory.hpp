@@ -32,8 +32,15 @@ class Path {
   double length() const { return total_; }
   // Position, first and second derivative with respect to the arc length s.
   void eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
+  // The piece holding s, and the same evaluation on piece k (a line or arc
+  // continued past its ends: at a break, the limit from inside piece k).
+  int piece(double s) const;
+  void eval_piece(int k, double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
   // Distance from p to the nearest point of the path [m] (exact for lines and arcs).
   double distance(const Eigen::Vector3d& p) const;
+  // The arc lengths in (0, L) where the curvature jumps (a line meets an arc,
+  // or arcs of different radius or turning direction meet).
+  std::vector<double> breaks() const;
 
  private:
   struct Piece {
@@ -76,13 +83,28 @@ class Reference {
   Interpolation interpolation() const { return interp_; }
   int simulated_joints() const { return n_; }
   // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
-  void eval(double t, ReferenceSample& out) const;
+  // With a segment (the smooth piece between breakpoints segment - 1 and
+  // segment, see breakpoints()) and t within rounding of it, that piece's
+  // formula is evaluated, so that at a breakpoint the value is the limit from
+  // inside the segment: a step that ends there sees the left limit, one that
+  // starts there the right limit. Otherwise the segment is found from t.
+  void eval(double t, ReferenceSample& out, int segment = -1) const;
+  // The segment a step starting at t lies in: the number of breakpoints <= t
+  // (to rounding).
+  int segment_after(double t) const;
+  // The instants where the reference is not infinitely differentiable in t,
+  // sorted: the timing law's breakpoints and the times at which it crosses the
+  // path's curvature jumps (Cartesian), or the spline's knots (joint space).
+  // The plant makes them time events, so that no integrator steps across one.
+  const std::vector<double>& breakpoints() const { return breakpoints_; }
+  // The first breakpoint strictly after t (+inf if none).
+  double next_breakpoint(double t) const;
   // The flange position for joint angles q (simulated joints first).
   Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
 
  private:
-  void eval_cartesian(double t, ReferenceSample& out) const;
-  void eval_joint_space(double t, ReferenceSample& out) const;
+  void eval_cartesian(double t, ReferenceSample& out, int segment) const;
+  void eval_joint_space(double t, ReferenceSample& out, int segment) const;
   void build_joint_spline(int segments);
   // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
@@ -113,6 +135,11 @@ class Reference {
   // reference stays continuous where the IK's (-pi, pi] would jump and through
   // a wrist singularity.
   std::vector<Eigen::Matrix<double, 6, 1>> branch_;
+  std::vector<double> breakpoints_;
+  // Per segment: the timing law's and the path's piece (Cartesian), or the
+  // spline piece (joint space), found at the segment's middle.
+  std::vector<int> seg_timing_, seg_path_;
+  double seg_tol_ = 0;  // how close to a segment's ends t counts as inside it [s]
 };
 
 }  // namespace pumasim
