@@ -1,4 +1,5 @@
 #include "experiments/cli.hpp"
+#include "experiments/run_folder.hpp"
 #include "experiments/stiffness.hpp"
 
 #include <charconv>
@@ -16,6 +17,7 @@
 #include <unistd.h>
 #include <sys/utsname.h>
 
+#include <Eigen/Geometry>
 #include <boost/version.hpp>
 #include <sundials/sundials_config.h>
 
@@ -48,17 +50,24 @@ constexpr const char* kUsage =
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR] [--exact-jacobian] [--max-steps N] [--late-events]\n"
+    "      [--t-end X] [--out DIR [--force]] [--exact-jacobian] [--max-steps N]\n"
+    "      [--late-events | --stop-at-outputs]\n"
     "      [--set section.key=value ...]\n"
-    "      runs a scene and writes DIR (default results/<scene name>/): trajectory.csv,\n"
-    "      stats.json, scene.resolved.toml, meta.json; more than N steps in all\n"
+    "      runs a scene and writes DIR (default runs/<scene name>/): trajectory.csv,\n"
+    "      stats.json, scene.resolved.toml, meta.json, all at once at the end. DIR must be\n"
+    "      new, or a pumasim run folder holding only what pumasim wrote, replaced only with\n"
+    "      --force: pumasim never deletes what it did not write. More than N steps in all\n"
     "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
     "      --atol is per unit of each state's typical magnitude: angles 1 rad, speeds\n"
     "      1 rad/s, currents the stall current at full command, PIV integrals their\n"
     "      full range, energies 1 J (stats.json lists the resulting atol per state).\n"
     "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5.\n"
     "      --late-events: do not stop at controller samples and set-point updates;\n"
-    "      apply them late, at the next output (shows what stepping over them does)\n"
+    "      apply them late, at the next output (shows what stepping over them does).\n"
+    "      The integrator stops only where the right-hand side changes (samples,\n"
+    "      set-point updates, the reference's breakpoints, roots); outputs come from\n"
+    "      its dense output. --stop-at-outputs also stops it at every output time\n"
+    "      (the output grid then caps the step: for comparison only).\n"
     "  stiffness <scene.toml> [--t-end X] [--samples N] [--bisect] [--set section.key=value ...]\n"
     "      eigenvalues of the plant Jacobian along a run (default 20 samples over\n"
     "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
@@ -319,7 +328,7 @@ std::string shell_line(const char* cmd) {
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   const Options opt = Options::parse(args, 2, {"set", "integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
                                                "max-steps"},
-                                     {"exact-jacobian", "late-events"});
+                                     {"exact-jacobian", "late-events", "stop-at-outputs", "force"});
   Scene sc = scene_argument(args, opt);
   if (auto b = opt.get("backend")) {
     const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
@@ -360,7 +369,10 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   if (max_steps > 0) io.max_steps = max_steps;  // also each integrator's own per-call limit
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
-  const std::filesystem::path dir = opt.get("out") ? *opt.get("out") : "results/" + sc.name;
+  // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
+  const std::filesystem::path dir = opt.get("out") ? std::filesystem::path(*opt.get("out")) : "runs" / std::filesystem::path(sc.name);
+  const bool force = opt.flags.count("force") > 0;
+  check_run_folder_target(dir, force);  // before the run: a refusal costs nothing
 
   Plant plant(sc.plant);
   auto integ = iinfo.make(io);
@@ -373,7 +385,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   if (sc.plant.reference) {
     for (int j = 0; j < n; ++j) csv << ",q_ref" << j + 1 << " [rad]";
   }
-  csv << ",x [m],y [m],z [m]";
+  csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
   if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
   if (sc.plant.drive) {
     for (int j = 0; j < n; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
@@ -396,6 +408,12 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
   const bool tty = isatty(STDERR_FILENO);
   auto last_progress = std::chrono::steady_clock::now();
+  if (opt.flags.count("late-events") && opt.flags.count("stop-at-outputs")) {
+    throw UsageError("--late-events and --stop-at-outputs: expected at most one (--late-events stops at outputs)");
+  }
+  const Stops stops = opt.flags.count("late-events")       ? Stops::kOutputsLateEvents
+                      : opt.flags.count("stop-at-outputs") ? Stops::kEventsAndOutputs
+                                                            : Stops::kEvents;
   const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
     saved.push_back(t);
     saved.insert(saved.end(), x, x + m);
@@ -407,7 +425,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
-  }, max_steps, !opt.flags.count("late-events"));
+  }, max_steps, stops);
   double max_err = 0, sum_sq = 0, max_dev = 0, sum_sq_dev = 0;
   long samples = 0, rows = 0;
   // Drive signals at the outputs: peaks, and the outputs at which the
@@ -427,12 +445,17 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     std::snprintf(buf, sizeof buf, "%.17g", t);
     csv << buf;
     for (int i = 0; i < m; ++i) num(x[i]);
-    const Eigen::Vector3d p = plant.tool_position(x);
+    Eigen::Matrix3d R_tool;
+    Eigen::Vector3d p;
+    plant.tool_pose(x, R_tool, p);
     if (sc.plant.reference) {
       sc.plant.reference->eval(std::min(t, sc.plant.reference->timing().duration()), ref);
       for (int j = 0; j < n; ++j) num(ref.q[j]);
     }
     num(p.x()), num(p.y()), num(p.z());
+    Eigen::Quaterniond quat(R_tool);
+    if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
+    num(quat.w()), num(quat.x()), num(quat.y()), num(quat.z());
     if (sc.plant.reference) {
       const double e = (p - ref.p).norm();
       // Deviation: the distance to the geometric path, whatever the timing
@@ -496,6 +519,10 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   js << "}";
   js << ",\n  \"exact_jacobian\": " << (io.exact_jacobian ? "true" : "false");
   js << ",\n  \"late_events\": " << (opt.flags.count("late-events") ? "true" : "false");
+  js << ",\n  \"stops\": "
+     << json_string(stops == Stops::kEvents             ? "events (outputs from the dense output)"
+                    : stops == Stops::kEventsAndOutputs ? "events and outputs"
+                                                        : "outputs (time events applied late)");
   js << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations
      << ",\n  \"jacobian_evaluations\": " << st.jacobian_evaluations << ",\n  \"linear_solves\": " << st.linear_solves
      << ",\n  \"rejected_steps\": " << st.rejected_steps << ",\n  \"nonlinear_iterations\": " << st.nonlinear_iterations
@@ -550,16 +577,9 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
        << ",\n  \"machine\": " << json_string(std::string(u.sysname) + " " + u.release + " " + u.machine)
        << ",\n  \"cpus\": " << std::thread::hardware_concurrency() << "\n}\n";
 
-  // Everything is written into a temporary directory that replaces DIR at the end.
-  const std::filesystem::path tmp = dir.string() + ".partial";
-  std::filesystem::remove_all(tmp);
-  std::filesystem::create_directories(tmp);
-  std::ofstream(tmp / "trajectory.csv") << csv.str();
-  std::ofstream(tmp / "stats.json") << js.str();
-  std::ofstream(tmp / "meta.json") << meta.str();
-  std::ofstream(tmp / "scene.resolved.toml") << resolved_toml(sc);
-  std::filesystem::remove_all(dir);
-  std::filesystem::rename(tmp, dir);
+  write_run_folder(dir, {{"trajectory.csv", csv.str()}, {"stats.json", js.str()}, {"meta.json", meta.str()},
+                         {"scene.resolved.toml", resolved_toml(sc)}},
+                   force);
   out << js.str();
   out << "results: " << dir.string() << "/\n";
   if (!r.ok) err << "pumasim run: " << r.failure << "\n";
@@ -672,6 +692,8 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   } catch (const ConfigError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const std::invalid_argument& e) {
+    err << "pumasim: " << e.what() << "\n";
+  } catch (const RunFolderError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const std::exception& e) {
     err << "pumasim: internal error: " << e.what() << "\n";

@@ -29,7 +29,7 @@ REPEATS = 5
 
 def run(scene, out_dir):
     cmd = [PUMASIM, "run", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
-           "--integrator", "ab2", "--dt", "0.0005", "--out", out_dir]
+           "--integrator", "ab2", "--dt", "0.0005", "--out", out_dir, "--force"]
     subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT)
     with open(os.path.join(out_dir, "stats.json")) as f:
         return json.load(f)

@@ -39,7 +39,7 @@ FINDINGS = """At the paper's T = 24 s every Cartesian law tracks the path to abo
 
 def run(runs_dir, label, sets, t_end=None):
     path = os.path.join(runs_dir, label)
-    cmd = [PUMASIM, "run", SCENE, "--out", path, "--set", "scene.output_interval=0.002"]
+    cmd = [PUMASIM, "run", SCENE, "--out", path, "--force", "--set", "scene.output_interval=0.002"]
     for s in sets:
         cmd += ["--set", s]
     if t_end is not None:

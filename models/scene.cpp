@@ -1,6 +1,7 @@
 #include "models/scene.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -80,6 +81,15 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 
   StrictTable s = root.table("scene");
   sc.name = s.string("name");
+  // The name becomes a folder name (runs/<name>/): a plain one only.
+  const bool plain = !sc.name.empty() && sc.name.size() <= 100 && sc.name != "." && sc.name != ".." &&
+                     std::all_of(sc.name.begin(), sc.name.end(), [](char c) {
+                       return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+                     });
+  if (!plain) {
+    s.fail("name", "a plain name of at most 100 letters, digits, '_', '-' and '.' (not '.' or '..')",
+           "\"" + sc.name + "\"");
+  }
   sc.robot_spec = s.string("robot");
   std::string robot_path = sc.robot_spec;
   if (robot_path.find('/') != std::string::npos && !std::filesystem::path(robot_path).is_absolute()) {

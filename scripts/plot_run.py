@@ -98,6 +98,16 @@ def main():
         fig.tight_layout()
         fig.savefig(os.path.join(out, a.prefix + "path_error.png"), dpi=110)
         plt.close(fig)
+    # Plots written into a pumasim run folder are listed in its marker, so that
+    # `pumasim run --force` may replace the folder with them (and nothing else).
+    marker = os.path.join(out, ".pumasim-run")
+    if os.path.exists(marker):
+        with open(marker) as f:
+            listed = set(f.read().split())
+        names = [a.prefix + n for n in ("path_xy.png", "speed.png", "joints.png", "path_error.png")
+                 if os.path.exists(os.path.join(out, a.prefix + n))]
+        with open(marker, "a") as f:
+            f.writelines(n + "\n" for n in names if n not in listed)
 
 
 if __name__ == "__main__":
