@@ -29,26 +29,65 @@ def fmt_int(x):
     return f"{int(float(x)):,}"
 
 
+def fmt_num(x):
+    """A CSV/summary number as the report prints it (3 significant digits; '–' for nan/empty)."""
+    if x is None or x == "":
+        return "–"
+    x = float(x)
+    return "–" if math.isnan(x) else f"{x:.3g}"
+
+
+def fmt_wall_ms(r):
+    """'median [min–max] ms' of a CSV row's wall times."""
+    def ms(x):
+        return f"{x:,.0f}" if x >= 100 else f"{x:.3g}"
+    med, lo, hi = (1e3 * float(r[k]) for k in ("wall_time_median_s", "wall_time_min_s", "wall_time_max_s"))
+    return f"{ms(med)} [{ms(lo)}–{ms(hi)}] ms"
+
+
 def sweep_section(summary, folder, rel):
     name = summary["name"]
+    if "rank_by" not in summary:
+        raise SystemExit(f"report: {folder}/{name}_summary.json predates the error measures (no rank_by): "
+                         f"re-run `experiments/sweep.py {summary['file']} --merge`")
     rows = read_csv(os.path.join(folder, name + ".csv"))
+    rank = summary["rank_by"]
+    rcol, runit, rlabel, target = rank["column"], rank["unit"], rank["label"], rank["target"]
+    measures = summary["measures"]
+    below, weak_factor = summary["below_reference_factor"], summary["weak_reference_factor"]
     out = [f"### {summary['title']}", "",
            f"Sweep `{summary['file']}` on scene `experiments/scenes/{summary['scene']}.toml`; "
-           f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason).",
+           f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason). "
+           f"Runs are ranked by the {rlabel} [{runit}] against the variant's reference, target {target:g} {runit}.",
            ""]
     if summary.get("findings"):
         out += [summary["findings"], ""]
     agree = summary["agreement"]
-    worst = max(a["ee_mm"] for a in agree.values())
-    track = [a["tracking_mm"] for a in agree.values() if a["tracking_mm"] is not None]
-    out += [f"References: per variant, the reference and a cross-check by a different method differ by at most "
-            f"{worst:.2g} mm at the end effector (every variant's figure is in the CSV header)"
-            + (f"; the path-tracking error itself is {min(track):.3g}–{max(track):.3g} mm." if track else "."), ""]
+    judged = [spec for spec in measures.values() if spec["target"] is not None]
+    targets = ", ".join(f"{spec['target']:g} {spec['unit']} for the {spec['label']}" for spec in judged)
+    out += [f"References: per variant, the reference against a cross-check by a different method, in every error "
+            f"measure; a reference is too weak where the difference exceeds 1/{weak_factor} of the target "
+            f"({targets}).", "",
+            "| variant | " + " | ".join(f"{spec['label']} [{spec['unit']}]" for spec in measures.values())
+            + " | final state | tracking [mm] | reference |",
+            "|---|" + "---:|" * (len(measures) + 2) + "---|"]
+    for lab, a in agree.items():
+        verdict = ("**too weak** for " + ", ".join(measures[m]["label"] for m in a["reference_too_weak"])
+                   if a["reference_too_weak"] else "ok")
+        out.append(f"| {lab} | " + " | ".join(fmt_num(a[spec["column"]]) for spec in measures.values())
+                   + f" | {fmt_num(a['final_state_error'])} | {fmt_num(a['tracking_mm'])} | {verdict} |")
+    out.append("")
+    if summary["reference_too_weak"]:
+        cells = "; ".join(f"{lab}: " + ", ".join(f"{col} {w['difference']:.3g} > {w['limit']:.3g}"
+                                                 for col, w in ws.items())
+                          for lab, ws in summary["reference_too_weak"].items())
+        out += [f"**Reference too weak** ({cells}): errors near the target are not resolved by it; "
+                "the comparisons with the target below are not conclusive for these variants.", ""]
     if summary.get("distance_to_limit"):
         lim = summary["limit_variant"]
-        cells = ", ".join(f"{lab} {d['ee_mm']:.3g} mm" for lab, d in summary["distance_to_limit"].items()
-                          if lab != lim)
-        out += [f"Distance of each variant's reference solution to the `{lim}` one (max end-effector "
+        cells = ", ".join(f"{lab} {d['max_tool_position_error_mm']:.3g} mm"
+                          for lab, d in summary["distance_to_limit"].items() if lab != lim)
+        out += [f"Distance of each variant's reference solution to the `{lim}` one (max tool position "
                 f"distance): {cells}.", ""]
     if summary.get("creep"):
         st = summary["stuck_variant"]
@@ -62,25 +101,44 @@ def sweep_section(summary, folder, rel):
         out.append("")
     variants = [v["label"] for v in summary["variants"]]
     integrators = sorted({r["integrator"] for r in rows})
-    target = summary["target_mm"]
-    out += [f"Cheapest run per integrator and variant whose end effector stays within {target:g} mm of the "
-            "reference: RHS evaluations (setting; median wall time); `fail` if every setting failed, `–` if "
-            "none was accurate enough.", "",
-            "| integrator | " + " | ".join(variants) + " |", "|---|" + "---:|" * len(variants)]
+    weak_rank = {lab for lab, a in agree.items() if rank["measure"] in a["reference_too_weak"]}
+    out += [f"Cheapest run per integrator and variant whose {rlabel} stays within {target:g} {runit} of the "
+            "reference (ranked by that measure): RHS evaluations (setting; wall time median [min–max] of the "
+            f"repeats); `fail` if every setting failed, `–` if none was accurate enough; † its error is within "
+            f"{below}× of the reference-vs-check difference (below the reference's accuracy)"
+            + ("; (weak ref.) the variant's reference is too weak in this measure." if weak_rank else "."), "",
+            "| integrator | " + " | ".join(v + (" (weak ref.)" if v in weak_rank else "") for v in variants) + " |",
+            "|---|" + "---:|" * len(variants)]
+    chosen = []
     for n in integrators:
         cells = []
         for v in variants:
             rs = [r for r in rows if r["integrator"] == n and r["variant"] == v]
-            good = [r for r in rs if r["ok"] == "True" and float(r["max_ee_error_mm"]) <= target]
+            good = [r for r in rs if r["ok"] == "True" and float(r[rcol]) <= target]
             if good:
                 b = min(good, key=lambda r: float(r["rhs_evaluations"]))
-                cells.append(f"{fmt_int(b['rhs_evaluations'])} ({b['setting']}; "
-                             f"{1e3 * float(b['wall_time_median_s']):.3g} ms)")
+                chosen.append(b)
+                cells.append(f"{fmt_int(b['rhs_evaluations'])} ({b['setting']}; {fmt_wall_ms(b)})"
+                             + (" †" if b["below_reference_accuracy"] == "True" else ""))
             elif rs and all(r["ok"] != "True" for r in rs):
                 cells.append("fail")
             else:
                 cells.append("–")
         out.append(f"| {n} | " + " | ".join(cells) + " |")
+    if chosen:
+        out += ["", f"Those runs (ranked by {rlabel}) in every error measure against the reference; † below the "
+                f"reference's accuracy in the ranking measure (within {below}× of reference vs check):", "",
+                "| integrator | variant | setting | " + " | ".join(f"{spec['label']} [{spec['unit']}]"
+                                                            for spec in measures.values())
+                + " | RMS tool position [mm] | final state |", "|---|---|---|" + "---:|" * (len(measures) + 2)]
+        for r in chosen:
+            out.append(f"| {r['integrator']} | {r['variant']} | {r['setting']}"
+                       + (" †" if r["below_reference_accuracy"] == "True" else "") + " | "
+                       + " | ".join(fmt_num(r[spec["column"]]) for spec in measures.values())
+                       + f" | {fmt_num(r['rms_tool_position_error_mm'])} | {fmt_num(r['final_state_error'])} |")
+    pin = summary["pinning"]
+    out += ["", f"Wall times: {pin['pinned_runs']} of {pin['runs']} runs pinned to one CPU"
+            + (f" ({', '.join(pin['methods'])})" if pin["methods"] else "") + "; each repeat's time is in the CSV."]
     if rows and "max_ledger_residual_J" in rows[0]:
         out += ["", "Energy ledger: largest residual of the balance (mechanical + magnetic energy change = input − "
                 "copper − friction) over the run, against the largest energy term [J]:", "",
@@ -89,9 +147,10 @@ def sweep_section(summary, folder, rel):
             if r["ok"] == "True" and r.get("max_ledger_residual_J"):
                 out.append(f"| {r['integrator']} | {r['setting']} | {float(r['max_ledger_residual_J']):.3g} | "
                            f"{float(r['ledger_energy_scale_J']):.3g} |")
-    out += ["", f"![{name}]({rel}/{name}.png)", ""]
+    out += ["", f"![{name}: {rlabel} against cost; hollow markers below the reference's accuracy]({rel}/{name}.png)",
+            ""]
     if summary.get("has_cost_plot"):
-        out += [f"![{name} cost]({rel}/{name}_cost.png)", ""]
+        out += [f"![{name} cost to reach the target {rlabel}]({rel}/{name}_cost.png)", ""]
     return out
 
 
@@ -199,8 +258,9 @@ def main():
              "do not edit by hand."
              + (f" Its last run took {args.minutes:.0f} min on this machine (2 cores; runs already complete "
                 "under build/sweeps/ are skipped)." if args.minutes else ""),
-             "Wall times are medians of repeated runs on a shared machine: compare them within one table; "
-             "right-hand-side evaluations do not depend on the machine.", "",
+             "Wall times are medians of repeated runs, with their range, on a shared machine (each run pinned to "
+             "one CPU where the platform allows): compare them within one table; right-hand-side evaluations do "
+             "not depend on the machine.", "",
              "Other results: `paper/README.md` (the paper's experiment), `dynamics_backends.md` (the dynamics "
              "back-ends' cost).", ""]
     summaries = []

@@ -24,12 +24,19 @@ splits over machines: as a Slurm job array
 or under GNU parallel: `parallel python3 experiments/sweep.py S --shard {}/8
 --jobs 1 ::: 1 2 3 4 5 6 7 8`; then one `sweep.py S --merge` over the shared
 build/sweeps/ writes the table. --merge compares each run with its variant's
-reference at the output times and writes results/<sweep>/: <sweep>.csv (every
-run, failures with their reason), <sweep>.png (error against wall time and
-against right-hand-side evaluations, one line per integrator and a panel row
-per variant), <sweep>_cost.png when the sweep has several variants (the RHS
-evaluations each integrator needs to reach the sweep's accuracy target, against
-the variant value) and summary.json for the report.
+reference at the output times in every error measure (tool position [mm],
+tool orientation [rad], joint angles [rad], motor currents [A], RMS position,
+final state), the reference with its cross-check in the same measures, and
+writes results/<sweep>/: <sweep>.csv (every run, failures with their reason,
+runs below the reference's accuracy flagged, the wall-time spread),
+<sweep>.png (the ranking error, sweep.rank_by, against wall time and against
+right-hand-side evaluations, one line per integrator and a panel row per
+variant, hollow markers below the reference's accuracy), <sweep>_cost.png when
+the sweep has several variants (the RHS evaluations each integrator needs to
+reach the target in the ranking measure, against the variant value) and
+<sweep>_summary.json for the report (with each variant's reference verdict:
+too weak where it differs from its check by more than target/100).
+Each worker pins its pumasim runs to a CPU of its own where the platform allows.
 
 --reduced (CI): the first and last variants, two settings per method, one
 repeat, short horizon, into build/sweeps-reduced/ and --out (default
@@ -43,9 +50,11 @@ import json
 import math
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
+import threading
 import tomllib
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
@@ -54,6 +63,21 @@ PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin"
 
 class SweepError(Exception):
     pass
+
+
+# The error measures of a run against its variant's reference (and of the
+# reference against its cross-check): name (for `rank_by`), CSV column, unit,
+# the sweep key of its accuracy target, and a label for tables and plots.
+MEASURES = {
+    "tool_position": ("max_tool_position_error_mm", "mm", "target_mm", "max tool position error"),
+    "tool_orientation": ("max_tool_orientation_error_rad", "rad", "target_orientation_rad",
+                         "max tool orientation error"),
+    "joint": ("max_joint_error_rad", "rad", "target_joint_rad", "max joint-angle error"),
+    "current": ("max_current_error_A", "A", "target_current_A", "max motor-current error"),
+}
+DEFAULT_RANK = "tool_position"
+BELOW_REFERENCE_FACTOR = 10  # a run's ranking error within this factor of reference vs check: flagged
+WEAK_REFERENCE_FACTOR = 100  # reference vs check must be this far below the target, or the reference is too weak
 
 
 def load_sweep(path, reduced):
@@ -77,7 +101,8 @@ def load_sweep(path, reduced):
     sw = need(doc, "sweep", dict, "(top level)")
     for k in sw:
         if k not in {"name", "title", "scene", "folder", "t_end", "reduced_t_end", "repeats", "x", "target_mm",
-                     "findings", "set", "max_steps", "limit_variant", "stuck_variant"}:
+                     "findings", "set", "max_steps", "limit_variant", "stuck_variant", "rank_by",
+                     *(m[2] for m in MEASURES.values())}:
             raise SweepError(f"{path}: unknown key 'sweep.{k}'")
     s = {
         "name": need(sw, "name", str, "sweep"),
@@ -94,7 +119,16 @@ def load_sweep(path, reduced):
         "limit_variant": sw.get("limit_variant"),
         "stuck_variant": sw.get("stuck_variant"),
         "file": os.path.relpath(path, ROOT),
+        "rank_by": sw.get("rank_by", DEFAULT_RANK),
     }
+    if s["rank_by"] not in MEASURES:
+        raise SweepError(f"{path}: sweep.rank_by: expected one of: {', '.join(MEASURES)}")
+    # Accuracy targets per measure (the position one has always a value).
+    s["targets"] = {col: (s["target_mm"] if key == "target_mm" else float(sw[key]))
+                    for col, _, key, _ in MEASURES.values() if key == "target_mm" or key in sw}
+    if MEASURES[s["rank_by"]][0] not in s["targets"]:
+        raise SweepError(f"{path}: sweep.rank_by = \"{s['rank_by']}\" needs its target "
+                         f"sweep.{MEASURES[s['rank_by']][2]}")
 
     def method_of(t, where):
         for k in t:
@@ -168,15 +202,53 @@ def scene_file(s):
     return os.path.join(ROOT, "experiments", "scenes", s["scene"] + ".toml")
 
 
-def execute(s, work, run):
-    """Runs one run (all repeats) unless complete; returns its summary."""
+class CpuPinning:
+    """One CPU per worker thread, for the pumasim processes it starts: the
+    first worker takes the first CPU this process may run on
+    (os.sched_getaffinity, which respects a Slurm or cgroup CPU set), the next
+    the next one, cycling when there are more workers than CPUs. A run is
+    pinned with `taskset -c CPU` if taskset is installed, else by
+    os.sched_setaffinity in the child before exec (subprocess preexec_fn); on
+    a platform with neither nothing is pinned and the runs record that."""
+
+    def __init__(self):
+        self.cpus = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else []
+        self.taskset = shutil.which("taskset")
+        self.method = ("taskset" if self.taskset else "sched_setaffinity") if self.cpus else None
+        self.local = threading.local()
+        self.lock = threading.Lock()
+        self.workers = 0
+
+    def cpu(self):
+        """This worker's CPU (None: no pinning on this platform)."""
+        if not self.cpus:
+            return None
+        if not hasattr(self.local, "cpu"):
+            with self.lock:
+                self.local.cpu = self.cpus[self.workers % len(self.cpus)]
+                self.workers += 1
+        return self.local.cpu
+
+    def wrap(self, cmd):
+        """(command, preexec_fn, cpu) that runs cmd on this worker's CPU."""
+        cpu = self.cpu()
+        if cpu is None:
+            return cmd, None, None
+        if self.taskset:
+            return [self.taskset, "-c", str(cpu)] + cmd, None, cpu
+        return cmd, (lambda: os.sched_setaffinity(0, {cpu})), cpu
+
+
+def execute(s, work, run, pinning=None):
+    """Runs one run (all repeats, pinned to this worker's CPU when `pinning`
+    is given) unless complete; returns its summary."""
     rid, variant, tag, name, opts, repeats = run
     summary_path = os.path.join(work, rid + ".json")
     if os.path.exists(summary_path):
         with open(summary_path) as f:
             return json.load(f)
     out = os.path.join(work, rid)
-    cmd = [PUMASIM, "run", scene_file(s), "--integrator", name, "--out", out] + opts
+    cmd = [PUMASIM, "run", scene_file(s), "--integrator", name, "--out", out, "--force"] + opts
     for o in s["set"] + variant["set"]:
         cmd += ["--set", o]
     if s["t_end"]:
@@ -188,13 +260,14 @@ def execute(s, work, run):
     if "--dt" in opts:  # no budget: the step count is t_end / dt
         cmd += ["--max-steps", "0"]
     walls = []
+    full, preexec, cpu = pinning.wrap(cmd) if pinning else (cmd, None, None)
     for _ in range(repeats):
-        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT, preexec_fn=preexec)
         if p.returncode == 2:  # bad input: the sweep file is wrong, not the method
             raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
         stats = os.path.join(out, "stats.json")
         if not os.path.exists(stats):  # pumasim itself failed (a crash, not a reported failure)
-            raise SweepError(f"{' '.join(cmd)}: exit status {p.returncode}, no stats.json: {p.stderr.strip()}")
+            raise SweepError(f"{' '.join(full)}: exit status {p.returncode}, no stats.json: {p.stderr.strip()}")
         with open(stats) as f:
             st = json.load(f)
         walls.append(st["wall_time_s"])
@@ -202,7 +275,8 @@ def execute(s, work, run):
             break
     summary = {"id": rid, "variant": variant["label"], "value": variant["value"], "tag": tag,
                "integrator": name, "options": opts, "stats": st, "wall_times_s": walls,
-               "wall_time_median_s": statistics.median(walls), "command": cmd}
+               "wall_time_median_s": statistics.median(walls), "command": cmd,
+               "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None}
     tmp = summary_path + ".tmp"
     os.makedirs(os.path.dirname(summary_path), exist_ok=True)
     with open(tmp, "w") as f:
@@ -218,20 +292,93 @@ def trajectory(run_dir):
     return {h: [float(r[i]) for r in rows[1:]] for i, h in enumerate(head)}
 
 
+QUATERNION = ("tool_qw", "tool_qx", "tool_qy", "tool_qz")
+
+
+def rotation_angle(q1, q2):
+    """Angle [rad] of the rotation between two unit quaternions (w, x, y, z):
+    2 atan2(|vec(q1* q2)|, |scalar(q1* q2)|), in [0, pi], the same for q and -q
+    and accurate near 0 (unlike 2 acos)."""
+    w1, x1, y1, z1 = q1
+    w2, x2, y2, z2 = q2
+    # q1* q2 with q1* = (w1, -x1, -y1, -z1)
+    w = w1 * w2 + x1 * x2 + y1 * y2 + z1 * z2
+    x = w1 * x2 - x1 * w2 - y1 * z2 + z1 * y2
+    y = w1 * y2 - y1 * w2 - z1 * x2 + x1 * z2
+    z = w1 * z2 - z1 * w2 - x1 * y2 + y1 * x2
+    return 2.0 * math.atan2(math.sqrt(x * x + y * y + z * z), abs(w))
+
+
+def _max(values):
+    """Largest value; nan if there is none or one is nan (an error that is
+    not finite must not hide behind a smaller one)."""
+    values = list(values)
+    if not values or any(math.isnan(v) for v in values):
+        return math.nan
+    return max(values)
+
+
 def compare(ref, run):
-    """Max and RMS end-effector distance [mm], max joint difference [rad] on the
-    common output times, and the final-state error max_i |dx_i| / max(1, |x_i|)
-    (nan unless both reached the same final time)."""
+    """The error measures of `run` against `ref` on their common output times
+    (the first min(len) rows of both; the runs share the scene's output grid):
+    max and RMS tool (flange) position distance [mm] (columns x, y, z); max
+    tool orientation angle [rad] (tool_qw..tool_qz; nan if absent); max
+    joint-angle difference over every q column [rad]; max motor-current
+    difference over every i_motor column [A] (nan without current states); and
+    the final-state error max_i |dx_i| / max(1, |x_i|) over q, qd, i_motor,
+    z_piv (nan unless both reached the same final time). Keys: the CSV
+    columns."""
     n = min(len(ref["t"]), len(run["t"]))
     d = [1e3 * math.dist((ref["x"][k], ref["y"][k], ref["z"][k]), (run["x"][k], run["y"][k], run["z"][k]))
          for k in range(n)]
-    joints = [h for h in ref if h.startswith("q") and h[1:].isdigit()]
-    dq = max(abs(ref[h][k] - run[h][k]) for h in joints for k in range(n))
+    if all(c in ref and c in run for c in QUATERNION):
+        rot = _max(rotation_angle([ref[c][k] for c in QUATERNION], [run[c][k] for c in QUATERNION])
+                   for k in range(n))
+    else:
+        rot = math.nan
+    joints = [h for h in ref if re.fullmatch(r"q\d+", h)]
+    currents = [h for h in ref if re.fullmatch(r"i_motor\d+", h)]
+    dq = _max(abs(ref[h][k] - run[h][k]) for h in joints for k in range(n))
+    di = _max(abs(ref[h][k] - run[h][k]) for h in currents for k in range(n))
     states = [h for h in ref if re.fullmatch(r"(q|qd|i_motor|z_piv)\d+", h) and h in run]
     final = math.nan
     if len(ref["t"]) == len(run["t"]) and abs(ref["t"][-1] - run["t"][-1]) < 1e-9:
-        final = max(abs(ref[h][-1] - run[h][-1]) / max(1.0, abs(ref[h][-1])) for h in states)
-    return max(d), math.sqrt(sum(e * e for e in d) / n), dq, final
+        final = _max(abs(ref[h][-1] - run[h][-1]) / max(1.0, abs(ref[h][-1])) for h in states)
+    return {"max_tool_position_error_mm": _max(d),
+            "rms_tool_position_error_mm": math.sqrt(sum(e * e for e in d) / n) if n else math.nan,
+            "max_tool_orientation_error_rad": rot, "max_joint_error_rad": dq, "max_current_error_A": di,
+            "final_state_error": final}
+
+
+def wall_spread(walls):
+    """Median, min, max of the repeats' wall times [s] and the interquartile
+    range (quartiles by linear interpolation, statistics 'inclusive'; nan for
+    fewer than 4 repeats)."""
+    iqr = math.nan
+    if len(walls) >= 4:
+        q1, _, q3 = statistics.quantiles(walls, n=4, method="inclusive")
+        iqr = q3 - q1
+    return {"wall_time_median_s": statistics.median(walls), "wall_time_min_s": min(walls),
+            "wall_time_max_s": max(walls), "wall_time_iqr_s": iqr}
+
+
+def reference_too_weak(agreement, targets):
+    """Measures (CSV columns) for which the reference and its cross-check
+    differ by more than target / WEAK_REFERENCE_FACTOR: the reference cannot
+    resolve errors near the target there. A measure without a target, or
+    whose difference is nan (no such states), is not judged."""
+    return [col for col, target in targets.items()
+            if math.isfinite(agreement.get(col, math.nan)) and agreement[col] > target / WEAK_REFERENCE_FACTOR]
+
+
+def below_reference_accuracy(error, agreement):
+    """True if a run's ranking error is within BELOW_REFERENCE_FACTOR of the
+    reference-vs-check difference in the same measure (the reference cannot
+    tell it from zero); None if either is not finite (failed run, no such
+    states)."""
+    if not (math.isfinite(error) and math.isfinite(agreement)):
+        return None
+    return error <= BELOW_REFERENCE_FACTOR * agreement
 
 
 STUCK_MARGIN = 2  # output samples trimmed from each end of a stuck interval
@@ -276,13 +423,22 @@ def creep(run, held):
     return worst
 
 
+def measures_text(a):
+    """'tool position 0.00226 mm, tool orientation 1e-07 rad, ...' of an agreement entry."""
+    return ", ".join(f"{label[len('max '):-len(' error')]} {a[col]:.3g} {unit}"
+                     for col, unit, _, label in MEASURES.values()) + f", final state {a['final_state_error']:.3g}"
+
+
 def merge(s, work, out_dir):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     os.makedirs(out_dir, exist_ok=True)
-    rows, agreement = [], {}
+    rcol, runit, _, rlabel = MEASURES[s["rank_by"]]
+    rtarget = s["targets"][rcol]
+    rows, agreement, weak = [], {}, {}
     summaries = {}
     for run in run_list(s):
         p = os.path.join(work, run[0] + ".json")
@@ -297,53 +453,85 @@ def merge(s, work, out_dir):
             if not sm["stats"]["ok"]:
                 raise SweepError(f"variant {v['label']}: the {which} run failed: {sm['stats']['failure']}")
         ref = trajectory(os.path.join(work, vdir, "reference"))
-        ee, _, dq, fin = compare(ref, trajectory(os.path.join(work, vdir, "check")))
-        agreement[v["label"]] = {"ee_mm": ee, "joint_rad": dq, "final": fin,
-                                 "reference_steps": ref_sum["stats"]["steps"],
-                                 "tracking_mm": ref_sum["stats"]["max_path_error_mm"]}
+        c = compare(ref, trajectory(os.path.join(work, vdir, "check")))
+        a = {col: c[col] for col, *_ in MEASURES.values()}
+        a["final_state_error"] = c["final_state_error"]
+        too_weak = reference_too_weak(a, s["targets"])
+        a["reference_too_weak"] = [m for m, spec in MEASURES.items() if spec[0] in too_weak]
+        a["reference_steps"] = ref_sum["stats"]["steps"]
+        a["tracking_mm"] = ref_sum["stats"]["max_path_error_mm"]
+        agreement[v["label"]] = a
+        if too_weak:
+            weak[v["label"]] = {col: {"difference": a[col], "limit": s["targets"][col] / WEAK_REFERENCE_FACTOR}
+                                for col in too_weak}
         for run in run_list(s):
             if run[1] is not v or run[2] in ("reference", "check"):
                 continue
             sm = summaries[run[0]]
             st = sm["stats"]
             if st["ok"]:
-                ee, rms, dq, fin = compare(ref, trajectory(os.path.join(work, run[0])))
+                e = compare(ref, trajectory(os.path.join(work, run[0])))
             else:
-                ee = rms = dq = fin = math.nan
+                e = dict.fromkeys(c, math.nan)
+            flag = below_reference_accuracy(e[rcol], a[rcol])
             rows.append({
                 "variant": v["label"], "value": v["value"], "integrator": sm["integrator"],
                 "setting": re.sub(r"^(dt|rtol)", r"\1=", run[2][len(sm["integrator"]) + 1:]),
                 "ok": st["ok"], "failure": st["failure"],
-                "max_ee_error_mm": ee, "rms_ee_error_mm": rms, "max_joint_error_rad": dq,
-                "final_state_error": fin, "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
-                "wall_time_median_s": sm["wall_time_median_s"], "repeats": len(sm["wall_times_s"]),
+                **e,
+                "below_reference_accuracy": "" if flag is None else flag,
+                "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
+                **wall_spread(sm["wall_times_s"]),
+                "wall_times_s": " ".join(f"{w:.6g}" for w in sm["wall_times_s"]),
+                "repeats": len(sm["wall_times_s"]),
+                "pinned_cpu": "" if sm.get("pinned_cpu") is None else sm["pinned_cpu"],
                 "rhs_evaluations": st["rhs_evaluations"], "jacobian_evaluations": st["jacobian_evaluations"],
                 "steps": st["steps"], "rejected_steps": st["rejected_steps"], "restarts": st["restarts"],
                 "time_events": st["time_events"], "root_events": st["root_events"],
             })
+            rows[-1]["_pinning"] = sm.get("pinning")
             if "max_ledger_residual_J" in st:  # scenes with the energy ledger
                 rows[-1]["max_ledger_residual_J"] = st["max_ledger_residual_J"]
                 rows[-1]["ledger_energy_scale_J"] = st["ledger_energy_scale_J"]
+    pinned = [r for r in rows if r["pinned_cpu"] != ""]
+    pinning = {"pinned_runs": len(pinned), "runs": len(rows),
+               "methods": sorted({r["_pinning"] for r in pinned if r["_pinning"]}),
+               "cpus": sorted({r["pinned_cpu"] for r in pinned})}
+    for r in rows:
+        del r["_pinning"]
     limit = {}
     if s["limit_variant"]:
         lim = trajectory(os.path.join(work, slug(s["limit_variant"]), "reference"))
         for v in s["variants"]:
-            ee, _, dq, _ = compare(lim, trajectory(os.path.join(work, slug(v["label"]), "reference")))
-            limit[v["label"]] = {"ee_mm": ee, "joint_rad": dq}
+            d = compare(lim, trajectory(os.path.join(work, slug(v["label"]), "reference")))
+            limit[v["label"]] = {col: d[col] for col, *_ in MEASURES.values()}
     held_creep = {}
     if s["stuck_variant"]:
         held = stuck_intervals(trajectory(os.path.join(work, slug(s["stuck_variant"]), "reference")))
         for v in s["variants"]:
             held_creep[v["label"]] = creep(trajectory(os.path.join(work, slug(v["label"]), "reference")), held)
     name = s["name"]
+    targets_text = ", ".join(f"{t:g} {next(m[1] for m in MEASURES.values() if m[0] == col)} ({col})"
+                             for col, t in s["targets"].items())
     with open(os.path.join(out_dir, name + ".csv"), "w", newline="") as f:
         f.write(f"# sweep {s['file']}: scene {s['scene']}, reference {' '.join([s['reference'][0]] + s['reference'][1])}, "
                 f"cross-check {' '.join([s['check'][0]] + s['check'][1])}\n")
+        f.write(f"# ranked by {rlabel} [{runit}] ({rcol}, sweep.rank_by = \"{s['rank_by']}\"), target {rtarget:g} "
+                f"{runit}; targets: {targets_text}\n")
+        f.write(f"# below_reference_accuracy: the run's {rcol} is within {BELOW_REFERENCE_FACTOR}x its variant's "
+                f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
+                f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}\n")
+        f.write(f"# wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
+                f"(nan below 4 repeats); {len(pinned)} of {len(rows)} runs pinned to one CPU "
+                f"({', '.join(pinning['methods']) or 'none'}; pinned_cpu, empty: not pinned)\n")
         for v in s["variants"]:
             lab, a = v["label"], agreement[v["label"]]
             f.write(f"# {lab}: reference {' '.join([v['reference'][0]] + v['reference'][1])} vs cross-check "
-                    f"{' '.join([v['check'][0]] + v['check'][1])}: {a['ee_mm']:.3g} mm, {a['joint_rad']:.3g} rad"
-                    + (f"; its reference vs {s['limit_variant']}'s: {limit[lab]['ee_mm']:.3g} mm" if limit else "")
+                    f"{' '.join([v['check'][0]] + v['check'][1])}: {measures_text(a)}"
+                    + "".join(f"; REFERENCE TOO WEAK for {col}: {w['difference']:.3g} > target/"
+                              f"{WEAK_REFERENCE_FACTOR} = {w['limit']:.3g}" for col, w in weak.get(lab, {}).items())
+                    + (f"; its reference vs {s['limit_variant']}'s: "
+                       f"{limit[lab]['max_tool_position_error_mm']:.3g} mm" if limit else "")
                     + (f"; creep where {s['stuck_variant']} holds a joint stuck: {held_creep[lab]['rad']:.3g} rad"
                        if held_creep else "")
                     + "\n")
@@ -354,28 +542,44 @@ def merge(s, work, out_dir):
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{x:.6g}" if isinstance(x, float) else x) for k, x in r.items()})
+
+    def usable(x):
+        return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
+
     integrators = sorted({r["integrator"] for r in rows})
     colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
     nv = len(s["variants"])
     fig, axes = plt.subplots(nv, 2, figsize=(11, 3.6 * nv), squeeze=False)
     for i, v in enumerate(s["variants"]):
-        for j, (key, label) in enumerate((("wall_time_median_s", "wall time [s] (median)"),
+        a = agreement[v["label"]]
+        for j, (key, label) in enumerate((("wall_time_median_s", "wall time [s] (median of the repeats)"),
                                           ("rhs_evaluations", "right-hand-side evaluations"))):
             ax = axes[i][j]
             for n in integrators:
-                pts = sorted((r[key], r["max_ee_error_mm"]) for r in rows
+                pts = sorted((r[key], r[rcol], r["below_reference_accuracy"] is True) for r in rows
                              if r["variant"] == v["label"] and r["integrator"] == n and r["ok"] and
-                             r["max_ee_error_mm"] > 0 and r[key] > 0)
-                if pts:
-                    ax.plot(*zip(*pts), "o-", ms=3, lw=1, color=colors[n], label=n)
-            ax.axhline(max(agreement[v["label"]]["ee_mm"], 1e-12), color="k", lw=0.8, ls=":",
-                       label="reference vs check")
+                             usable(r[rcol]) and usable(r[key]))
+                if not pts:
+                    continue
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", lw=1, color=colors[n], label=n)
+                for hollow in (False, True):
+                    sel = [p for p in pts if p[2] == hollow]
+                    if sel:
+                        ax.plot([p[0] for p in sel], [p[1] for p in sel], "o", ms=4, color=colors[n],
+                                mfc="none" if hollow else colors[n])
+            if math.isfinite(a[rcol]):
+                ax.axhline(max(a[rcol], 1e-300), color="k", lw=0.8, ls=":", label="reference vs check")
+            ax.axhline(rtarget, color="0.5", lw=0.8, ls="--", label=f"target {rtarget:g} {runit}")
             nfail = sum(1 for r in rows if r["variant"] == v["label"] and not r["ok"])
-            ax.set(xscale="log", yscale="log", xlabel=label, ylabel="max end-effector error [mm]",
-                   title=f"{v['label']}" + (f" ({nfail} failed runs, see CSV)" if nfail else ""))
+            ax.set(xscale="log", yscale="log", xlabel=label, ylabel=f"{rlabel} [{runit}]",
+                   title=f"{v['label']}" + (f" ({nfail} failed runs, see CSV)" if nfail else "")
+                   + (" — reference too weak" if s["rank_by"] in a["reference_too_weak"] else ""))
             ax.grid(True, which="major", lw=0.3)
-    axes[0][1].legend(fontsize=6, ncol=2)
-    fig.suptitle(s["title"], fontsize=10)
+    handles, labels = axes[0][1].get_legend_handles_labels()
+    handles.append(Line2D([], [], ls="none", marker="o", ms=4, color="k", mfc="none"))
+    labels.append(f"hollow: within {BELOW_REFERENCE_FACTOR}× of reference vs check (below its accuracy)")
+    axes[0][1].legend(handles, labels, fontsize=6, ncol=2)
+    fig.suptitle(f"{s['title']} — ranked by {rlabel}", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, name + ".png"), dpi=80)
     plt.close(fig)
@@ -383,35 +587,51 @@ def merge(s, work, out_dir):
     for n in integrators:
         for v in s["variants"]:
             ok = [r for r in rows if r["variant"] == v["label"] and r["integrator"] == n and r["ok"] and
-                  r["max_ee_error_mm"] <= s["target_mm"]]
+                  math.isfinite(r[rcol]) and r[rcol] <= rtarget]
             if ok:
                 best = min(ok, key=lambda r: r["rhs_evaluations"])
-                cost.setdefault(n, []).append((v["value"], best["rhs_evaluations"], best["setting"],
-                                               best["wall_time_median_s"]))
-    plottable = {n: [p for p in pts if isinstance(p[0], (int, float)) and math.isfinite(p[0]) and p[0] > 0]
-                 for n, pts in cost.items()}
+                cost.setdefault(n, []).append({
+                    "value": v["value"], "variant": v["label"], "rhs": best["rhs_evaluations"],
+                    "setting": best["setting"], "wall_s": best["wall_time_median_s"],
+                    "wall_min_s": best["wall_time_min_s"], "wall_max_s": best["wall_time_max_s"],
+                    "error": best[rcol], "below_reference_accuracy": best["below_reference_accuracy"],
+                    "reference_too_weak": s["rank_by"] in agreement[v["label"]]["reference_too_weak"]})
+    plottable = {n: [p for p in pts if usable(p["value"])] for n, pts in cost.items()}
     has_cost_plot = nv > 1 and any(len(p) > 1 for p in plottable.values())
     if has_cost_plot:
         fig, ax = plt.subplots(figsize=(7, 4.5))
         for n, pts in sorted(plottable.items()):
             if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", ms=3, lw=1, color=colors[n], label=n)
-        ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)",
-               title=f"{s['title']}: cost to reach {s['target_mm']:g} mm")
+                ax.plot([p["value"] for p in pts], [p["rhs"] for p in pts], "-", lw=1, color=colors[n], label=n)
+                for hollow in (False, True):
+                    sel = [p for p in pts if (p["below_reference_accuracy"] is True) == hollow]
+                    if sel:
+                        ax.plot([p["value"] for p in sel], [p["rhs"] for p in sel], "o", ms=4, color=colors[n],
+                                mfc="none" if hollow else colors[n])
+        ax.plot([], [], ls="none", marker="o", ms=4, color="k", mfc="none",
+                label=f"hollow: error within {BELOW_REFERENCE_FACTOR}× of reference vs check")
+        ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)")
+        ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)", fontsize=8)
         ax.grid(True, which="major", lw=0.3)
         ax.legend(fontsize=6, ncol=2)
         fig.tight_layout()
         fig.savefig(os.path.join(out_dir, name + "_cost.png"), dpi=80)
         plt.close(fig)
     summary = {"name": name, "title": s["title"], "file": s["file"], "scene": s["scene"], "x": s["x"],
-               "target_mm": s["target_mm"], "findings": s["findings"], "agreement": agreement,
+               "target_mm": s["target_mm"], "findings": s["findings"],
+               "rank_by": {"measure": s["rank_by"], "column": rcol, "label": rlabel, "unit": runit,
+                           "target": rtarget},
+               "measures": {m: {"column": col, "unit": unit, "label": label, "target": s["targets"].get(col)}
+                            for m, (col, unit, _, label) in MEASURES.items()},
+               "below_reference_factor": BELOW_REFERENCE_FACTOR, "weak_reference_factor": WEAK_REFERENCE_FACTOR,
+               "agreement": agreement, "reference_too_weak": weak,
                "limit_variant": s["limit_variant"], "distance_to_limit": limit,
                "stuck_variant": s["stuck_variant"], "creep": held_creep,
                "variants": [{"label": v["label"], "value": v["value"]} for v in s["variants"]],
                "runs": len(rows), "failed": sum(1 for r in rows if not r["ok"]),
-               "cost_to_target": {n: [{"value": p[0], "rhs": p[1], "setting": p[2], "wall_s": p[3]} for p in pts]
-                                  for n, pts in cost.items()},
-               "has_cost_plot": has_cost_plot}
+               "below_reference_accuracy": sum(1 for r in rows if r["below_reference_accuracy"] is True),
+               "pinning": pinning,
+               "cost_to_target": cost, "has_cost_plot": has_cost_plot}
     with open(os.path.join(out_dir, name + "_summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     return summary
@@ -443,8 +663,12 @@ def main():
             todo = [r for r in runs if not os.path.exists(os.path.join(work, r[0] + ".json"))]
             print(f"{s['name']}: {len(runs)} runs in this share, {len(runs) - len(todo)} already complete",
                   flush=True)
+            pinning = CpuPinning()
+            if todo and len(pinning.cpus) < min(args.jobs, len(todo)):
+                print(f"  note: {args.jobs} workers on {len(pinning.cpus) or 'no'} pinnable CPUs: "
+                      "workers share CPUs, wall times are less comparable", flush=True)
             with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-                for sm in pool.map(lambda r: execute(s, work, r), todo):
+                for sm in pool.map(lambda r: execute(s, work, r, pinning), todo):
                     st = sm["stats"]
                     print(f"  {sm['id']}: {'ok' if st['ok'] else 'FAILED'} "
                           f"{sm['wall_time_median_s']:.3g} s, {st['rhs_evaluations']} RHS", flush=True)
