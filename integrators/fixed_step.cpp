@@ -69,6 +69,7 @@ class FixedStep : public Integrator {
 
  protected:
   virtual void advance_step(double h, bool full_step) = 0;  // x_ <- x_(t_ + h)
+  double dt() const { return dt_; }
   virtual void restart_history() {}
   // Over the last step (from x0_ at t0_, size h_): sum_j b_j(th) k_j into
   // out, so that x(t0_ + th h_) = x0_ + h_ out.
@@ -187,7 +188,7 @@ class AdamsBashforth final : public FixedStep {
     for (auto& v : ring_) v.resize(x_.size());
   }
   // ring_[(head_ - j) mod k] holds f_{n-j}.
-  void advance_step(double h, bool) override {
+  void advance_step(double h, bool full) override {
     const int m = static_cast<int>(x_.size());
     head_ = (head_ + 1) % k_;
     f(t_, x_.data(), ring_[head_].data());
@@ -200,20 +201,29 @@ class AdamsBashforth final : public FixedStep {
     static constexpr double kB2[] = {3.0 / 2, -1.0 / 2};
     static constexpr double kB3[] = {23.0 / 12, -16.0 / 12, 5.0 / 12};
     static constexpr double kB4[] = {55.0 / 24, -59.0 / 24, 37.0 / 24, -9.0 / 24};
-    const double* b = k_ == 2 ? kB2 : k_ == 3 ? kB3 : kB4;
+    // A step shortened to land on a stop (h < dt) integrates the same
+    // polynomial through the history, whose points are dt apart, over [0, h]:
+    // dt * beta_j(h / dt), not h times the full step's weights (that is an
+    // O(dt^2) local error at every stop, which held AB3 and AB4 to order 2).
+    grid_ = full ? h : dt();
+    const double* b = full ? (k_ == 2 ? kB2 : k_ == 3 ? kB3 : kB4) : coefficients(h / grid_);
+    const double w = full ? h : grid_;
     for (int i = 0; i < m; ++i) {
       double s = 0;
       for (int j = 0; j < k_; ++j) s += b[j] * ring_[(head_ - j + k_) % k_][i];
-      x_[i] += h * s;
+      x_[i] += w * s;
     }
   }
+  // x(t0 + th h) = x0 + h out, with the history dt apart: out = (g / h) sum
+  // beta_j(th h / g) f_{n-j}, g the history's spacing (h itself on a full step).
   void extension(double th, double* out) const override {
     if (bootstrap_) return rk4_extension(th, ring_[head_].data(), out);
-    const double* b = coefficients(th);
+    const double* b = coefficients(th * h_ / grid_);
+    const double w = grid_ / h_;
     for (std::size_t i = 0; i < x_.size(); ++i) {
       double s = 0;
       for (int j = 0; j < k_; ++j) s += b[j] * ring_[(head_ - j + k_) % k_][i];
-      out[i] = s;
+      out[i] = w * s;
     }
   }
 
@@ -232,6 +242,7 @@ class AdamsBashforth final : public FixedStep {
   int k_;
   int head_ = 0, count_ = 0;
   bool bootstrap_ = true;  // the last step was an RK4 start-up step
+  double grid_ = 1;         // the history's spacing over the last step
   std::vector<std::vector<double>> ring_;
   std::array<std::array<double, 4>, 4> poly_{};
   mutable std::array<double, 4> beta_{};
