@@ -133,4 +133,5 @@ if s["rank_by"]["column"] != "max_joint_error_rad" or s["rank_by"]["target"] != 
         any(p["error"] > 1e-4 for pts in s["cost_to_target"].values() for p in pts):
     sys.exit(f"rank_by joint: {s['rank_by']}, {s['cost_to_target']}")
 PY
+$PY experiments/observed_order.py --reduced --out build/sweeps-reduced/observed_order > /dev/null; test -s build/sweeps-reduced/observed_order/observed_order.csv
 echo "sweep pipeline: ok"

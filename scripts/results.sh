@@ -27,5 +27,6 @@ for f in experiments/sweeps/*.toml; do
 done
 /usr/bin/python3 experiments/stiffness_table.py
 /usr/bin/python3 experiments/planning.py
+/usr/bin/python3 experiments/observed_order.py
 minutes=$(( ($(date +%s) - start + 30) / 60 ))
 /usr/bin/python3 experiments/report.py --minutes "$minutes"

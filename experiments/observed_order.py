@@ -1,0 +1,383 @@
+#!/usr/bin/python3
+"""Observed order of every integrator on two scenes of the plant.
+
+    /usr/bin/python3 experiments/observed_order.py [--out DIR] [--work DIR]
+        [--jobs N] [--paper-t-end T] [--reduced]
+
+Scenes: smooth_line_quintic (a C-infinity reference: one straight line,
+quintic timing, viscous friction; 8 s) and paper_slow_viscous (the paper's
+path of lines and arcs with its piecewise speed table, viscous friction; its
+breakpoints are time events at which the driver stops; 24 s, --paper-t-end
+to shorten). The driver stops only where the right-hand side changes and
+reads the outputs (every 10 ms) from each method's dense output, so the
+error at the outputs is the method's global error there.
+
+Per scene: a reference run (cvode-bdf, rtol 1e-12, atol 1e-15), cross-checked
+by odeint-dopri5 at the same tolerances (their difference is reported). The
+error of a run is
+
+    e = max over all output rows and the states q, qd, i_motor, z_piv of
+        |x - x_ref| / max(1, |x_ref|)
+
+(the slopes are fitted on e); the max joint-angle error [rad] is recorded too.
+Fixed-step methods (euler, rk4, ab2, ab3, ab4) run a dt ladder 2e-3 ...
+1.25e-4 (halving); the slope is d log e / d log dt. Adaptive methods run an
+rtol ladder 1e-3 ... 1e-9 (atol = 1e-3 rtol); the slope is
+-d log e / d log(RHS evaluations). Both are least-squares fits over the
+asymptotic runs: ok, e above 100 x the reference-vs-check difference and
+below 1e-2. A run that failed (reported failure) or came back unstable
+(e >= 1 or not finite) is dropped and marked in the ladder.
+
+Writes DIR (default results/observed_order/): observed_order.csv (one row per
+scene and method: theoretical and observed order, runs used, error range),
+ladder.csv (every run), references.csv (reference vs check), <scene>.png
+(error against dt and against RHS evaluations) and README.md (the table, read
+back from the CSVs). Run folders go to --work (default build/observed_order/),
+with a private copy of the pumasim binary ($PUMASIM if set), so that a
+rebuild meanwhile does not change the program under measurement.
+--reduced (CI, under 30 s): the scenes cut to 1 s and 2.5 s (past
+paper_slow_viscous's first breakpoint), rk4 and ab2 at three dt (5e-4 ...),
+cvode-bdf and odeint-dopri5 at three rtol, run folders in
+build/observed_order-reduced/.
+"""
+import argparse
+import concurrent.futures
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+
+FIXED = ["euler", "rk4", "ab2", "ab3", "ab4"]
+# Theoretical orders (the registry's summaries state most of them; the
+# CVODE methods are variable-order).
+THEORY = {"euler": "1", "rk4": "4", "ab2": "2", "ab3": "3", "ab4": "4",
+          "cvode-bdf": "1-5", "cvode-adams": "1-12", "arkode-erk": "4", "arkode-dirk": "4",
+          "arkode-imex": "4", "odeint-dopri5": "5", "odeint-rosenbrock4": "4"}
+REFERENCE = ("cvode-bdf", ["--rtol", "1e-12", "--atol", "1e-15"])
+CHECK = ("odeint-dopri5", ["--rtol", "1e-12", "--atol", "1e-15"])
+ASYMPTOTIC_FACTOR = 100  # a run's error must exceed this times reference vs check
+ASYMPTOTIC_MAX = 1e-2    # ... and be below this, to enter the fit
+UNSTABLE = 1.0           # e at or above this (or not finite): unstable
+ORDER_TOLERANCE = 0.3    # a fixed-step method reaches its order p if |slope - p| <= this
+STATE = re.compile(r"(q|qd|i_motor|z_piv)\d+")
+
+
+def private_copy(work):
+    """Copies the pumasim binary to work/ (retrying while it is missing or
+    being relinked), so that every run of this experiment uses one program."""
+    global PUMASIM
+    os.makedirs(work, exist_ok=True)
+    dest = os.path.join(work, "pumasim")
+    for attempt in range(60):
+        try:
+            shutil.copy2(PUMASIM, dest + ".tmp")
+            subprocess.run([dest + ".tmp", "integrators"], capture_output=True, check=True)
+            break
+        except (OSError, subprocess.CalledProcessError):
+            if attempt == 59:
+                raise
+            time.sleep(2)
+    os.replace(dest + ".tmp", dest)
+    PUMASIM = dest
+
+
+def integrators():
+    p = subprocess.run([PUMASIM, "integrators"], capture_output=True, text=True, check=True)
+    return dict(line.split("\t", 1) for line in p.stdout.splitlines() if "\t" in line)
+
+
+def trajectory(run_dir):
+    """Columns of trajectory.csv by name without the unit (as sweep.py)."""
+    with open(os.path.join(run_dir, "trajectory.csv")) as f:
+        rows = list(csv.reader(f))
+    head = [h.split(" [")[0] for h in rows[0]]
+    data = np.array([[float(v) for v in r] for r in rows[1:]]).reshape(-1, len(head))
+    return {h: data[:, i] for i, h in enumerate(head)}
+
+
+def errors(ref, run):
+    """(e over every state relative to max(1, |x_ref|), max joint-angle error
+    [rad]); nan unless the run has every output row of the reference."""
+    n = len(ref["t"])
+    if len(run["t"]) != n or np.max(np.abs(run["t"] - ref["t"])) > 1e-9:
+        return math.nan, math.nan
+    states = [h for h in ref if STATE.fullmatch(h)]
+    e = max(float(np.max(np.abs(run[h] - ref[h]) / np.maximum(1.0, np.abs(ref[h])))) for h in states)
+    dq = max(float(np.max(np.abs(run[h] - ref[h]))) for h in ref if re.fullmatch(r"q\d+", h))
+    return e, dq
+
+
+def execute(work, scene, t_end, name, opts):
+    """One pumasim run into a fresh folder; returns (folder, stats)."""
+    tag = name + "_" + "_".join(o.lstrip("-") for o in opts)
+    out = os.path.join(work, scene, tag)
+    shutil.rmtree(out, ignore_errors=True)
+    cmd = [PUMASIM, "run", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
+           "--integrator", name, "--t-end", repr(t_end), "--out", out] + opts
+    if "--dt" in opts:  # the step count is t_end / dt: no budget
+        cmd += ["--max-steps", "0"]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    stats = os.path.join(out, "stats.json")
+    if p.returncode == 2 or not os.path.exists(stats):
+        sys.exit(f"{' '.join(cmd)}: exit status {p.returncode}: {p.stderr.strip()}")
+    with open(stats) as f:
+        return out, json.load(f)
+
+
+def fit(xs, ys):
+    """Least-squares slope of log y against log x (nan for fewer than 2 points)."""
+    if len(xs) < 2:
+        return math.nan
+    return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
+
+
+def fmt(x, spec=".3g"):
+    return "" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=None)
+    ap.add_argument("--work", default=None)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--paper-t-end", type=float, default=24.0)
+    ap.add_argument("--reduced", action="store_true")
+    a = ap.parse_args()
+    out = a.out or os.path.join(ROOT, "results", "observed_order")
+    work = a.work or os.path.join(ROOT, "build", "observed_order-reduced" if a.reduced else "observed_order")
+    private_copy(work)
+    summaries = integrators()
+    if a.reduced:
+        scenes = {"smooth_line_quintic": 1.0, "paper_slow_viscous": 2.5}  # 2.5 s: past the first breakpoint
+        fixed, dts = ["rk4", "ab2"], [5e-4, 2.5e-4, 1.25e-4]
+        adaptive, rtols = ["cvode-bdf", "odeint-dopri5"], [1e-4, 1e-6, 1e-8]
+    else:
+        scenes = {"smooth_line_quintic": 8.0, "paper_slow_viscous": a.paper_t_end}
+        fixed, dts = FIXED, [2e-3 / 2 ** k for k in range(5)]
+        adaptive = [m for m in sorted(summaries) if m not in FIXED]
+        rtols = [10.0 ** -k for k in range(3, 10)]
+    for m in fixed + adaptive:
+        if m not in summaries:
+            sys.exit(f"{m}: not in `pumasim integrators`")
+        stated = re.search(r"order (\d+)", summaries[m])
+        if stated and m in THEORY and stated.group(1) not in THEORY[m].split("-"):
+            sys.exit(f"{m}: summary says order {stated.group(1)}, THEORY says {THEORY[m]}")
+
+    start = time.time()
+    jobs = []  # (scene, role, integrator, kind, setting value, options)
+    for scene in scenes:
+        jobs.append((scene, "reference", REFERENCE[0], "reference", math.nan, REFERENCE[1]))
+        jobs.append((scene, "check", CHECK[0], "check", math.nan, CHECK[1]))
+        for m in fixed:
+            jobs += [(scene, "run", m, "fixed", dt, ["--dt", repr(dt)]) for dt in dts]
+        for m in adaptive:
+            jobs += [(scene, "run", m, "adaptive", r, ["--rtol", repr(r), "--atol", repr(r * 1e-3)])
+                     for r in rtols]
+    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        done = list(pool.map(lambda j: execute(work, j[0], scenes[j[0]], j[2], j[5]), jobs))
+    run_time = time.time() - start
+
+    os.makedirs(out, exist_ok=True)
+    ladder, refs = [], []
+    for scene in scenes:
+        mine = [(j, d) for j, d in zip(jobs, done) if j[0] == scene]
+        (ref_dir, ref_st), = [d for j, d in mine if j[1] == "reference"]
+        (chk_dir, chk_st), = [d for j, d in mine if j[1] == "check"]
+        if not (ref_st["ok"] and chk_st["ok"]):
+            sys.exit(f"{scene}: reference or check failed: {ref_st['failure']} {chk_st['failure']}")
+        ref = trajectory(ref_dir)
+        diff, diff_q = errors(ref, trajectory(chk_dir))
+        refs.append({"scene": scene, "t_end_s": scenes[scene],
+                     "reference": f"{REFERENCE[0]} {' '.join(REFERENCE[1])}",
+                     "check": f"{CHECK[0]} {' '.join(CHECK[1])}",
+                     "difference": diff, "difference_joint_rad": diff_q,
+                     "reference_rhs_evaluations": ref_st["rhs_evaluations"],
+                     "time_events": ref_st.get("time_events", "")})
+        for j, (d, st) in mine:
+            if j[1] != "run":
+                continue
+            e, dq = errors(ref, trajectory(d)) if st["ok"] else (math.nan, math.nan)
+            if not st["ok"]:
+                status = "failed"
+            elif not (e < UNSTABLE):
+                status = "unstable"
+            else:
+                status = "ok"
+            used = status == "ok" and ASYMPTOTIC_FACTOR * diff < e < ASYMPTOTIC_MAX
+            used_q = status == "ok" and ASYMPTOTIC_FACTOR * diff_q < dq < ASYMPTOTIC_MAX
+            ladder.append({"scene": scene, "integrator": j[2], "kind": j[3],
+                           "setting": ("dt=" if j[3] == "fixed" else "rtol=") + f"{j[4]:g}",
+                           "value": j[4], "ok": st["ok"], "status": status, "error": e,
+                           "max_joint_error_rad": dq, "steps": st["steps"],
+                           "rhs_evaluations": st["rhs_evaluations"], "used_in_fit": used, "used_in_joint_fit": used_q,
+                           "failure": st["failure"]})
+
+    rows = []
+    for scene in scenes:
+        for m in fixed + adaptive:
+            runs = [r for r in ladder if r["scene"] == scene and r["integrator"] == m]
+            use = [r for r in runs if r["used_in_fit"]]
+            use_q = [r for r in runs if r["used_in_joint_fit"]]
+            kind = runs[0]["kind"]
+            # x: dt (slope of log e), or RHS evaluations (slope of -log e);
+            # the ladders run from coarse to fine, so use[-2:] is the finest pair.
+            x, sign = (("value", 1), ("rhs_evaluations", -1))[kind != "fixed"]
+            slope = sign * fit([r[x] for r in use], [r["error"] for r in use])
+            finest = sign * fit([r[x] for r in use[-2:]], [r["error"] for r in use[-2:]])
+            slope_q = sign * fit([r[x] for r in use_q], [r["max_joint_error_rad"] for r in use_q])
+            dropped = [f"{r['setting']} {r['status']}" for r in runs if r["status"] != "ok"]
+            rows.append({"scene": scene, "integrator": m, "kind": kind, "theoretical_order": THEORY[m],
+                         "observed_slope": slope, "runs_used": len(use), "runs": len(runs),
+                         "error_min": min((r["error"] for r in use), default=math.nan),
+                         "error_max": max((r["error"] for r in use), default=math.nan),
+                         "slope_finest_pair": finest, "observed_slope_joint": slope_q,
+                         "joint_runs_used": len(use_q), "dropped": "; ".join(dropped)})
+
+    def write(name, table, cols):
+        with open(os.path.join(out, name), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=cols)
+            w.writeheader()
+            for r in table:
+                w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items() if k in cols})
+
+    write("observed_order.csv", rows, ["scene", "integrator", "kind", "theoretical_order", "observed_slope",
+                                       "runs_used", "runs", "error_min", "error_max", "slope_finest_pair",
+                                       "observed_slope_joint", "joint_runs_used", "dropped"])
+    write("ladder.csv", ladder, ["scene", "integrator", "kind", "setting", "ok", "status", "error",
+                                 "max_joint_error_rad", "steps", "rhs_evaluations", "used_in_fit",
+                                 "used_in_joint_fit", "failure"])
+    write("references.csv", refs, list(refs[0]))
+    plots(out, scenes)
+    readme(out, run_time, a)
+    print(f"observed order: {len(jobs)} runs in {run_time:.1f} s; {out}/observed_order.csv")
+
+
+def plots(out, scenes):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ladder = read_csv(os.path.join(out, "ladder.csv"))
+    refs = {r["scene"]: r for r in read_csv(os.path.join(out, "references.csv"))}
+    for scene in scenes:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+        floor = ASYMPTOTIC_FACTOR * float(refs[scene]["difference"])
+        for ax, kind in zip(axes, ["fixed", "adaptive"]):
+            runs = [r for r in ladder if r["scene"] == scene and r["kind"] == kind and r["status"] == "ok"]
+            for m in dict.fromkeys(r["integrator"] for r in runs):
+                rs = [r for r in runs if r["integrator"] == m]
+                x = [float(r["setting"].split("=")[1]) if kind == "fixed" else float(r["rhs_evaluations"])
+                     for r in rs]
+                y = [float(r["error"]) for r in rs]
+                line, = ax.loglog(x, y, "-", lw=1, label=f"{m} (order {THEORY[m]})")
+                for xi, yi, r in zip(x, y, rs):
+                    ax.loglog(xi, yi, "o", color=line.get_color(),
+                              mfc=line.get_color() if r["used_in_fit"] == "True" else "none")
+            ax.axhline(floor, color="grey", ls=":", lw=1)
+            ax.axhline(ASYMPTOTIC_MAX, color="grey", ls=":", lw=1)
+            ax.set_xlabel("dt [s]" if kind == "fixed" else "RHS evaluations")
+            ax.set_ylabel("max |x - x_ref| / max(1, |x_ref|)")
+            ax.set_title(f"{kind}-step" if kind == "fixed" else "adaptive (rtol ladder)")
+            ax.grid(True, which="both", alpha=0.3)
+            if runs:
+                ax.legend(fontsize=7)
+        fig.suptitle(f"{scene}, {float(refs[scene]['t_end_s']):g} s: filled markers enter the fit "
+                     f"(between the dotted lines: 100 x reference vs check, and 1e-2)", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, f"{scene}.png"), dpi=110)
+        plt.close(fig)
+
+
+def reaches(slope, theory):
+    return abs(slope - float(theory)) <= ORDER_TOLERANCE
+
+
+def readme(out, run_time, a):
+    rows = read_csv(os.path.join(out, "observed_order.csv"))
+    refs = read_csv(os.path.join(out, "references.csv"))
+    ladder = read_csv(os.path.join(out, "ladder.csv"))
+    num = lambda r, k: float(r[k])
+    L = ["# Observed order of the integrators", "",
+         "Generated by `experiments/observed_order.py" + (" --reduced" if a.reduced else "") +
+         f"` ({run_time:.0f} s with {a.jobs} jobs); every number below is read from",
+         "`observed_order.csv`, `ladder.csv` and `references.csv` in this folder.", "",
+         "Error of a run (the slopes are fitted on it): the max over all output rows (every 10 ms)",
+         "and the states q, qd, i_motor, z_piv of |x − x_ref| / max(1, |x_ref|); the reference is",
+         "CVODE BDF at rtol 1e-12, atol 1e-15, cross-checked by Dormand–Prince at the same tolerances.",
+         "Fixed-step: slope of log(error) against log(dt), dt = 2e-3 … 1.25e-4 halving; adaptive: slope",
+         "of −log(error) against log(RHS evaluations), rtol = 1e-3 … 1e-9, atol = 1e-3 rtol. Fitted by",
+         f"least squares over the runs with error above {ASYMPTOTIC_FACTOR} × the reference-vs-check difference",
+         f"and below {ASYMPTOTIC_MAX:g}; failed or unstable runs (error ≥ {UNSTABLE:g}) are dropped. Beside it: the",
+         "slope over the two finest of those runs, and the slope of the max joint-angle error [rad]",
+         "(its own runs: above 100 × the joint-angle reference-vs-check difference, below 1e-2).",
+         "For the variable-order CVODE methods the adaptive slope is a cost exponent, not an order.",
+         "Plots: `<scene>.png`.", "",
+         "| scene | t_end [s] | reference vs check | (joint angles [rad]) | reference RHS | time events |",
+         "|---|---|---|---|---|---|"]
+    for r in refs:
+        L.append(f"| {r['scene']} | {num(r, 't_end_s'):g} | {fmt(num(r, 'difference'))} | "
+                 f"{fmt(num(r, 'difference_joint_rad'))} | {r['reference_rhs_evaluations']} | {r['time_events']} |")
+    L += ["", "| scene | integrator | kind | order | observed slope | finest pair | runs used | error range "
+              "| joint-angle slope (runs) | dropped |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        rng = f"{fmt(num(r, 'error_min'), '.2g')} … {fmt(num(r, 'error_max'), '.2g')}" if r["runs_used"] != "0" else ""
+        L.append(f"| {r['scene']} | {r['integrator']} | {r['kind']} | {r['theoretical_order'].replace('-', '–')} | "
+                 f"{fmt(num(r, 'observed_slope'), '.2f')} | {fmt(num(r, 'slope_finest_pair'), '.2f')} | "
+                 f"{r['runs_used']}/{r['runs']} | {rng} | {fmt(num(r, 'observed_slope_joint'), '.2f')} "
+                 f"({r['joint_runs_used']}) | {r['dropped']} |")
+    L += ["", f"Verdicts: a fixed-step method reaches its order p when its observed slope is within "
+              f"{ORDER_TOLERANCE} of p.", ""]
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        fx = [r for r in rows if r["scene"] == scene and r["kind"] == "fixed"]
+        fitted = [r for r in fx if not math.isnan(num(r, "observed_slope"))]
+        good = [r for r in fitted if reaches(num(r, "observed_slope"), r["theoretical_order"])]
+        bad = [r for r in fitted if r not in good]
+        unfit = [r for r in fx if r not in fitted]
+        parts = []
+        if good:
+            parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f})" for r in good)
+                         + (" reaches its order" if len(good) == 1 else " reach their orders"))
+        if bad:
+            parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f} for order {r['theoretical_order']}"
+                                   + (f"; {num(r, 'slope_finest_pair'):.2f} over its finest pair"
+                                      if r["runs_used"] != "2" else "") + ")" for r in bad)
+                         + (" does not" if len(bad) == 1 else " do not"))
+        if unfit:
+            parts.append(", ".join(f"{r['integrator']} ({r['runs_used']} run{'s' * (r['runs_used'] != '1')} "
+                                   "in the fit range)" for r in unfit)
+                         + (" cannot be measured: fewer than two of " + ("its" if len(unfit) == 1 else "their")
+                            + " stable runs lie between 100 × the reference-vs-check difference and 1e-2"))
+        short = [r for r in fx if r["joint_runs_used"] not in ("0", "1")
+                 and num(r, "observed_slope_joint") < float(r["theoretical_order"]) - ORDER_TOLERANCE]
+        if short:
+            parts.append("in the joint angles alone " + ", ".join(
+                f"{r['integrator']} {num(r, 'observed_slope_joint'):.2f}" for r in short)
+                + " (below " + ("its order" if len(short) == 1 else "their orders") + ")")
+        dropped = []
+        for r in fx:
+            ds = [d.split(" ") for d in r["dropped"].split("; ") if d]
+            for status in dict.fromkeys(st for _, st in ds):
+                dropped.append(f"{r['integrator']} at " + ", ".join(v for v, st in ds if st == status) + f" ({status})")
+        if dropped:
+            parts.append("dropped: " + ", ".join(dropped))
+        L.append(f"- {scene}: " + "; ".join(parts) + ".")
+    with open(os.path.join(out, "README.md"), "w") as f:
+        f.write("\n".join(L) + "\n")
+
+
+if __name__ == "__main__":
+    main()
