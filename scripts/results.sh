@@ -28,5 +28,6 @@ done
 /usr/bin/python3 experiments/stiffness_table.py
 /usr/bin/python3 experiments/planning.py
 /usr/bin/python3 experiments/observed_order.py
+/usr/bin/python3 experiments/testset.py
 minutes=$(( ($(date +%s) - start + 30) / 60 ))
 /usr/bin/python3 experiments/report.py --minutes "$minutes"
