@@ -42,15 +42,21 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       if (observe) observe(to, xo.data());
       ++k_out;
     }
+    // The state is copied only where the plant may change it (an event) or
+    // an output at this instant reads it, not after every step.
     const double* xs = integrator.state();
-    x.assign(xs, xs + plant.size());
     if (max_steps > 0 && integrator.stats().steps > max_steps) {
       res.ok = false;
       res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
                     " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-                    fastest_component(sys, t, x.data());
+                    fastest_component(sys, t, xs);
       break;
     }
+    const bool output_now = t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps;
+    const bool event_now = o.status == Outcome::kRoot ||
+                           (t >= t_event - eps && (stop_at_events || t >= output_time() - eps));
+    if (!output_now && !event_now) continue;
+    x.assign(xs, xs + plant.size());
     bool restart = false;
     if (o.status == Outcome::kRoot) {
       plant.on_root(o.root, t, x.data());
@@ -66,7 +72,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       restart = true;
     }
     if (restart) integrator.reset(sys, t, x.data());
-    if (t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps) {
+    if (output_now) {
       if (observe) observe(t, x.data());
       ++k_out;
     }

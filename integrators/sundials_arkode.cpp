@@ -90,9 +90,9 @@ class Arkode final : public Integrator {
         check(ARKStepSetLinearSolver(mem_, LS_, A_), "ARKStepSetLinearSolver");
         // The implicit stages' Newton iterations start from ARKODE's maximum-
         // order predictor (the dense-output interpolant), not the default
-        // trivial one: with the trivial predictor, ARKODE 6.4's error on a
-        // non-autonomous problem (Prothero-Robinson, tests/test_conformance.cpp)
-        // grew as rtol fell (2.2e-5, 4.1e-5, 1.6e-4 at rtol 1e-4, 1e-6, 1e-8).
+        // trivial one: with the trivial predictor, ARKODE 6.4's DIRK error on a
+        // non-autonomous problem did not fall with rtol (tests/test_conformance.cpp,
+        // ErrorIsProportionalToTheTolerance: 2.1e-3 at rtol 1e-7, 1.6e-4 at 1e-8).
         check(ARKStepSetPredictorMethod(mem_, 1), "ARKStepSetPredictorMethod");
         if (kind_ == Kind::kDirk) {  // see the note at the top
           check(ARKStepSetTableNum(mem_, ARKODE_ARK436L2SA_DIRK_6_3_4, ARKODE_ERK_NONE), "ARKStepSetTableNum");

@@ -22,45 +22,21 @@
 
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
+#include "integrators/testset/problems.hpp"
 
 namespace pumasim {
 namespace {
 
-// y0' = lambda (y0 - phi(t)) + phi'(t), phi = sin t;  y1' = y0 - y1.
-// y0(0) = 0, y1(0) = 1/2: y0 = sin t, y1 = (sin t - cos t) / 2 + e^-t.
-class ProtheroRobinson final : public OdeSystem {
- public:
-  explicit ProtheroRobinson(double lambda) : lambda_(lambda) {}
-  int size() const override { return 2; }
-  void rhs(double t, const double* y, double* f) override {
-    f[0] = lambda_ * (y[0] - std::sin(t)) + std::cos(t);
-    f[1] = y[0] - y[1];
-  }
-  void jacobian(double, const double*, Eigen::MatrixXd& J) override {
-    J.resize(2, 2);
-    J << lambda_, 0, 1, -1;
-  }
-  bool has_exact_jacobian() const override { return true; }
-  bool time_derivative(double t, const double*, double* dfdt) override {
-    dfdt[0] = -lambda_ * std::cos(t) - std::sin(t);
-    dfdt[1] = 0;
-    return true;
-  }
-  static void exact(double t, double* y) {
-    y[0] = std::sin(t);
-    y[1] = 0.5 * (std::sin(t) - std::cos(t)) + std::exp(-t);
-  }
+// The test set's Prothero-Robinson problem (integrators/testset/problems.hpp):
+// y0' = lambda (y0 - sin t) + cos t, y1' = y0 - y1, y(0) = 0, with its closed
+// form and exact df/dt; here at a mild lambda.
+std::unique_ptr<testset::Problem> problem() { return testset::prothero_robinson(-5.0); }
 
- private:
-  double lambda_;
-};
-
-constexpr double kLambda = -5.0;  // moderately stiff: every explicit method is stable at the steps used
 constexpr double kT = 6.0;
 
 double error_at(const double* y, double t) {
   double e[2];
-  ProtheroRobinson::exact(t, e);
+  problem()->exact_solution(t, e);
   return std::max(std::abs(y[0] - e[0]), std::abs(y[1] - e[1]));
 }
 
@@ -70,11 +46,9 @@ struct RunOutcome {
 };
 
 RunOutcome solve(const IntegratorInfo& info, const IntegratorOptions& o) {
-  ProtheroRobinson sys(kLambda);
+  auto sys = problem();
   auto integ = info.make(o);
-  double y0[2];
-  ProtheroRobinson::exact(0.0, y0);
-  integ->reset(sys, 0.0, y0);
+  integ->reset(*sys, 0.0, sys->initial_value().data());
   const Outcome out = integ->advance_to(kT);
   EXPECT_EQ(out.status, Outcome::kReached) << info.name << ": " << out.message;
   return {error_at(integ->state(), kT), integ->stats().steps};
@@ -155,15 +129,14 @@ TEST_P(Conformance, KeepsItsOrderWithStopsOffTheStepGrid) {
   if (i.kind != IntegratorKind::kFixedStep) return;  // adaptive methods end their own steps at a stop
   std::vector<double> errs;
   for (double dt : {0.04, 0.02, 0.01, 0.005}) {
-    ProtheroRobinson sys(kLambda);
+    auto sys = problem();
     auto integ = i.make(with_dt(dt));
     double y[2];
-    ProtheroRobinson::exact(0.0, y);
-    integ->reset(sys, 0.0, y);
+    integ->reset(*sys, 0.0, sys->initial_value().data());
     for (double t = 0.3137; t < kT + 0.3137; t += 0.3137) {
       ASSERT_EQ(integ->advance_to(std::min(t, kT)).status, Outcome::kReached) << i.name;
       std::copy(integ->state(), integ->state() + 2, y);
-      integ->reset(sys, integ->time(), y);
+      integ->reset(*sys, integ->time(), y);
     }
     errs.push_back(error_at(integ->state(), kT));
   }
@@ -194,14 +167,14 @@ TEST_P(Conformance, ErrorIsProportionalToTheTolerance) {
 // the exact solution, and reading them does not change the step count.
 TEST_P(Conformance, DenseOutputHasTheMethodsAccuracy) {
   const IntegratorInfo& i = info();
-  ProtheroRobinson sys(kLambda);
-  double y0[2], y[2];
-  ProtheroRobinson::exact(0.0, y0);
+  auto sys = problem();
+  const double* y0 = sys->initial_value().data();
+  double y[2];
   if (i.kind == IntegratorKind::kFixedStep) {
     std::vector<double> errs;
     for (double dt : {0.02, 0.01, 0.005}) {
       auto integ = i.make(with_dt(dt));
-      integ->reset(sys, 0.0, y0);
+      integ->reset(*sys, 0.0, y0);
       const double t_read = 1.3 + dt / 3;
       while (integ->time() < t_read) ASSERT_EQ(integ->step_toward(kT).status, Outcome::kReached) << i.name;
       ASSERT_LT(integ->step_start(), t_read) << i.name;
@@ -214,7 +187,7 @@ TEST_P(Conformance, DenseOutputHasTheMethodsAccuracy) {
   }
   const double rtol = 1e-7;
   auto integ = i.make(with_rtol(rtol));
-  integ->reset(sys, 0.0, y0);
+  integ->reset(*sys, 0.0, y0);
   double worst = 0;
   long reads = 0;
   int k = 1;

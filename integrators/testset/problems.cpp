@@ -340,6 +340,10 @@ class Pleiades final : public Problem {
 
 }  // namespace
 
+std::unique_ptr<Problem> prothero_robinson(double lambda, std::vector<double> fixed_steps) {
+  return std::make_unique<ProtheroRobinson>("prothero-robinson", lambda, std::move(fixed_steps));
+}
+
 std::vector<std::unique_ptr<Problem>> make_problems() {
   std::vector<std::unique_ptr<Problem>> v;
   // Fixed-step ladders: lambda = -50 limits explicit Euler to dt < 0.04,

@@ -77,6 +77,10 @@ struct EndError {
 };
 EndError end_error(const Problem& p, const double* y);
 
+// Prothero-Robinson with the given stiffness (lambda < 0) and fixed-step ladder,
+// for tests that need it at another lambda than the set's two.
+std::unique_ptr<Problem> prothero_robinson(double lambda, std::vector<double> fixed_steps = {});
+
 // Every problem of the set, in a fixed order.
 std::vector<std::unique_ptr<Problem>> make_problems();
 // The problem called `name`; std::invalid_argument listing the valid names otherwise.
