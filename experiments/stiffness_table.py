@@ -12,9 +12,12 @@ and DIR/<table>.png (default DIR = results/stiffness). Then the conditioning
 table: `pumasim conditioning` along the paper's path, the path moved out to a
 nearly stretched arm, and the six-joint path through the wrist singularity,
 each with and without rotor inertia: DIR/conditioning.csv and .png. --reduced: one case per
-table, into build/stiffness-reduced (CI).
+table, into build/stiffness-reduced (CI). Last, DIR/scenes.csv: every shipped
+scene over its whole run, its spectral radius and stiffness ratio (median over
+40 samples, and the range), and whether it is stiff (median >= 100).
 """
 import argparse
+import re
 import csv
 import os
 import subprocess
@@ -38,7 +41,7 @@ def gains(k):
 TABLES = {
     "stiff_armature": [(f"La={la}", [f"motor.inductance={la}"]) for la in
                        ("2.1e-2", "2.1e-3", "2.1e-4", "2.1e-5", "2.1e-6")],
-    "stiff_high_gain": [(f"gain_x{k}", gains(k)) for k in (1, 10, 100)],
+    "high_gain": [(f"gain_x{k}", gains(k)) for k in (1, 10, 100)],
 }
 
 
@@ -125,6 +128,60 @@ def conditioning(out, reduced, plt):
     plt.close(fig)
 
 
+def scene_stiffness(out, reduced):
+    """Every shipped scene over its whole run: the largest spectral radius and
+    the stiffness ratio (largest over smallest |Re lambda| of the decaying
+    modes), as the median over the samples and its range. The median, not the
+    maximum, classifies a scene: while a hybrid-friction joint is stuck its
+    speed and PIV integral form modes with |Re lambda| near zero, and the
+    ratio of those samples (1e6 and more) says nothing about the stiffness of
+    the motion. A scene is called stiff here when the median is >= 100."""
+    rows = []
+    scenes = sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "experiments", "scenes")) if f.endswith(".toml"))
+    for scene in (scenes[:1] if reduced else scenes):
+        path = os.path.join(ROOT, "experiments", "scenes", scene + ".toml")
+        check = subprocess.run([PUMASIM, "check", path], capture_output=True, text=True, cwd=ROOT)
+        if check.returncode != 0:
+            sys.exit(f"stiffness_table: pumasim check {path} failed: {check.stderr.strip()}")
+        # The resolved scene ends at its state layout; its [scene] table holds the run's duration.
+        duration = float(re.search(r"^duration = (\S+)$", check.stdout, re.M).group(1))
+        cmd = [PUMASIM, "stiffness", path, "--samples", "5" if reduced else "40",
+               "--t-end", "0.02" if reduced else repr(duration)]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        if p.returncode != 0:
+            sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
+        block = [b for b in p.stdout.split("\n\n") if b.strip()][0]
+        lines = [line for line in block.splitlines() if not line.startswith("#")]
+        head = lines[0].split("\t")
+        data = [dict(zip(head, line.split("\t"))) for line in lines[1:]]
+        t_end = float(re.search(r"over \[0, ([^\]]+)\] s", block).group(1))
+        # Modes slower than the run (and the undamped ones of a conservative
+        # arm, Re lambda ~ 0) barely move within it: their rate is floored at
+        # 1 / t_end (Shampine's view: stiffness is rho times the interval).
+        def slowest_rate(r):
+            tau = float(r["slowest tau [s]"])
+            return 1.0 / tau if 0 < tau < float("inf") else 0.0  # no decaying mode: 0
+        ratios = sorted(float(r["spectral radius [1/s]"]) / max(slowest_rate(r), 1.0 / t_end) for r in data)
+        median = ratios[len(ratios) // 2] if len(ratios) % 2 else 0.5 * (ratios[len(ratios) // 2 - 1] +
+                                                                          ratios[len(ratios) // 2])
+        worst = max(data, key=lambda r: float(r["spectral radius [1/s]"]))
+        rows.append({"scene": scene, "t_end_s": f"{t_end:g}", "samples": len(data),
+                     "max_spectral_radius_per_s": worst["spectral radius [1/s]"],
+                     "fastest_state": worst["fastest state"],
+                     "median_stiffness_ratio": f"{median:.4g}",
+                     "min_stiffness_ratio": f"{ratios[0]:.4g}", "max_stiffness_ratio": f"{ratios[-1]:.4g}",
+                     "stiff": "yes" if median >= 100 else "no"})
+        print(f"scene {scene}: median stiffness ratio {median:.4g}", flush=True)
+    path = os.path.join(out, "scenes.csv")
+    with open(path + ".tmp", "w", newline="") as f:
+        f.write("# pumasim stiffness experiments/scenes/<scene>.toml --samples 40 --t-end <its duration>; stiffness ratio = "
+                "spectral radius / max(slowest decay rate, 1/t_end); stiff = median >= 100\n")
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(path + ".tmp", path)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--reduced", action="store_true")
@@ -169,6 +226,7 @@ def main():
         fig.savefig(os.path.join(out, scene + ".png"), dpi=80)
         plt.close(fig)
     conditioning(out, args.reduced, plt)
+    scene_stiffness(out, args.reduced)
     print(f"stiffness tables: {os.path.relpath(out, ROOT)}/")
 
 

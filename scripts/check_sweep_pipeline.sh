@@ -13,17 +13,17 @@ rm -rf build/sweeps-reduced build/stiffness-reduced
 for f in experiments/sweeps/*.toml; do
   $PY experiments/sweep.py "$f" --reduced --jobs 2 > /dev/null
 done
-again=$($PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced | sed -n 1p)
+again=$($PY experiments/sweep.py experiments/sweeps/sampled_control.toml --reduced | sed -n 1p)
 # "<name>: N runs in this share, M already complete": a re-run must find M = N.
 read -r total done_ <<< "$(sed -E 's/.*: ([0-9]+) runs in this share, ([0-9]+) already complete.*/\1 \2/' <<< "$again")"
 if [ -z "$total" ] || [ "$total" != "$done_" ]; then
   echo "re-run did not skip the complete runs: $again" >&2; exit 1
 fi
 # Shards 1/2 and 2/2 of a fresh sweep together complete it.
-rm -rf build/sweeps-reduced/stiff_sampling
-$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --shard 1/2 > /dev/null
-$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --shard 2/2 > /dev/null
-$PY experiments/sweep.py experiments/sweeps/stiff_sampling.toml --reduced --merge > /dev/null
+rm -rf build/sweeps-reduced/sampled_control
+$PY experiments/sweep.py experiments/sweeps/sampled_control.toml --reduced --shard 1/2 > /dev/null
+$PY experiments/sweep.py experiments/sweeps/sampled_control.toml --reduced --shard 2/2 > /dev/null
+$PY experiments/sweep.py experiments/sweeps/sampled_control.toml --reduced --merge > /dev/null
 $PY experiments/stiffness_table.py --reduced > /dev/null
 mkdir -p build/sweeps-reduced/results/stiffness
 cp build/stiffness-reduced/*.csv build/sweeps-reduced/results/stiffness/
@@ -36,7 +36,7 @@ grep -q "Trajectory planning methods" build/sweeps-reduced/README.md
 # identity), and there are such intervals (the arm starts at rest, stuck).
 $PY - <<'PY'
 import json, sys
-s = json.load(open("build/sweeps-reduced/results/stiff_stick_slip/stiff_stick_slip_summary.json"))
+s = json.load(open("build/sweeps-reduced/results/stick_slip/stick_slip_summary.json"))
 c = s["creep"][s["stuck_variant"]]
 if not (c["stuck_time_s"] > 0 and c["rad"] == 0.0):
     sys.exit(f"creep of the stuck model itself: {c}")
