@@ -134,4 +134,17 @@ if s["rank_by"]["column"] != "max_joint_error_rad" or s["rank_by"]["target"] != 
     sys.exit(f"rank_by joint: {s['rank_by']}, {s['cost_to_target']}")
 PY
 $PY experiments/observed_order.py --reduced --out build/sweeps-reduced/observed_order > /dev/null; test -s build/sweeps-reduced/observed_order/observed_order.csv
+# The output grid must not change an adaptive run's cost (dense output; the
+# instrument issue's criterion: within 5 %), and --stop-at-outputs must (else
+# the comparison shows nothing).
+$PY experiments/output_grid.py --reduced --out build/sweeps-reduced/output_grid \
+  --work build/sweeps-reduced/output_grid-runs > /dev/null
+$PY - <<'PY'
+import csv, sys
+rows = list(csv.DictReader(l for l in open("build/sweeps-reduced/output_grid/output_grid.csv") if not l.startswith("#")))
+for r in rows:
+    spread = float(r["rhs_spread_percent"])
+    if (r["mode"] == "dense") != (spread <= 5):
+        sys.exit(f"output grid: {r['integrator']} {r['mode']}: RHS spread {spread} %")
+PY
 echo "sweep pipeline: ok"

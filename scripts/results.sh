@@ -2,7 +2,8 @@
 # Regenerates results/README.md and everything it reads: every sweep in
 # experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
 # back-ends inside the ODE, the stiff scenes), the stiffness tables, the
-# planning methods (experiments/planning.py), and the report. A fresh run
+# planning methods (experiments/planning.py), the observed orders, the test set,
+# the output-grid table (experiments/output_grid.py), and the report. A fresh run
 # takes about 20 minutes on 2 cores (the report's header states how long its
 # last run took). Runs already complete under build/sweeps/ are skipped:
 # delete that folder for a fresh run. Uses a private copy of the pumasim binary, so that
@@ -29,5 +30,6 @@ done
 /usr/bin/python3 experiments/planning.py
 /usr/bin/python3 experiments/observed_order.py
 /usr/bin/python3 experiments/testset.py
+/usr/bin/python3 experiments/output_grid.py
 minutes=$(( ($(date +%s) - start + 30) / 60 ))
 /usr/bin/python3 experiments/report.py --minutes "$minutes"
