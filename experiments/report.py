@@ -93,9 +93,13 @@ def sweep_section(summary, folder, rel):
         st = summary["stuck_variant"]
         out += [f"Creep while stuck: over the intervals in which the `{st}` model holds a joint at exactly zero "
                 f"speed (the outputs 2 samples in from each end; {summary['creep'][st]['stuck_time_s']:.3g} s of "
-                "joint-time in all), the largest motion of that joint in each variant's reference solution:", "",
+                "joint-time in all), the largest motion of that joint in each other variant's reference solution "
+                f"(`{st}` itself is not listed: while stuck its speed is zero by construction, so its motion is "
+                "zero and says nothing):", "",
                 "| variant | motion [rad] | joint | interval [s] |", "|---|---:|---|---|"]
         for lab, c in summary["creep"].items():
+            if lab == st:
+                continue
             out.append(f"| {lab} | {c['rad']:.3g} | {c['joint'] or '–'} | "
                        + (f"{c['from_s']:.2f}–{c['to_s']:.2f}" if c["joint"] else "–") + " |")
         out.append("")
