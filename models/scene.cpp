@@ -39,8 +39,9 @@ std::vector<std::vector<double>> read_rows(StrictTable& t, std::string_view key,
     }
     std::vector<double> v;
     for (const toml::node& x : *r) {
-      if (!x.is_number()) t.fail(key, expected, "a row with a non-number");
-      v.push_back(*x.value<double>());
+      const auto d = StrictTable::as_double(x);
+      if (!d) t.fail(key, expected, x.is_integer() ? "an integer beyond +-2^53" : "a row with a non-number");
+      v.push_back(*d);
     }
     rows.push_back(v);
   }
@@ -104,7 +105,14 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   pc.energy_ledger = s.boolean_or("energy_ledger", false);
   if (!sc.rotor_inertia) pc.robot = without_rotor_inertia(pc.robot);
   const int dof = pc.robot.dof();
+  // The plant and the reference hold a pose in a 6-vector, and lock held
+  // joints only on a 6-joint arm: checked here, before any size is used.
+  if (dof > 6) s.fail("robot", "a robot with at most 6 joints", "one with " + std::to_string(dof));
   const int n = read_int(s, "joints", 1, dof);
+  if (n < dof && dof != 6) {
+    s.fail("joints", "all " + std::to_string(dof) + " joints of this robot (held joints need a 6-joint robot)",
+           std::to_string(n));
+  }
   pc.n = n;
   const auto held = s.optional_numbers("held", dof - n, {-4 * M_PI, 4 * M_PI});
   pc.q_held.setZero();

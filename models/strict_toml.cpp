@@ -151,10 +151,25 @@ const toml::node& StrictTable::require(std::string_view key) {
 
 bool StrictTable::has(std::string_view key) const { return table_->get(key) != nullptr; }
 
+std::optional<double> StrictTable::as_double(const toml::node& node) {
+  if (const auto* f = node.as_floating_point()) return f->get();
+  if (const auto* i = node.as_integer()) {
+    constexpr std::int64_t kExact = std::int64_t{1} << 53;
+    const std::int64_t v = i->get();
+    if (v >= -kExact && v <= kExact) return static_cast<double>(v);
+  }
+  return std::nullopt;
+}
+
+namespace {
+constexpr const char* kInexact = " (an integer beyond +-2^53 is not exactly a double)";
+}
+
 double StrictTable::number(std::string_view key, Bounds bounds) {
   const toml::node& node = require(key);
-  if (!node.is_number()) fail(key, bounds.describe(), describe(node));
-  const double x = *node.value<double>();
+  const auto v = as_double(node);
+  if (!v) fail(key, bounds.describe() + (node.is_integer() ? kInexact : ""), describe(node));
+  const double x = *v;
   if (!bounds.contains(x)) fail(key, bounds.describe(), format_number(x));
   return x;
 }
@@ -207,8 +222,9 @@ std::vector<double> StrictTable::numbers(std::string_view key, int size, Bounds 
   out.reserve(arr->size());
   for (std::size_t i = 0; i < arr->size(); ++i) {
     const toml::node& e = *arr->get(i);
-    if (!e.is_number()) fail(key, expected, describe(e) + " at index " + std::to_string(i));
-    const double x = *e.value<double>();
+    const auto v = as_double(e);
+    if (!v) fail(key, expected + (e.is_integer() ? kInexact : ""), describe(e) + " at index " + std::to_string(i));
+    const double x = *v;
     if (!bounds.contains(x)) fail(key, expected, format_number(x) + " at index " + std::to_string(i));
     out.push_back(x);
   }
@@ -224,7 +240,9 @@ std::optional<std::vector<double>> StrictTable::optional_numbers(std::string_vie
 std::vector<double> StrictTable::per_joint(std::string_view key, int n, Bounds bounds) {
   const toml::node& nd = require(key);
   if (nd.is_number()) {
-    const double x = *nd.value<double>();
+    const auto v = as_double(nd);
+    if (!v) fail(key, bounds.describe() + kInexact, describe(nd));
+    const double x = *v;
     if (!bounds.contains(x)) fail(key, bounds.describe(), format_number(x));
     return std::vector<double>(static_cast<std::size_t>(n), x);
   }

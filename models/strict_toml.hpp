@@ -82,6 +82,12 @@ class StrictTable {
   [[noreturn]] void fail(std::string_view key, const std::string& expected,
                          const std::string& got) const;
 
+  // A number node's value as a double: a floating-point node, or an integer
+  // node that a double holds exactly (|i| <= 2^53); empty otherwise (not a
+  // number, or an integer such as 2^53 + 1 or -2^63 that a double cannot
+  // hold -- toml++'s value<double>() is empty then, never to be dereferenced).
+  static std::optional<double> as_double(const toml::node& node);
+
  private:
   const toml::node* lookup(std::string_view key);
   const toml::node& require(std::string_view key);

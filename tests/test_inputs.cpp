@@ -9,6 +9,7 @@
 #include "experiments/cli.hpp"
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
+#include "models/scene.hpp"
 
 namespace pumasim {
 namespace {
@@ -150,6 +151,66 @@ TEST_F(RobotFile, WrongArrayLengthAndSyntaxError) {
   expect_error(std::string(kHead) + "[[joint]]\na = 0\nalpha = 0\nd = 0\nmass = 1\ncom = [0, 0]\n",
                {"joint[1].com: expected an array of 3 numbers, got an array of 2"});
   expect_error(std::string(kHead) + "[[joint]\n", {"TOML syntax error"});
+}
+
+// Integers a double cannot hold exactly (beyond +-2^53) are refused, naming
+// the key, instead of being read through toml++'s empty value<double>()
+// (which printed another key's memory, or rtol = 4.66e-310).
+TEST(SceneNumbers, IntegersBeyondTwoToThe53AreRefused) {
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"integrator.rtol=9007199254740993", "rtol"},
+      {"motor.resistance=-9223372036854775808", "resistance"},
+      {"motor.resistance=[2.0, 9007199254740993, 2.0]", "resistance"},
+      {"scene.joints=9223372036854775807", "joints"},
+  };
+  for (const auto& [set, key] : cases) {
+    try {
+      load_scene(scene, {set});
+      ADD_FAILURE() << "accepted --set " << set;
+    } catch (const ConfigError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(key), std::string::npos) << msg;
+      EXPECT_NE(msg.find("expected"), std::string::npos) << msg;
+    }
+    const Result r = cli({"check", scene, "--set", set});
+    EXPECT_EQ(r.status, kExitBadInput) << set;
+  }
+  // 2^53 itself is a double: accepted where the range allows (here, a duration).
+  EXPECT_EQ(load_scene(scene, {"scene.duration=9007199254740992"}).duration, 9007199254740992.0);
+}
+
+// A robot file with 7 joints (the PUMA file with its sixth joint repeated) is
+// refused at the robot key before any 6-sized buffer is written; before, a
+// scene with joints = 3 crashed and one with joints = 7 wrote out of bounds.
+TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
+  std::ifstream in(std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/puma560.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string robot = text.str();
+  const std::size_t last = robot.rfind("[[joint]]");
+  ASSERT_NE(last, std::string::npos);
+  const std::size_t end = robot.find("\n[", last + 1);
+  const std::string seventh = robot.substr(last, end == std::string::npos ? std::string::npos : end - last);
+  robot = robot.substr(0, end == std::string::npos ? robot.size() : end) + "\n" + seventh + "\n";  // poses dropped
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_seven";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "seven.toml") << robot;
+  ASSERT_EQ(load_robot_file((dir / "seven.toml").string()).dof(), 7);
+  std::ifstream sin(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
+  std::stringstream scene;
+  scene << sin.rdbuf();
+  std::string sc = scene.str();
+  const std::size_t at = sc.find("robot = \"puma560\"");
+  ASSERT_NE(at, std::string::npos);
+  sc.replace(at, std::string("robot = \"puma560\"").size(), "robot = \"" + (dir / "seven.toml").string() + "\"");
+  std::ofstream(dir / "scene.toml") << sc;
+  for (const std::string joints : {"3", "7"}) {
+    const Result r = cli({"check", (dir / "scene.toml").string(), "--set", "scene.joints=" + joints,
+                          "--set", "scene.held=[]"});
+    EXPECT_EQ(r.status, kExitBadInput) << joints;
+    EXPECT_NE(r.err.find("robot: expected a robot with at most 6 joints"), std::string::npos) << r.err;
+  }
 }
 
 }  // namespace
