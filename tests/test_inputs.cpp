@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "experiments/cli.hpp"
 #include "models/backend.hpp"
 #include "models/robot_file.hpp"
@@ -193,7 +195,7 @@ TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
   const std::size_t end = robot.find("\n[", last + 1);
   const std::string seventh = robot.substr(last, end == std::string::npos ? std::string::npos : end - last);
   robot = robot.substr(0, end == std::string::npos ? robot.size() : end) + "\n" + seventh + "\n";  // poses dropped
-  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_seven";
+  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_test_seven_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "seven.toml") << robot;
   ASSERT_EQ(load_robot_file((dir / "seven.toml").string()).dof(), 7);
