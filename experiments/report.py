@@ -206,6 +206,13 @@ def stiffness_section(folder, rel):
                 cells.append(f"{float(rm[0]['predicted_s']):.3g} / {float(rm[0]['measured_s']):.3g}" if rm else "")
             out.append(f"| {c} | {float(r0['spectral_radius']):.4g} | {float(r0['stiffness_ratio']):.3g} | "
                        f"{r0['fastest_state']} (tau {float(r0['fastest_tau_s']):.3g} s) | " + " | ".join(cells) + " |")
+        ratios = [(float(r["measured_s"]) / float(r["predicted_s"]), r["integrator"], r["case"]) for r in rows
+                  if float(r["predicted_s"]) > 0 and float(r["measured_s"]) > 0]
+        if ratios:
+            lo, hi = min(ratios), max(ratios)
+            near = sum(1 for x, _, _ in ratios if abs(x - 1) <= 0.05)
+            out += ["", f"Measured over predicted stable step: from {lo[0]:.3g} ({lo[1]}, {lo[2]}) to {hi[0]:.3g} "
+                        f"({hi[1]}, {hi[2]}); within 5 % in {near} of {len(ratios)} cases."]
         png = os.path.join(folder, name + ".png")
         if os.path.exists(png):
             out += ["", f"![{name}]({rel}/{name}.png)"]
@@ -308,6 +315,12 @@ def main():
     with open(tmp, "w") as f:
         f.write("\n".join(lines) + "\n")
     os.replace(tmp, out_path)
+    if args.minutes:  # the figure the header quotes, kept beside the tables it describes
+        run = os.path.join(res, "report_run.json")
+        with open(run + ".tmp", "w") as f:
+            json.dump({"minutes_of_last_full_run": round(args.minutes), "cores": os.cpu_count()}, f)
+            f.write("\n")
+        os.replace(run + ".tmp", run)
     print(f"report: {os.path.relpath(out_path, ROOT)}")
 
 
