@@ -284,7 +284,16 @@ Scene scene_argument(const std::vector<std::string>& args, const Options& opt) {
   if (args.size() < 2 || args[1].rfind("--", 0) == 0) {
     throw UsageError(args[0] + ": expected a scene file, e.g. experiments/scenes/paper_slow.toml");
   }
-  return load_scene(args[1], opt.sets);
+  Scene sc = load_scene(args[1], opt.sets);
+  // The integrator named by the scene exists: `check` says so with the file,
+  // line and key, as `run` would otherwise fail without them.
+  try {
+    find_integrator(sc.integrator.name);
+  } catch (const std::invalid_argument&) {
+    throw ConfigError(sc.integrator.name_where + "expected one of: " + integrator_names() + "; got \"" +
+                      sc.integrator.name + "\"");
+  }
+  return sc;
 }
 
 int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
@@ -369,6 +378,15 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   if (max_steps > 0) io.max_steps = max_steps;  // also each integrator's own per-call limit
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
+  // The output rows are held in memory until the run ends (then written at
+  // once): their number is bounded before anything is allocated.
+  constexpr double kMaxOutputRows = 1e7;
+  if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
+    std::ostringstream m;
+    m << "scene.duration / scene.output_interval: expected at most " << kMaxOutputRows
+      << " output rows (a longer output_interval, or a shorter duration), got " << rows;
+    throw UsageError(m.str());
+  }
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const std::filesystem::path dir = opt.get("out") ? std::filesystem::path(*opt.get("out")) : "runs" / std::filesystem::path(sc.name);
   const bool force = opt.flags.count("force") > 0;

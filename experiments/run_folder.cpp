@@ -25,7 +25,7 @@ void write_file(const fs::path& p, const std::string& content) {
   std::ofstream f(p, std::ios::binary);
   f << content;
   f.close();
-  if (!f) throw std::runtime_error("could not write " + p.string() + " (disk full or not writable?)");
+  if (!f) throw RunFolderError("could not write " + p.string() + " (disk full or not writable?); no run folder written");
 }
 
 }  // namespace
@@ -60,13 +60,13 @@ void write_run_folder(const fs::path& dir, const std::vector<std::pair<std::stri
                       bool force) {
   check_run_folder_target(dir, force);
   const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
-  fs::create_directories(parent);
   std::string base(1, '.');  // built piecewise: GCC 12 warns falsely on "." + string (bug 105329)
   base.append(dir.filename().string()).append(1, '.').append(std::to_string(::getpid()));
   const fs::path tmp = parent / (base + ".partial"), old = parent / (base + ".old");
-  fs::remove_all(tmp);  // only a leftover of this very process id's earlier attempt
-  fs::create_directory(tmp);
   try {
+    fs::create_directories(parent);
+    fs::remove_all(tmp);  // only a leftover of this very process id's earlier attempt
+    fs::create_directory(tmp);
     std::ostringstream marker;
     marker << "# a pumasim run folder: the files pumasim wrote here (it replaces the folder only with --force,\n"
               "# and only while nothing else is in it)\n";
@@ -80,6 +80,11 @@ void write_run_folder(const fs::path& dir, const std::vector<std::pair<std::stri
     if (replace) fs::rename(dir, old);
     fs::rename(tmp, dir);
     if (replace) fs::remove_all(old);
+  } catch (const fs::filesystem_error& e) {  // a folder that cannot be made or renamed: the path, not "internal"
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw RunFolderError("--out " + dir.string() + ": " + e.code().message() + " (" + e.path1().string() +
+                         "); no run folder written");
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);

@@ -89,7 +89,11 @@ RobotModel load_robot(const std::string& name_or_path) {
                         name_or_path.compare(name_or_path.size() - 5, 5, ".toml") == 0);
   if (is_path) return load_robot_file(name_or_path);
   const std::filesystem::path file = std::filesystem::path(robots_dir()) / (name_or_path + ".toml");
-  if (!std::filesystem::exists(file)) {
+  // The non-throwing overload: a name too long for the file system (or
+  // otherwise unusable as a file name) is an unknown robot, not an internal
+  // "filesystem error".
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) {
     std::string known;
     if (std::filesystem::is_directory(robots_dir())) {
       for (const auto& e : std::filesystem::directory_iterator(robots_dir())) {

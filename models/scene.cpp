@@ -133,6 +133,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   s.finish();
 
   if (auto it = root.optional_table("integrator")) {
+    if (it->has("name")) sc.integrator.name_where = it->where("name");
     sc.integrator.name = it->string_or("name", sc.integrator.name);
     sc.integrator.dt = it->number_or("dt", sc.integrator.dt, kPositive);
     sc.integrator.rtol = it->number_or("rtol", sc.integrator.rtol, kPositive);

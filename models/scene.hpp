@@ -14,7 +14,8 @@
 namespace pumasim {
 
 struct IntegratorSettings {
-  std::string name = "rk4";  // checked against the integrator registry when run
+  std::string name = "rk4";  // checked against the integrator registry by the command line
+  std::string name_where;    // "file:line: integrator.name: " when the scene sets it (for that check's message)
   double dt = 5e-4;          // [s] fixed-step methods
   double rtol = 1e-6;        // adaptive methods
   double atol = 1e-8;

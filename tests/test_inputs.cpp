@@ -182,6 +182,27 @@ TEST(SceneNumbers, IntegersBeyondTwoToThe53AreRefused) {
   EXPECT_EQ(load_scene(scene, {"scene.duration=9007199254740992"}).duration, 9007199254740992.0);
 }
 
+// `check` validates what `run` uses: an integrator name the registry does not
+// know is refused with the file (or override), the key and the names; a
+// duration whose output rows cannot be held is an input error before any
+// allocation; a robot name too long for a file name is an unknown robot, not
+// an internal filesystem error (all found by the reliability issue).
+TEST(SceneNumbers, CheckRefusesWhatRunWouldRefuse) {
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+  Result r = cli({"check", scene, "--set", "integrator.name=\"RK4\""});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("integrator.name: expected one of: ab2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("got \"RK4\""), std::string::npos) << r.err;
+  r = cli({"run", scene, "--set", "scene.duration=1e300", "--out",
+           (std::filesystem::temp_directory_path() / ("pumasim_rows_" + std::to_string(::getpid()))).string()});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("scene.duration / scene.output_interval: expected at most"), std::string::npos) << r.err;
+  r = cli({"check", scene, "--set", "scene.robot=\"" + std::string(300, 'a') + "\""});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("scene.robot: unknown robot"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+}
+
 // A robot file with 7 joints (the PUMA file with its sixth joint repeated) is
 // refused at the robot key before any 6-sized buffer is written; before, a
 // scene with joints = 3 crashed and one with joints = 7 wrote out of bounds.
