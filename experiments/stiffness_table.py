@@ -3,7 +3,7 @@
 
     /usr/bin/python3 experiments/stiffness_table.py [--reduced] [--out DIR]
 
-For the armature sweep (La over five decades) and the high-gain sweep (PIV
+For the armature sweep (La over four decades) and the high-gain sweep (PIV
 feedback gains x1, x10, x100): the largest spectral radius of the plant
 Jacobian along 0.2 s of the run, the stiffness ratio, the fastest mode, and
 for each explicit fixed-step method the largest stable step predicted by its

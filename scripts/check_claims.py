@@ -112,6 +112,11 @@ UNIT_SCALE = {
 }
 UNIT_RE = re.compile(r"\s?(" + "|".join(sorted((re.escape(u) for u in UNIT_SCALE), key=len, reverse=True)) + r")(?![A-Za-z])")
 
+# What may stand between a figure and its unit: the rest of a range ("–1.79"),
+# a bracketed range ("[1.76–1.79]"), a closing bracket -- as report.py writes
+# "median [min–max] ms".
+RANGE_TAIL_RE = re.compile(r"(?:\s?[–-]\s?[\d.,eE+−-]+)?\]?(?:\s?\[[\d.,eE+−\s–-]+\])?")
+
 CITE_RE = re.compile(
     r"(?i)(?:\b(?:sec|secs|section|sections|fig|figs|figure|figures|eq|eqs|equation|equations|"
     r"p|pp|page|pages|table|tables|chapter|chapters|ch|issue|issues)\.?|§|#)\s*"
@@ -457,6 +462,10 @@ def main():
             le = raw.find("\n", start)
             context = raw[line_starts[line - 1]:le if le >= 0 else len(raw)].strip()
             unit = UNIT_RE.match(text, end)
+            if not unit:  # "1.79 [1.76–1.79] ms", "1.76–1.79] ms": the unit after a range or a bracket
+                tail = RANGE_TAIL_RE.match(text, end)
+                if tail:
+                    unit = UNIT_RE.match(text, tail.end())
             unit_s = unit.group(1) if unit else ""
             fig = m.group(0) + (" " + unit_s if unit_s else "")
             rule = rule_for(text, m)
