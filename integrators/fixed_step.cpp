@@ -1,5 +1,5 @@
 // Fixed-step integrators written in the project: forward Euler, classical RK4,
-// and Adams-Bashforth of orders 2-4 (the paper's method).
+// and Adams-Bashforth of orders 2-4 (the paper's integrator family; it does not give the order).
 //
 // Adams-Bashforth history: the first k-1 steps after every (re)start are
 // taken with RK4, whose derivatives seed the history; a reset (after a
