@@ -206,8 +206,8 @@ def stiffness_section(folder, rel):
                 cells.append(f"{float(rm[0]['predicted_s']):.3g} / {float(rm[0]['measured_s']):.3g}" if rm else "")
             out.append(f"| {c} | {float(r0['spectral_radius']):.4g} | {float(r0['stiffness_ratio']):.3g} | "
                        f"{r0['fastest_state']} (tau {float(r0['fastest_tau_s']):.3g} s) | " + " | ".join(cells) + " |")
-        ratios = [(float(r["measured_s"]) / float(r["predicted_s"]), r["integrator"], r["case"]) for r in rows
-                  if float(r["predicted_s"]) > 0 and float(r["measured_s"]) > 0]
+        ratios = [(float(r["measured_over_predicted"]), r["integrator"], r["case"]) for r in rows
+                  if r.get("measured_over_predicted")]
         if ratios:
             lo, hi = min(ratios), max(ratios)
             near = sum(1 for x, _, _ in ratios if abs(x - 1) <= 0.05)

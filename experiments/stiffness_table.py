@@ -198,8 +198,11 @@ def main():
         for case, sets in (cases[:1] if args.reduced else cases):
             info, steps = analyse(scene, sets, 0.02 if args.reduced else T_END)
             for s in steps:
+                p, m = float(s["predicted [s]"]), float(s["measured [s]"])
                 rows.append({"case": case, **info, "integrator": s["integrator"],
-                             "predicted_s": s["predicted [s]"], "measured_s": s["measured [s]"], "note": s["note"]})
+                             "predicted_s": s["predicted [s]"], "measured_s": s["measured [s]"],
+                             "measured_over_predicted": f"{m / p:.4g}" if p > 0 and m > 0 else "",
+                             "note": s["note"]})
             print(f"{scene} {case}: spectral radius {info['spectral_radius']} 1/s", flush=True)
         path = os.path.join(out, scene + ".csv")
         with open(path + ".tmp", "w", newline="") as f:

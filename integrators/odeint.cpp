@@ -44,6 +44,7 @@
 #include <boost/numeric/odeint.hpp>
 
 #include "integrators/integrator.hpp"
+#include "integrators/rosenbrock_coefficients.hpp"
 #include "integrators/registry_entries.hpp"
 
 namespace pumasim {
@@ -296,29 +297,6 @@ class Dopri5 final : public OdeintBase {
   double t_old_ = 0, t_new_ = 0;
   bool have_f_ = false;
   Stepper stepper_;
-};
-
-// odeint's rosenbrock4 table with d_i = gamma_i = sum_j gamma_ij recomputed
-// from the table's own transformed coefficients (see the top of this file):
-// s = Gamma 1 solves (I/gamma - C) s = 1, C strictly lower triangular (c_ij),
-// i.e. s_i = gamma (1 + sum_{j<i} c_ij s_j). The members shadow the base's.
-template <class Value>
-struct ConsistentRosenbrockCoefficients : odeint::default_rosenbrock_coefficients<Value> {
-  using Base = odeint::default_rosenbrock_coefficients<Value>;
-  ConsistentRosenbrockCoefficients()
-      : d1(row_sum(0)), d2(row_sum(1)), d3(row_sum(2)), d4(row_sum(3)) {}
-  Value row_sum(int i) const {
-    const Base& b = *this;
-    const Value c[4][3] = {{0, 0, 0}, {b.c21, 0, 0}, {b.c31, b.c32, 0}, {b.c41, b.c42, b.c43}};
-    Value s[4];
-    for (int r = 0; r <= i; ++r) {
-      Value acc = 1;
-      for (int j = 0; j < r; ++j) acc += c[r][j] * s[j];
-      s[r] = b.gamma * acc;
-    }
-    return s[i];
-  }
-  const Value d1, d2, d3, d4;
 };
 
 class Rosenbrock4 final : public OdeintBase {

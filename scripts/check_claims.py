@@ -85,7 +85,7 @@ import tomllib
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 DEFAULT_ALLOW = os.path.join("scripts", "claims_allow.toml")
 DEFAULT_DOCS = ["README.md", "results/README.md"]
-CORPUS_EXT = (".csv", ".json", ".md", ".txt", ".toml")
+CORPUS_EXT = (".csv", ".tsv", ".json", ".md", ".txt", ".toml")
 
 # A number as written in the documents: thousands separators, decimals,
 # scientific notation (e or a "10^k" power).
@@ -288,7 +288,7 @@ def load_file(path, fid, corpus, skip_keys=()):
     ext = os.path.splitext(path)[1].lower()
     with open(path, encoding="utf-8", errors="replace") as f:
         text = f.read()
-    if ext == ".csv":
+    if ext in (".csv", ".tsv"):
         body = []
         for line in text.splitlines(keepends=True):
             if line.startswith("#"):
@@ -296,7 +296,7 @@ def load_file(path, fid, corpus, skip_keys=()):
                     corpus.add(v, fid)
             else:
                 body.append(line)
-        for row in csv.reader(io.StringIO("".join(body))):
+        for row in csv.reader(io.StringIO("".join(body)), delimiter="\t" if ext == ".tsv" else ","):
             for field in row:
                 try:
                     corpus.add(float(field), fid)
@@ -486,6 +486,17 @@ def main():
             cited_hit = next((h for h in (corpus.find_in(v, hf, cited) for v, hf in cands) if h), None)
             if cited_hit and sig > 2:
                 figures.append((drel, line, fig, "backed", f"{fids[cited_hit[1]]} ({cited_hit[0]:.6g}; cited)", context))
+                continue
+            if cited and sig > 2 and not cited_hit:
+                # A figure of three or more digits in a section that names its
+                # results files must be in one of them: a match elsewhere is
+                # most likely a coincidence (a wrong 0.520 for 0.502 is found
+                # somewhere among 10^5 stored values).
+                ihit = next((h for h in (inputs.find(v, exact_half(v)) for v, hf in cands) if h), None)
+                if ihit:
+                    figures.append((drel, line, fig, "input", f"{in_ids[ihit[1]]} ({ihit[0]:.6g})", context))
+                else:
+                    figures.append((drel, line, fig, "UNBACKED", "not in the files its section names", context))
                 continue
             hit = next((h for h in (corpus.find(v, exact_half(v), exclude=doc_fid) for v, hf in cands) if h), None)
             if hit:

@@ -31,5 +31,10 @@ done
 /usr/bin/python3 experiments/observed_order.py
 /usr/bin/python3 experiments/testset.py
 /usr/bin/python3 experiments/output_grid.py
+# rosenbrock4's error estimate against its true local error (README, "Is the instrument right?")
+for lam in -1050 -1e4; do
+  build/release/bin/rosenbrock_local_error "$lam" > "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp"
+  mv "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp" "results/testset/rosenbrock_local_error_lambda$lam.tsv"
+done
 minutes=$(( ($(date +%s) - start + 30) / 60 ))
 /usr/bin/python3 experiments/report.py --minutes "$minutes"
