@@ -60,6 +60,16 @@ RunOutcome solve(const IntegratorInfo& info, const IntegratorOptions& o) {
   return {error_at(integ->state(), kT), integ->stats().steps};
 }
 
+// The least-squares slope of y against x.
+double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  double mx = 0, my = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) mx += x[k] / n, my += y[k] / n;
+  double sxy = 0, sxx = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) sxy += (x[k] - mx) * (y[k] - my), sxx += (x[k] - mx) * (x[k] - mx);
+  return sxy / sxx;
+}
+
 IntegratorOptions with_dt(double dt) {
   IntegratorOptions o;
   o.dt = dt;
@@ -96,7 +106,7 @@ TEST_P(Conformance, RegistryEntryDescribesTheMethod) {
 // Fixed step: the error at T falls as dt^p, p the registry's order (within
 // 0.3, on dt = 0.02 -> 0.01 -> 0.005). Adaptive: over rtol 1e-5 ... 1e-9, the
 // least-squares slope of -log(error) against log(steps) is at least the
-// order - 1 (variable-order methods: at least 2), i.e. clearly above first order.
+// order - 0.5 (variable-order methods: at least 2).
 TEST_P(Conformance, ConvergesAtItsOrderOnProtheroRobinson) {
   const IntegratorInfo& i = info();
   if (i.kind == IntegratorKind::kFixedStep) {
@@ -112,13 +122,11 @@ TEST_P(Conformance, ConvergesAtItsOrderOnProtheroRobinson) {
     lx.push_back(std::log(static_cast<double>(r.steps)));
     ly.push_back(-std::log(r.error));
   }
-  const double n = static_cast<double>(lx.size());
-  double mx = 0, my = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) mx += lx[k] / n, my += ly[k] / n;
-  double sxy = 0, sxx = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) sxy += (lx[k] - mx) * (ly[k] - my), sxx += (lx[k] - mx) * (lx[k] - mx);
-  const double slope = sxy / sxx;
-  const double least = i.variable_order ? 2.0 : i.order - 1.0;
+  const double slope = least_squares_slope(lx, ly);
+  // Halfway between p and p - 1: a method that lost one order fails (the
+  // first version accepted p - 1, which a wrong coefficient costing one order
+  // would have passed).
+  const double least = i.variable_order ? 2.0 : i.order - 0.5;
   EXPECT_GE(slope, least) << i.name << ": observed order " << slope << " (steps " << std::exp(lx.front()) << " ... "
                           << std::exp(lx.back()) << ")";
   EXPECT_LE(slope, i.order + 2.0) << i.name << ": observed order " << slope;
@@ -298,12 +306,7 @@ TEST_P(PlantConformanceP, ConvergesAtItsOrderOnTheSmoothPlant) {
     lx.push_back(std::log(static_cast<double>(steps)));
     ly.push_back(-std::log(e));
   }
-  const double n = static_cast<double>(lx.size());
-  double mx = 0, my = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) mx += lx[k] / n, my += ly[k] / n;
-  double sxy = 0, sxx = 0;
-  for (std::size_t k = 0; k < lx.size(); ++k) sxy += (lx[k] - mx) * (ly[k] - my), sxx += (lx[k] - mx) * (lx[k] - mx);
-  const double slope = sxy / sxx;
+  const double slope = least_squares_slope(lx, ly);
   EXPECT_GE(slope, i.variable_order ? 2.0 : i.order - 1.0)
       << i.name << ": observed order " << slope << " (steps " << std::exp(lx.front()) << " ... " << std::exp(lx.back())
       << ")";
