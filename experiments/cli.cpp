@@ -598,8 +598,8 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   write_run_folder(dir, {{"trajectory.csv", csv.str()}, {"stats.json", js.str()}, {"meta.json", meta.str()},
                          {"scene.resolved.toml", resolved_toml(sc)}},
                    force);
-  out << js.str();
-  out << "results: " << dir.string() << "/\n";
+  out << js.str();  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
+  err << "results: " << dir.string() << "/\n";
   if (!r.ok) err << "pumasim run: " << r.failure << "\n";
   return r.ok ? kExitOk : kExitInternal;
 }

@@ -49,7 +49,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       res.ok = false;
       res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
                     " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-                    fastest_component(sys, t, xs);
+                    fastest_component(sys, t, xs) + " (pumasim run --max-steps N raises the budget; 0: none)";
       break;
     }
     const bool output_now = t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps;

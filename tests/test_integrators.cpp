@@ -516,6 +516,11 @@ TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, 21);  // t = 0, 0.01, ..., 0.2
   EXPECT_NE(out.str().find("\"ok\": true"), std::string::npos) << out.str();
+  // stdout is the JSON document alone (one object, nothing after it), so that
+  // `pumasim run ... | jq` works; where it went is said on stderr.
+  EXPECT_EQ(out.str().front(), '{') << out.str();
+  EXPECT_EQ(out.str().substr(out.str().size() - 2), "}\n") << out.str();
+  EXPECT_NE(err.str().find("results: " + dir.string() + "/"), std::string::npos) << err.str();
   EXPECT_TRUE(std::filesystem::exists(dir / ".pumasim-run"));
 
   auto bad = [&](std::vector<std::string> args, const std::string& fragment) {
