@@ -32,6 +32,7 @@ namespace pumasim {
 namespace {
 
 constexpr long kDefaultStepBudget = 10'000'000;  // pumasim run --max-steps
+constexpr double kDefaultWallBudget = 600.0;      // [s], pumasim run --max-wall
 
 // Bad command-line input; becomes one line on stderr and exit status 2.
 class UsageError : public std::runtime_error {
@@ -50,14 +51,17 @@ constexpr const char* kUsage =
     "      checks a scene; prints it resolved (every default filled in), its state\n"
     "      layout and initial state\n"
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR [--force]] [--exact-jacobian] [--max-steps N]\n"
+    "      [--t-end X] [--out DIR [--force]] [--exact-jacobian] [--max-steps N] [--max-wall S]\n"
     "      [--late-events | --stop-at-outputs]\n"
     "      [--set section.key=value ...]\n"
     "      runs a scene and writes DIR (default runs/<scene name>/): trajectory.csv,\n"
     "      stats.json, scene.resolved.toml, meta.json, all at once at the end. DIR must be\n"
     "      new, or a pumasim run folder holding only what pumasim wrote, replaced only with\n"
     "      --force: pumasim never deletes what it did not write. More than N steps in all\n"
-    "      (default 10000000; 0: no limit) end the run as a reported failure.\n"
+    "      (default 10000000; 0: no limit), or more than S seconds of wall-clock time\n"
+    "      (--max-wall, default 600; 0: no limit), end the run as a reported failure; a\n"
+    "      scene whose controller samples or set-point updates alone exceed the step\n"
+    "      budget is refused before it runs.\n"
     "      --atol is per unit of each state's typical magnitude: angles 1 rad, speeds\n"
     "      1 rad/s, currents the stall current at full command, PIV integrals their\n"
     "      full range, energies 1 J (stats.json lists the resulting atol per state).\n"
@@ -336,7 +340,7 @@ std::string shell_line(const char* cmd) {
 
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   const Options opt = Options::parse(args, 2, {"set", "integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
-                                               "max-steps"},
+                                               "max-steps", "max-wall"},
                                      {"exact-jacobian", "late-events", "stop-at-outputs", "force"});
   Scene sc = scene_argument(args, opt);
   if (auto b = opt.get("backend")) {
@@ -376,6 +380,13 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     max_steps = static_cast<long>(v);
   }
   if (max_steps > 0) io.max_steps = max_steps;  // also each integrator's own per-call limit
+  // A wall-clock budget too: the step budget's time depends on the method
+  // (an implicit step on six joints costs a hundred explicit ones).
+  double max_wall = kDefaultWallBudget;
+  if (auto w = opt.get("max-wall")) {
+    max_wall = parse_double(*w, "--max-wall");
+    if (!(max_wall >= 0)) throw UsageError("--max-wall: expected seconds >= 0 (0: no limit)");
+  }
   if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
   if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
   // The output rows are held in memory until the run ends (then written at
@@ -386,6 +397,24 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
     m << "scene.duration / scene.output_interval: expected at most " << kMaxOutputRows
       << " output rows (a longer output_interval, or a shorter duration), got " << rows;
     throw UsageError(m.str());
+  }
+  // Every controller sample and set-point update is a stop, so at least one
+  // step: a period so small that they alone exceed the step budget is refused
+  // up front (a 1e-12 s servo period ground through 10 million steps first).
+  if (max_steps > 0) {
+    auto too_many = [&](const char* key, double period) {
+      if (!(period > 0)) return;
+      const double stops = sc.duration / period;
+      if (stops > static_cast<double>(max_steps)) {
+        std::ostringstream m;
+        m << key << ": " << period << " s over " << sc.duration << " s is " << stops
+          << " stops, more than the step budget of " << max_steps
+          << " steps (--max-steps N raises it; a longer period or a shorter duration)";
+        throw UsageError(m.str());
+      }
+    };
+    if (sc.plant.controller == ControllerMode::kSampled) too_many("controller.servo_period", sc.plant.servo_period);
+    too_many("controller.setpoint_interval", sc.plant.setpoint_interval);
   }
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const std::filesystem::path dir = opt.get("out") ? std::filesystem::path(*opt.get("out")) : "runs" / std::filesystem::path(sc.name);
@@ -443,7 +472,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
-  }, max_steps, stops);
+  }, max_steps, stops, max_wall);
   double max_err = 0, sum_sq = 0, max_dev = 0, sum_sq_dev = 0;
   long samples = 0, rows = 0;
   // Drive signals at the outputs: peaks, and the outputs at which the

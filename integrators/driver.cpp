@@ -8,7 +8,7 @@
 namespace pumasim {
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps, Stops stops) {
+                    const Observer& observe, long max_steps, Stops stops, double max_wall) {
   const auto start = std::chrono::steady_clock::now();
   PlantSystem sys(plant);
   std::vector<double> x(plant.size()), xo(plant.size());
@@ -45,6 +45,13 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     // The state is copied only where the plant may change it (an event) or
     // an output at this instant reads it, not after every step.
     const double* xs = integrator.state();
+    if (max_wall > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > max_wall) {
+      res.ok = false;
+      res.failure = std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) +
+                    " s exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
+                    fastest_component(sys, t, xs) + " (pumasim run --max-wall S raises the budget; 0: none)";
+      break;
+    }
     if (max_steps > 0 && integrator.stats().steps > max_steps) {
       res.ok = false;
       res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +

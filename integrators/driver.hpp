@@ -56,8 +56,11 @@ enum class Stops {
 // Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
 // every multiple of output_interval reached. An output at an event's instant
 // sees the state after the event. A run that needs more than max_steps steps
-// in all (0: no limit) ends as a reported failure.
+// in all (0: no limit) ends as a reported failure; so does one still running
+// after max_wall seconds of wall-clock time (0: no limit), checked after each
+// step (one step of any method is bounded: it either succeeds or fails).
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents);
+                    const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents,
+                    double max_wall = 0);
 
 }  // namespace pumasim

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "experiments/cli.hpp"
 #include "integrators/driver.hpp"
 #include "integrators/integrator.hpp"
@@ -496,6 +498,31 @@ TEST(Imex, AgreesWithBdfOnThePlant) {
 
 // pumasim run: the four files, with the named columns; bad options exit 2 and
 // write nothing.
+// Every run ends within its budgets: a servo period whose samples alone
+// exceed the step budget is refused before running (exit 2, naming the key);
+// a run over its wall-clock budget ends as a reported failure naming the
+// time and a state component, its files written (the reliability issue: a
+// 1e-12 s period ground through 10 million steps, about 40 s, first).
+TEST(Run, EndsWithinItsBudgets) {
+  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_budget_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::ostringstream out, err;
+  EXPECT_EQ(run_cli({"run", std::string(PUMASIM_SCENES_DIR) + "/sampled_control.toml", "--set",
+                     "controller.mode=\"sampled\"", "--set", "controller.servo_period=1e-12", "--integrator", "rk4",
+                     "--t-end", "0.001", "--out", dir.string()}, out, err), kExitBadInput);
+  EXPECT_NE(err.str().find("controller.servo_period: 1e-12 s over 0.001 s"), std::string::npos) << err.str();
+  EXPECT_FALSE(std::filesystem::exists(dir));
+  // 24 s at 1 us steps is 24 million RK4 steps: far beyond 0.05 s on any machine.
+  std::ostringstream out2, err2;
+  EXPECT_EQ(run_cli({"run", std::string(PUMASIM_SCENES_DIR) + "/paper_slow_viscous.toml", "--integrator", "rk4",
+                     "--dt", "1e-6", "--max-steps", "0", "--max-wall", "0.05", "--out", dir.string()}, out2, err2),
+            kExitInternal);
+  EXPECT_NE(out2.str().find("wall-clock budget of 0.050000 s exhausted at t = "), std::string::npos) << out2.str();
+  EXPECT_NE(out2.str().find("fastest-changing component"), std::string::npos) << out2.str();
+  EXPECT_TRUE(std::filesystem::exists(dir / "stats.json"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
   const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
   const auto dir = std::filesystem::temp_directory_path() / "pumasim_run_test";
