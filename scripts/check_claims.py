@@ -303,16 +303,11 @@ def load_file(path, fid, corpus, skip_keys=()):
                 except ValueError:
                     for v in numbers_in(field, PLAIN_NUM_RE):
                         corpus.add(v, fid)
-    elif ext == ".json":
+    elif ext in (".json", ".toml"):  # structured: walk the values; unparsable: every number in the text
+        parse, error = (json.loads, json.JSONDecodeError) if ext == ".json" else (tomllib.loads, tomllib.TOMLDecodeError)
         try:
-            walk(json.loads(text), fid, corpus, skip_keys)
-        except json.JSONDecodeError:
-            for v in numbers_in(text, PLAIN_NUM_RE):
-                corpus.add(v, fid)
-    elif ext == ".toml":
-        try:
-            walk(tomllib.loads(text), fid, corpus, skip_keys)
-        except tomllib.TOMLDecodeError:
+            walk(parse(text), fid, corpus, skip_keys)
+        except error:
             for v in numbers_in(text, PLAIN_NUM_RE):
                 corpus.add(v, fid)
     elif ext == ".md":
