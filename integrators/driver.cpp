@@ -60,16 +60,17 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       break;
     }
     const bool output_now = t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps;
-    const bool event_now = o.status == Outcome::kRoot ||
-                           (t >= t_event - eps && (stop_at_events || t >= output_time() - eps));
-    if (!output_now && !event_now) continue;
+    // Time events due here: the one stopped at, or (late events) every one
+    // passed since the last output.
+    const bool time_event_now = t >= t_event - eps && (stop_at_events || t >= output_time() - eps);
+    if (!output_now && !time_event_now && o.status != Outcome::kRoot) continue;
     x.assign(xs, xs + plant.size());
     bool restart = false;
     if (o.status == Outcome::kRoot) {
       plant.on_root(o.root, t, x.data());
       ++res.root_events;
       restart = true;
-    } else if (t >= t_event - eps && (stop_at_events || t >= output_time() - eps)) {
+    } else if (time_event_now) {
       // Stopping at events, exactly one is due here; otherwise every event
       // passed since the last stop, each applied now (late).
       for (; t_event <= t + eps; t_event = plant.next_time_event(t_event)) {

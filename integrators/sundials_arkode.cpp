@@ -160,21 +160,11 @@ class Arkode final : public Integrator {
   double time() const override { return t_; }
   const double* state() const override { return N_VGetArrayPointer(y_); }
 
-  // ARKODE's interpolant is valid over its last internal step [tcur - hu, tcur].
   double step_start() const override {
-    double tcur = t_, hu = 0;
-    ARKStepGetCurrentTime(mem_, &tcur);
-    ARKStepGetLastStep(mem_, &hu);
-    return std::min(t_, tcur - hu);
+    return detail::last_step_start(mem_, t_, ARKStepGetCurrentTime, ARKStepGetLastStep);
   }
   void dense_state(double t, double* x) override {
-    if (t >= t_) {
-      std::copy(state(), state() + static_cast<int>(N_VGetLength_Serial(y_)), x);
-      return;
-    }
-    N_Vector v = N_VMake_Serial(N_VGetLength_Serial(y_), x, ctx_);
-    check(ARKStepGetDky(mem_, t, 0, v), "ARKStepGetDky");
-    N_VDestroy(v);
+    detail::interpolated_state(mem_, ARKStepGetDky, t, t_, y_, ctx_, x, "arkode", "ARKStepGetDky");
   }
 
  protected:

@@ -73,4 +73,30 @@ inline void check_flag(int flag, const char* module, const char* what) {
   }
 }
 
+// Both integrators' interpolant is valid over their last internal step
+// [tcur - hu, tcur]: its start, from their GetCurrentTime and GetLastStep.
+using GetReal = int (*)(void*, sunrealtype*);
+inline double last_step_start(void* mem, double t_reached, GetReal current_time, GetReal last_step) {
+  double tcur = t_reached, hu = 0;
+  current_time(mem, &tcur);
+  last_step(mem, &hu);
+  return std::min(t_reached, tcur - hu);
+}
+
+// The state at t into x: the current state at or past the time reached,
+// else SUNDIALS' interpolant (CVodeGetDky / ARKStepGetDky, derivative 0).
+using GetDky = int (*)(void*, sunrealtype, int, N_Vector);
+inline void interpolated_state(void* mem, GetDky get_dky, double t, double t_reached, N_Vector y, SUNContext ctx,
+                               double* x, const char* module, const char* what) {
+  const sunindextype n = N_VGetLength_Serial(y);
+  if (t >= t_reached) {
+    std::copy(N_VGetArrayPointer(y), N_VGetArrayPointer(y) + n, x);
+    return;
+  }
+  N_Vector v = N_VMake_Serial(n, x, ctx);
+  const int flag = get_dky(mem, t, 0, v);
+  N_VDestroy(v);
+  check_flag(flag, module, what);
+}
+
 }  // namespace pumasim::detail

@@ -115,21 +115,9 @@ class Cvode final : public Integrator {
     collect_stats();
     return out;
   }
-  // CVODE's interpolant is valid over its last internal step [tcur - hu, tcur].
-  double step_start() const override {
-    double tcur = t_, hu = 0;
-    CVodeGetCurrentTime(mem_, &tcur);
-    CVodeGetLastStep(mem_, &hu);
-    return std::min(t_, tcur - hu);
-  }
+  double step_start() const override { return detail::last_step_start(mem_, t_, CVodeGetCurrentTime, CVodeGetLastStep); }
   void dense_state(double t, double* x) override {
-    if (t >= t_) {
-      std::copy(state(), state() + n_, x);
-      return;
-    }
-    N_Vector v = N_VMake_Serial(n_, x, ctx_);
-    check(CVodeGetDky(mem_, t, 0, v), "CVodeGetDky");
-    N_VDestroy(v);
+    detail::interpolated_state(mem_, CVodeGetDky, t, t_, y_, ctx_, x, "cvode", "CVodeGetDky");
   }
 
   double time() const override { return t_; }
