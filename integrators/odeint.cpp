@@ -299,15 +299,18 @@ class Dopri5 final : public OdeintBase {
   Stepper stepper_;
 };
 
+// odeint's rosenbrock4 stepper and controller with a RODAS-form coefficient
+// set (integrators/rosenbrock_coefficients.hpp).
+template <class Coefficients>
 class Rosenbrock4 final : public OdeintBase {
   using Vec = boost::numeric::ublas::vector<double>;
   using Mat = boost::numeric::ublas::matrix<double>;
-  using Method = odeint::rosenbrock4<double, ConsistentRosenbrockCoefficients<double>>;
+  using Method = odeint::rosenbrock4<double, Coefficients>;
   using Stepper = odeint::rosenbrock4_controller<Method>;
 
  public:
-  using OdeintBase::OdeintBase;
-  const char* name() const override { return "odeint-rosenbrock4"; }
+  Rosenbrock4(const IntegratorOptions& o, const char* name) : OdeintBase(o), name_(name) {}
+  const char* name() const override { return name_; }
   IntegratorCapabilities capabilities() const override {
     IntegratorCapabilities c;
     c.adaptive = true;
@@ -398,6 +401,7 @@ class Rosenbrock4 final : public OdeintBase {
     t_old_ = t0, t_new_ = t1;
     for (std::size_t i = 0; i < x_.size(); ++i) x_[i] = s_[i] * y_[i];
   }
+  const char* name_;
   Vec y_, y_old_, yd_;                     // the state integrated (x / s); the step's start; scratch
   std::vector<double> x_, s_;              // x = s y, and the scales
   double t_old_ = 0, t_new_ = 0;
@@ -413,7 +417,10 @@ std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions& o) { ret
 // rosenbrock4 always uses the system's Jacobian (exact for the plant; for a
 // system without one, OdeSystem's forward differences).
 std::unique_ptr<Integrator> make_odeint_rosenbrock4(const IntegratorOptions& o) {
-  return std::make_unique<Rosenbrock4>(o);
+  return std::make_unique<Rosenbrock4<ConsistentRosenbrockCoefficients<double>>>(o, "odeint-rosenbrock4");
+}
+std::unique_ptr<Integrator> make_odeint_rodas4p(const IntegratorOptions& o) {
+  return std::make_unique<Rosenbrock4<Rodas4PCoefficients<double>>>(o, "odeint-rodas4p");
 }
 }  // namespace detail
 

@@ -97,7 +97,7 @@ namespace {
 // output is ARKODE's Hermite interpolant, degree 3 by default).
 constexpr auto F = IntegratorKind::kFixedStep;
 constexpr auto A = IntegratorKind::kAdaptive;
-constexpr std::array<IntegratorInfo, 12> kIntegrators{{
+constexpr std::array<IntegratorInfo, 13> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4},
@@ -114,6 +114,10 @@ constexpr std::array<IntegratorInfo, 12> kIntegrators{{
     {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1},
     {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
      false, false, 0, 0.0, 4},
+    {"odeint-rodas4p",
+     "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order reduction), "
+     "adaptive, linearly implicit, the system's Jacobian",
+     &detail::make_odeint_rodas4p, A, 4, false, true, 0, 0.0, 3},
     {"odeint-rosenbrock4",
      "Boost.Odeint Rosenbrock 4 (coefficients made consistent: d4 = -0.0362), adaptive, linearly implicit, the "
      "system's Jacobian",

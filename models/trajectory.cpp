@@ -257,9 +257,11 @@ void Reference::build_joint_spline(int M) {
   }
 }
 
-void Reference::eval_joint_space(double t, ReferenceSample& out, int segment) const {
+void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bool extend) const {
   const double T = timing_.duration();
-  const double tc = std::clamp(t, 0.0, T);
+  // A moving piece continued past its ends (extend), or t within [0, T].
+  const bool continued = extend && segment >= 0 && segment < std::ssize(breakpoints_);
+  const double tc = continued ? t : std::clamp(t, 0.0, T);
   // The piece [t_k, t_k+1) holding tc (or the segment's); the last one also holds T.
   const auto after = std::upper_bound(knots_.begin(), knots_.end(), tc) - knots_.begin();
   const std::size_t k =
@@ -330,16 +332,17 @@ void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen:
     for (int c = 0; c < 6; ++c) Jdot(r, c) = JJ(r, c).deriv();
 }
 
-void Reference::eval(double t, ReferenceSample& out, int segment) const {
+void Reference::eval(double t, ReferenceSample& out, int segment, bool extend) const {
   const int m = static_cast<int>(breakpoints_.size());
   const bool inside = segment >= 0 && segment <= m &&
-                      (segment == 0 || t >= breakpoints_[static_cast<std::size_t>(segment - 1)] - seg_tol_) &&
-                      (segment == m || t <= breakpoints_[static_cast<std::size_t>(segment)] + seg_tol_);
+                      (extend ||
+                       ((segment == 0 || t >= breakpoints_[static_cast<std::size_t>(segment - 1)] - seg_tol_) &&
+                        (segment == m || t <= breakpoints_[static_cast<std::size_t>(segment)] + seg_tol_)));
   if (!inside) segment = -1;
   if (interp_ == Interpolation::kCartesian) {
     eval_cartesian(t, out, segment);
   } else {
-    eval_joint_space(t, out, segment);
+    eval_joint_space(t, out, segment, extend);
   }
 }
 

@@ -88,7 +88,10 @@ class Reference {
   // formula is evaluated, so that at a breakpoint the value is the limit from
   // inside the segment: a step that ends there sees the left limit, one that
   // starts there the right limit. Otherwise the segment is found from t.
-  void eval(double t, ReferenceSample& out, int segment = -1) const;
+  // With extend, the segment's formula is evaluated at any t (its smooth
+  // continuation past the piece's ends, for differences in t that must not see
+  // a kink; the caller keeps t near the piece).
+  void eval(double t, ReferenceSample& out, int segment = -1, bool extend = false) const;
   // The segment a step starting at t lies in: the number of breakpoints <= t
   // (to rounding).
   int segment_after(double t) const;
@@ -104,7 +107,7 @@ class Reference {
 
  private:
   void eval_cartesian(double t, ReferenceSample& out, int segment) const;
-  void eval_joint_space(double t, ReferenceSample& out, int segment) const;
+  void eval_joint_space(double t, ReferenceSample& out, int segment, bool extend) const;
   void build_joint_spline(int segments);
   // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;

@@ -335,6 +335,64 @@ TEST(Plant, FiniteDifferenceAndExactJacobiansAgree) {
   }
 }
 
+// df/dt (what Rosenbrock methods multiply by h d_i) is the limit of difference
+// quotients in t on the side a step lies: inside a smooth piece the central
+// quotient's error falls like h^2; at a breakpoint, after the time event,
+// the forward quotient's error falls like h, while at some breakpoint the
+// backward quotient (which sees the previous piece) does not converge to it.
+// The saturations are lifted so that (t, x) stays on one side of their kinks.
+TEST(Plant, TimeDerivativeIsTheLimitOfDifferenceQuotientsOnTheStepsSide) {
+  const Scene sc = load_scene(scene_path("paper_slow_viscous"),
+                              {"amplifier.voltage_limit=1e9", "controller.output_limit=1e9"});
+  Plant plant(sc.plant);
+  const int m = plant.size();
+  std::vector<double> x(m), ft(m), fa(m), fb(m);
+  plant.initial_state(x.data());
+  const StateLayout& L = plant.layout();
+  x[L.qd + 0] = 0.1, x[L.qd + 1] = -0.2, x[L.i + 1] += 0.3;
+  const auto& bp = sc.plant.reference->breakpoints();
+  ASSERT_GE(bp.size(), 2u);
+  auto max_diff = [&](double t0, double t1, double h) {  // |(f(t1) - f(t0)) / h - df/dt|, max over states
+    plant.rhs(t0, x.data(), fa.data());
+    plant.rhs(t1, x.data(), fb.data());
+    double e = 0;
+    for (int r = 0; r < m; ++r) e = std::max(e, std::abs((fb[r] - fa[r]) / h - ft[r]));
+    return e;
+  };
+  // Inside the first piece.
+  const double t = 0.5 * bp[0];
+  plant.time_derivative(t, x.data(), ft.data());
+  double scale = 0;
+  for (double v : ft) scale = std::max(scale, std::abs(v));
+  ASSERT_GT(scale, 0);
+  std::vector<double> central;
+  for (double h = 2e-2; h > 1e-3; h /= 2) central.push_back(max_diff(t - h, t + h, 2 * h));
+  for (std::size_t k = 0; k + 1 < central.size(); ++k) {
+    EXPECT_GT(central[k] / central[k + 1], 3.5) << "h^2: ratio near 4";
+    EXPECT_LT(central[k] / central[k + 1], 4.5);
+  }
+  EXPECT_LT(central.back(), 1e-6 * scale);
+  // At each breakpoint, the piece after it.
+  double worst_backward = 0;
+  for (const double b : bp) {
+    if (b >= sc.plant.reference->timing().duration()) break;
+    plant.on_time_event(b, x.data());
+    plant.time_derivative(b, x.data(), ft.data());
+    std::vector<double> forward;
+    double backward = 0;
+    for (double h = 1e-3; h > 1e-5; h /= 2) {
+      forward.push_back(max_diff(b, b + h, h));
+      backward = max_diff(b - h, b, h);
+    }
+    for (std::size_t k = 0; k + 1 < forward.size(); ++k) {
+      EXPECT_GT(forward[k] / forward[k + 1], 1.7) << "h: ratio near 2, breakpoint " << b;
+      EXPECT_LT(forward[k] / forward[k + 1], 2.3) << "breakpoint " << b;
+    }
+    worst_backward = std::max(worst_backward, backward / forward.back());
+  }
+  EXPECT_GT(worst_backward, 100);
+}
+
 TEST(Plant, StateLayoutHasOnlyTheIncludedBlocks) {
   auto names = [](const std::string& scene) {
     Plant p(load_scene(scene_path(scene)).plant);
