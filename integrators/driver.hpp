@@ -24,10 +24,7 @@ class PlantSystem final : public OdeSystem {
   void rhs(double t, const double* x, double* xdot) override { p_.rhs(t, x, xdot); }
   void jacobian(double t, const double* x, Eigen::MatrixXd& J) override { p_.jacobian_exact(t, x, J); }
   bool has_exact_jacobian() const override { return true; }
-  bool time_derivative(double t, const double* x, double* dfdt) override {
-    p_.time_derivative(t, x, dfdt);
-    return true;
-  }
+  int time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
   void rhs_split(double t, const double* x, double* fe, double* fi) override { p_.rhs_split(t, x, fe, fi); }
   std::string state_name(int i) const override { return p_.layout().names[static_cast<std::size_t>(i)]; }
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }

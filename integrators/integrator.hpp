@@ -24,10 +24,12 @@ class OdeSystem {
   virtual void jacobian(double t, const double* x, Eigen::MatrixXd& J);
   virtual bool has_exact_jacobian() const { return false; }
   // The explicit time dependence df/dt at (t, x), for the methods that use it
-  // (Rosenbrock): false if the system does not provide it, and the method
-  // then takes a difference in t. Problems with a known df/dt (Prothero-
-  // Robinson) supply it, so a method's order is tested without that noise.
-  virtual bool time_derivative(double /*t*/, const double* /*x*/, double* /*dfdt*/) { return false; }
+  // (Rosenbrock). Returns the number of right-hand-side evaluations it cost
+  // (0 for a closed form; the integrator adds them to its count), or -1 if the
+  // system does not provide it, and the method then takes a difference in t.
+  // Problems with a known df/dt (Prothero-Robinson) supply it, so a method's
+  // order is tested without that noise.
+  virtual int time_derivative(double /*t*/, const double* /*x*/, double* /*dfdt*/) { return -1; }
   // IMEX split f = fe + fi (fe explicit, fi implicit). The default puts all of
   // f in the implicit part; systems with a natural split override it.
   virtual void rhs_split(double t, const double* x, double* fe, double* fi) {

@@ -342,7 +342,9 @@ class Rosenbrock4 final : public OdeintBase {
       for (int r = 0; r < n; ++r)
         for (int c = 0; c < n; ++c) J(r, c) = Jd_(r, c) * s_[c] / s_[r];
       // The explicit time dependence: the system's own, or a forward difference in t.
-      if (!sys_->time_derivative(t, xt_.data(), f1_.data())) {
+      if (const int cost = sys_->time_derivative(t, xt_.data(), f1_.data()); cost >= 0) {
+        stats_.rhs_evaluations += cost;
+      } else {
         const double dt = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(t));
         sys_->rhs(t, xt_.data(), f0_.data());
         sys_->rhs(t + dt, xt_.data(), f1_.data());

@@ -119,7 +119,8 @@ constexpr std::array<IntegratorInfo, 13> kIntegrators{{
      "adaptive, linearly implicit, the system's Jacobian",
      &detail::make_odeint_rodas4p, A, 4, false, true, 0, 0.0, 3},
     {"odeint-rosenbrock4",
-     "Boost.Odeint Rosenbrock 4 (coefficients made consistent: d4 = -0.0362), adaptive, linearly implicit, the "
+     "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; order "
+     "4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly implicit, the "
      "system's Jacobian",
      &detail::make_odeint_rosenbrock4, A, 4, false, true, 0, 0.0, 3},
     {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4, F, 4, false, false, 4, 2.785293563405282,

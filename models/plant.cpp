@@ -323,30 +323,38 @@ void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
   }
 }
 
-void Plant::time_derivative(double t, const double* x, double* dfdt) {
+int Plant::time_derivative(double t, const double* x, double* dfdt) {
   const int m = layout_.size;
-  const bool depends_on_t = cfg_.reference && cfg_.setpoint_interval == 0 && cfg_.controller != ControllerMode::kNone;
-  if (!depends_on_t) {  // a held set-point, or no reference: f(x) alone
+  // A sampled controller holds its output and a held set-point holds the
+  // reference: then f does not depend on t.
+  const bool depends_on_t =
+      cfg_.reference && cfg_.setpoint_interval == 0 && cfg_.controller == ControllerMode::kContinuous;
+  if (!depends_on_t) {
     std::fill(dfdt, dfdt + m, 0.0);
-    return;
+    return 0;
   }
   // Forward, so that the first step of a run (t = 0) and of a piece look only
-  // into the piece; its formula continued past the piece's end, so that a
-  // step that starts just before a breakpoint does not see it. Truncation
-  // O(d^4), rounding about eps |f| / d. Rosenbrock methods multiply df/dt by
-  // h d_i in every stage, and their step control is sensitive to its error:
-  // measured while this was written, odeint-rodas4p on paper_slow_viscous at
-  // rtol 1e-8 took about the same number of steps for d from 1e-3 s to 1e-5 s,
-  // and three times as many with the first-order forward difference of step
-  // sqrt(eps) max(1, t) that the odeint adapter falls back on.
-  constexpr double d = 1e-4;  // [s]
-  extend_piece_ = true;
+  // into the piece; f(t) too on the continued piece (at t = 0 or a breakpoint
+  // the reference itself may jump: a joint spline's acceleration at the start
+  // of the motion); the piece continued past its end, so that a step that
+  // starts just before a breakpoint does not see it. Truncation O(d^2),
+  // rounding about eps |f| / d. Rosenbrock methods multiply df/dt by h d_i in
+  // every stage and their step control is sensitive to its error: measured
+  // while this was written, odeint-rodas4p on paper_slow_viscous at rtol 1e-8
+  // took about the same number of steps with this, with a fourth-order
+  // difference, and with d from 1e-3 s to 1e-5 s, and three times as many with
+  // a first-order forward difference of step sqrt(eps) max(1, t).
+  constexpr double d = 1e-5;  // [s]
+  struct Continued {  // the continued piece for the duration of the difference, even on a throw
+    explicit Continued(Plant& p) : p_(p) { p_.extend_piece_ = true, p_.ref_time_ = std::nan(""); }
+    ~Continued() { p_.extend_piece_ = false, p_.ref_time_ = std::nan(""); }  // the cache held a continued piece
+    Plant& p_;
+  } continued(*this);
   rhs(t, x, dfdt);
-  for (int k = 0; k < 4; ++k) rhs(t + (k + 1) * d, x, ft_[k].data());
-  for (int r = 0; r < m; ++r)
-    dfdt[r] = (-25 * dfdt[r] + 48 * ft_[0][r] - 36 * ft_[1][r] + 16 * ft_[2][r] - 3 * ft_[3][r]) / (12 * d);
-  extend_piece_ = false;
-  ref_time_ = std::numeric_limits<double>::quiet_NaN();  // the cache held a continued piece
+  rhs(t + d, x, ft_[0].data());
+  rhs(t + 2 * d, x, ft_[1].data());
+  for (int r = 0; r < m; ++r) dfdt[r] = (-3 * dfdt[r] + 4 * ft_[0][r] - ft_[1][r]) / (2 * d);
+  return 3;
 }
 
 double Plant::next_time_event(double t) const {

@@ -104,11 +104,12 @@ class Plant {
   // df/dx by forward differences (relative step sqrt(eps)) and exactly (dual numbers).
   void jacobian_fd(double t, const double* x, Eigen::MatrixXd& J);
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
-  // df/dt at (t, x): f depends on t only through the reference, whose smooth
-  // piece since the last time event is held for the difference (so that it
-  // never straddles a breakpoint): a fourth-order one-sided difference
-  // forward in t. Allocation-free.
-  void time_derivative(double t, const double* x, double* dfdt);
+  // df/dt at (t, x): f depends on t only through a continuously followed
+  // reference, whose smooth piece since the last time event is continued for
+  // the difference (so that it never straddles a breakpoint): a second-order
+  // one-sided difference forward in t. Returns the right-hand sides it took
+  // (0 when f does not depend on t). Allocation-free.
+  int time_derivative(double t, const double* x, double* dfdt);
 
   // Time events: controller samples and set-point updates. The next event time
   // strictly after t (+inf if none); at such a time, update the discrete state.
@@ -173,7 +174,7 @@ class Plant {
   std::vector<double> u_held_, integral_;
   std::vector<SlipMode> mode_;
   std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
-  std::vector<double> ft_[4];        // time_derivative scratch
+  std::vector<double> ft_[2];        // time_derivative scratch
   bool extend_piece_ = false;        // inside time_derivative: the reference piece continued past its ends
   bool friction_on_ = true;          // off only inside rhs_split
   bool needs_bias_ = false;          // paper or Karnopp friction: the applied torque needs h

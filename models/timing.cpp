@@ -160,7 +160,7 @@ void Timing::eval(double t, double& s, double& sd, double& sdd) const {
 }
 
 int Timing::piece(double t) const {
-  if (pieces_.empty()) return 0;
+  if (pieces_.empty()) return t > T_ ? 1 : 0;  // quintic: the motion, then the hold
   if (t > T_) return pieces();
   // The last piece starting at or before t.
   const auto it = std::upper_bound(pieces_.begin(), pieces_.end(), t,
@@ -169,7 +169,17 @@ int Timing::piece(double t) const {
 }
 
 void Timing::eval_piece(int k, double t, double& s, double& sd, double& sdd) const {
-  if (pieces_.empty()) return eval(t, s, sd, sdd);  // quintic: one piece, held after T (C2 there)
+  if (pieces_.empty()) {  // quintic: piece 0 the polynomial (at any t), piece 1 the hold after T (C2 there)
+    if (k >= 1) {
+      s = L_, sd = 0, sdd = 0;
+      return;
+    }
+    const double r = t / T_, r2 = r * r;
+    s = L_ * r2 * r * (10 - 15 * r + 6 * r2);
+    sd = L_ / T_ * 30 * r2 * (1 - r) * (1 - r);
+    sdd = L_ / (T_ * T_) * 60 * r * (1 - r) * (1 - 2 * r);
+    return;
+  }
   if (k >= pieces()) {
     s = L_, sd = 0, sdd = 0;
     return;

@@ -278,7 +278,7 @@ void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bo
     for (int e = 4; e >= 2; --e) a = a * u + e * (e - 1) * c(j, e);
     q[j] = p;
     // Moving inside (0, T); with a segment, up to its ends (the hold after T is the last).
-    const bool moving = segment >= 0 ? segment < std::ssize(breakpoints_) && t > 0 : t > 0 && t < T;
+    const bool moving = continued || (segment >= 0 ? segment < std::ssize(breakpoints_) && t > 0 : t > 0 && t < T);
     if (moving) qd[j] = v, qdd[j] = a;
   }
   Eigen::Matrix<double, 6, 6> J;

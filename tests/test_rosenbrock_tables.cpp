@@ -17,6 +17,9 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <vector>
+
+#include <boost/numeric/odeint.hpp>
 
 #include "integrators/rosenbrock_coefficients.hpp"
 
@@ -28,6 +31,7 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 struct StandardForm {
   double gamma = 0;
   Mat6 Gamma, alpha;
+  Vec6 m, d2, d3;       // odeint's weights of u: the solution, and the dense output's (d2j, d3j)
   Vec6 b, bhat;         // order 4 and the embedded order 3
   double d[4], c[3];    // as the table gives them
 };
@@ -53,6 +57,9 @@ StandardForm standard_form(const T& k) {
   s.gamma = k.gamma;
   s.Gamma = (Mat6::Identity() / k.gamma - C).inverse();
   s.alpha = A * s.Gamma;
+  s.m = m;
+  s.d2 << k.d21, k.d22, k.d23, k.d24, k.d25, 0;
+  s.d3 << k.d31, k.d32, k.d33, k.d34, k.d35, 0;
   s.b = s.Gamma.transpose() * m;
   s.bhat = s.Gamma.transpose() * mhat;
   const double d[4] = {k.d1, k.d2, k.d3, k.d4}, c[3] = {k.c2, k.c3, k.c4};
@@ -81,6 +88,26 @@ std::vector<double> order_residuals(const StandardForm& s, const Vec6& w) {
   };
 }
 
+// odeint's dense output y(theta) = (1 - theta) y0 + theta y1 + theta (1 - theta)
+// (cont3 + theta cont4), cont3 = sum_j d2j u_j, cont4 = sum_j d3j u_j, is
+// sum_i b_i(theta) k_i with b(theta) = Gamma^T w(theta). Its order-3
+// conditions are those of a step theta h taken with the stages of the step h:
+// sum b = theta, sum b beta' = theta^2/2 - gamma theta, sum b alpha^2 =
+// theta^3/3, sum b beta beta' = theta^3/6 - gamma theta^2 + gamma^2 theta
+// (expanding k_i in h as for Table IV.7.1, with the exact solution at theta h).
+std::vector<double> dense_residuals(const StandardForm& s, double th) {
+  const double g = s.gamma;
+  const Vec6 w = th * s.m + th * (1 - th) * (s.d2 + th * s.d3);
+  const Vec6 b = s.Gamma.transpose() * w;
+  const Vec6 one = Vec6::Ones(), a = s.alpha * one;
+  Mat6 Bs = s.alpha + s.Gamma;
+  Bs.diagonal().setZero();
+  const Vec6 bp = Bs * one;
+  return {b.sum() - th, b.dot(bp) - (th * th / 2 - g * th), b.dot(a.cwiseProduct(a)) - th * th * th / 3,
+          b.dot(Bs * bp) - (th * th * th / 6 - g * th * th + g * g * th),
+          b.dot(a.cwiseProduct(a).cwiseProduct(a)) - th * th * th * th / 4};  // the last: order 4, not required
+}
+
 // The stability function at infinity, R(inf) = 1 - w^T B^-1 1 with B = alpha + Gamma.
 double r_infinity(const StandardForm& s, const Vec6& w) {
   const Mat6 B = s.alpha + s.Gamma;
@@ -104,6 +131,12 @@ void expect_rodas_form(const char* name) {
   double worst = 0;  // the embedded method is of order 3 exactly: some order-4 condition fails
   for (std::size_t k = 4; k < rh.size(); ++k) worst = std::max(worst, std::abs(rh[k]));
   EXPECT_GT(worst, 1e-3) << name;
+  // The dense output: order 3 at every theta (and not 4).
+  for (const double th : {0.25, 0.5, 0.75}) {
+    const auto dr = dense_residuals(s, th);
+    for (std::size_t k = 0; k < 4; ++k) EXPECT_NEAR(dr[k], 0, 1e-12) << name << ": dense output at " << th << ", condition " << k;
+    EXPECT_GT(std::abs(dr[4]), 1e-4) << name << ": dense output at " << th;
+  }
   // Stiffly accurate, both: L-stable (R(inf) = 0) when A-stable.
   EXPECT_NEAR(r_infinity(s, s.b), 0, 1e-12) << name;
   EXPECT_NEAR(r_infinity(s, s.bhat), 0, 1e-12) << name;
@@ -115,6 +148,53 @@ TEST(RosenbrockTables, RodasAsShippedWithConsistentDIsOrderFourWithAnOrderThreeE
 
 TEST(RosenbrockTables, Rodas4PIsOrderFourWithAnOrderThreeEstimate) {
   expect_rodas_form<pumasim::Rodas4PCoefficients<double>>("Rodas4P");
+}
+
+// What Rodas4P was built for: on the Prothero-Robinson problem y' = lambda (y -
+// sin t) + cos t in the stiff limit (h |lambda| >> 1), fixed steps from y(0) =
+// 0 to t = 1, a Rosenbrock method's global error falls like h^(q+1) rather
+// than h^p unless extra conditions hold (J. Rang, "The Prothero and Robinson
+// example: convergence studies for Runge-Kutta and Rosenbrock-Wanner
+// methods", TU Braunschweig, Informatikbericht 2014-05): RODAS falls like h
+// (ratio 2 per halving), Rodas4P like h^3 (ratio 8; G. Steinebach, TH
+// Darmstadt Preprint 1741, 1995, designed it for order 3 there).
+template <class Coefficients>
+std::vector<double> stiff_prothero_robinson_ratios() {
+  namespace odeint = boost::numeric::odeint;
+  using Vec = boost::numeric::ublas::vector<double>;
+  using Mat = boost::numeric::ublas::matrix<double>;
+  const double lambda = -1e6;
+  auto f = [lambda](const Vec& y, Vec& dy, double t) {
+    dy.resize(1);
+    dy[0] = lambda * (y[0] - std::sin(t)) + std::cos(t);
+  };
+  auto jac = [lambda](const Vec&, Mat& J, double t, Vec& dfdt) {
+    J.resize(1, 1);
+    J(0, 0) = lambda;
+    dfdt.resize(1);
+    dfdt[0] = -lambda * std::cos(t) - std::sin(t);
+  };
+  odeint::rosenbrock4<double, Coefficients> stepper;
+  std::vector<double> err, ratios;
+  for (int n = 8; n <= 64; n *= 2) {  // h |lambda| from 1.25e5 to 1.6e4
+    Vec y(1);
+    y[0] = 0;
+    for (int k = 0; k < n; ++k) stepper.do_step(std::make_pair(f, jac), y, static_cast<double>(k) / n, 1.0 / n);
+    err.push_back(std::abs(y[0] - std::sin(1.0)));
+  }
+  for (std::size_t k = 0; k + 1 < err.size(); ++k) ratios.push_back(err[k] / err[k + 1]);
+  return ratios;
+}
+
+TEST(RosenbrockTables, OnStiffProtheroRobinsonRodasIsFirstOrderAndRodas4PThirdOrder) {
+  for (double r : stiff_prothero_robinson_ratios<pumasim::ConsistentRosenbrockCoefficients<double>>()) {
+    EXPECT_GT(r, 1.8) << "RODAS: order 1";
+    EXPECT_LT(r, 2.4) << "RODAS: order 1";
+  }
+  for (double r : stiff_prothero_robinson_ratios<pumasim::Rodas4PCoefficients<double>>()) {
+    EXPECT_GT(r, 7.0) << "Rodas4P: order 3";
+    EXPECT_LT(r, 9.0) << "Rodas4P: order 3";
+  }
 }
 
 // The defect the consistent set repairs: Boost 1.74's d4 is gamma_4 with the wrong sign.

@@ -9,9 +9,9 @@
 
 namespace pumasim::testset {
 
-bool Problem::time_derivative(double, const double*, double* dfdt) {
+int Problem::time_derivative(double, const double*, double* dfdt) {
   for (int i = 0; i < size(); ++i) dfdt[i] = 0.0;
-  return true;
+  return 0;
 }
 
 EndError end_error(const Problem& p, const double* y) {
@@ -75,10 +75,10 @@ class ProtheroRobinson final : public Problem {
     J.resize(2, 2);
     J << lambda_, 0.0, 1.0, -1.0;
   }
-  bool time_derivative(double t, const double*, double* dfdt) override {
+  int time_derivative(double t, const double*, double* dfdt) override {
     dfdt[0] = -lambda_ * std::cos(t) - std::sin(t);
     dfdt[1] = 0.0;
-    return true;
+    return 0;
   }
   bool exact_solution(double t, double* y) const override {
     y[0] = std::sin(t);

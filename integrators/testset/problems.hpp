@@ -55,7 +55,7 @@ class Problem : public OdeSystem {
   bool has_exact_jacobian() const override { return true; }
   double tolerance_scale(int i) const override { return scale_[static_cast<std::size_t>(i)]; }
   // The autonomous problems' df/dt is exactly zero: said so, not differenced.
-  bool time_derivative(double t, const double* x, double* dfdt) override;
+  int time_derivative(double t, const double* x, double* dfdt) override;
 
  protected:
   std::string name_, description_, source_;

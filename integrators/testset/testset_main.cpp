@@ -59,7 +59,7 @@ class Guarded final : public OdeSystem {
     p_.jacobian(t, x, J);
   }
   bool has_exact_jacobian() const override { return p_.has_exact_jacobian(); }
-  bool time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
+  int time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
   std::string state_name(int i) const override { return p_.state_name(i); }
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
   long calls() const { return calls_; }
