@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "models/backend.hpp"
-#include "models/random_chain.hpp"
-#include "models/robot_file.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/robot/robot_file.hpp"
 
 namespace {
 

@@ -1,5 +1,5 @@
 #include "experiments/cli.hpp"
-#include "experiments/run_folder.hpp"
+#include "experiments/simulation/run_folder.hpp"
 #include "experiments/stiffness.hpp"
 
 #include <charconv>
@@ -21,12 +21,12 @@
 #include <boost/version.hpp>
 #include <sundials/sundials_config.h>
 
-#include "integrators/driver.hpp"
+#include "experiments/simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
-#include "models/backend.hpp"
-#include "models/robot_file.hpp"
-#include "models/scene.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/scene/scene.hpp"
 
 namespace pumasim {
 namespace {

@@ -8,10 +8,10 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "integrators/driver.hpp"
+#include "experiments/simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
-#include "models/backend.hpp"
+#include "models/dynamics/backend.hpp"
 
 namespace pumasim {
 namespace {

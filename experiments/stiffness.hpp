@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "models/scene.hpp"
+#include "models/scene/scene.hpp"
 
 namespace pumasim {
 

@@ -47,7 +47,7 @@ class OdeSystem {
   virtual void roots(double /*t*/, const double* /*x*/, double* /*g*/) {}
 };
 
-struct IntegratorSettings;  // models/scene.hpp: name, dt, rtol, atol
+struct IntegratorSettings;  // models/scene/scene.hpp: name, dt, rtol, atol
 
 struct IntegratorOptions {
   double dt = 5e-4;             // fixed-step methods [s]

@@ -1,18 +1,18 @@
 #!/usr/bin/env bash
 # Regenerates the closed-form Lagrange sources into a temporary directory and
-# fails if they differ from the committed ones (models/generated/).
+# fails if they differ from the committed ones (models/dynamics/generated/).
 # Uses Debian's interpreter and SymPy, which generated the committed files.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 /usr/bin/python3 scripts/generate_lagrange.py --out "$tmp"
-if ! diff -u models/generated "$tmp" > "$tmp.diff"; then
+if ! diff -u models/dynamics/generated "$tmp" > "$tmp.diff"; then
   head -40 "$tmp.diff"
-  echo "check_generated: models/generated/ is not what scripts/generate_lagrange.py produces;" \
+  echo "check_generated: models/dynamics/generated/ is not what scripts/generate_lagrange.py produces;" \
        "regenerate with /usr/bin/python3 scripts/generate_lagrange.py and commit" >&2
   rm -f "$tmp.diff"
   exit 1
 fi
 rm -f "$tmp.diff"
-echo "check_generated: models/generated/ is current"
+echo "check_generated: models/dynamics/generated/ is current"

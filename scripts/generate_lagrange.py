@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Generates the closed-form Lagrange model of the PUMA 560 as C++.
 
-    /usr/bin/python3 scripts/generate_lagrange.py [--out models/generated]
+    /usr/bin/python3 scripts/generate_lagrange.py [--out models/dynamics/generated]
 
 Writes lagrange_puma560_3.hpp and lagrange_puma560_6.hpp (the arm with 3 and 6
 moving joints, parameters at run time), and lagrange_puma560_folded_3.hpp and
@@ -14,7 +14,7 @@ files are what this script produces there, which CI checks by regenerating
 and diffing (scripts/check_generated.sh).
 
 Derivation (Lagrange, symbolic, no numbers but the arm's structure):
-  - Joint frames as in models/chain.hpp: joint frame j is joint frame j-1 moved
+  - Joint frames as in models/dynamics/chain.hpp: joint frame j is joint frame j-1 moved
     by Rx(alpha_{j-1}) and p_j = (a_{j-1}, 0, d_{j-1}), then turned by Rz(q_j).
     The twists alpha are the PUMA's (pi/2, 0, -pi/2, pi/2, -pi/2, 0): they are
     the arm's structure and are fixed here; a_j, d_j, every link's ten inertial
@@ -184,7 +184,7 @@ class Model:
 def folded_parameters(robot_file, n):
     """Parameter values (in Model.param_names order) from a standard-DH robot file.
 
-    An independent Python implementation of the conversion that models/chain.hpp
+    An independent Python implementation of the conversion that models/dynamics/chain.hpp
     and lock_joints do in C++: DH link frames to joint frames, barycentric
     parameters about each joint-frame origin, and links n..5 lumped into link
     n-1 with their joints held at zero.
@@ -340,7 +340,7 @@ def generate(n, robot_file=None):
         f"// Closed-form Lagrange model of the PUMA 560 with {n} moving joints (SymPy {sp.__version__}),",
         f"// {what}.",
         "// Parameter vector order (kParamNames): per link j the mass, first moment h = m c",
-        "// and inertia about the joint-frame origin (models/chain.hpp), then the rotor",
+        "// and inertia about the joint-frame origin (models/dynamics/chain.hpp), then the rotor",
         "// inertias Z^2 Im, then a_j and d_j (p_{j+1} = (a_j, 0, d_j)), then gravity.",
         "#pragma once",
         "",
@@ -366,7 +366,7 @@ def generate(n, robot_file=None):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "generated"))
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "dynamics", "generated"))
     ap.add_argument("--dof", type=int, nargs="*", default=[3, 6])
     ap.add_argument("--robot", default=os.path.join(os.path.dirname(__file__), "..", "models", "robots",
                                                     "puma560.toml"),

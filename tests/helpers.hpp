@@ -6,10 +6,10 @@
 
 #include <vector>
 
-#include "models/algorithms.hpp"
-#include "models/backend.hpp"
-#include "models/random_chain.hpp"
-#include "models/robot_model.hpp"
+#include "models/dynamics/algorithms.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/dynamics/robot_model.hpp"
 
 namespace pumasim::testing {
 

@@ -24,11 +24,11 @@
 #include <string>
 #include <vector>
 
-#include "integrators/driver.hpp"
+#include "experiments/simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/testset/problems.hpp"
-#include "models/scene.hpp"
+#include "models/scene/scene.hpp"
 
 namespace pumasim {
 namespace {

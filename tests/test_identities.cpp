@@ -6,9 +6,9 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "models/backend.hpp"
-#include "models/dual.hpp"
-#include "models/robot_file.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/dynamics/dual.hpp"
+#include "models/robot/robot_file.hpp"
 #include "tests/helpers.hpp"
 
 namespace pumasim {

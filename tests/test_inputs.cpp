@@ -9,9 +9,9 @@
 #include <unistd.h>
 
 #include "experiments/cli.hpp"
-#include "models/backend.hpp"
-#include "models/robot_file.hpp"
-#include "models/scene.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/scene/scene.hpp"
 
 namespace pumasim {
 namespace {

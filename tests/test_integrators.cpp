@@ -13,11 +13,11 @@
 #include <unistd.h>
 
 #include "experiments/cli.hpp"
-#include "integrators/driver.hpp"
+#include "experiments/simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
-#include "models/scene.hpp"
+#include "models/scene/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"

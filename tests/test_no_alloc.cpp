@@ -12,10 +12,10 @@
 #include <atomic>
 #include <cstdlib>
 
-#include "models/backend.hpp"
-#include "models/plant.hpp"
-#include "models/robot_file.hpp"
-#include "models/scene.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/plant/plant.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/scene/scene.hpp"
 #include "tests/helpers.hpp"
 
 extern "C" {

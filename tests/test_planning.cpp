@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "experiments/cli.hpp"
-#include "models/scene.hpp"
-#include "models/time_optimal.hpp"
-#include "models/timing.hpp"
-#include "models/trajectory.hpp"
+#include "models/scene/scene.hpp"
+#include "models/reference/time_optimal.hpp"
+#include "models/reference/timing.hpp"
+#include "models/reference/trajectory.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"

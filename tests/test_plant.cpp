@@ -10,13 +10,13 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "integrators/driver.hpp"
+#include "experiments/simulation/driver.hpp"
 #include "integrators/registry.hpp"
-#include "models/kinematics.hpp"
-#include "models/plant.hpp"
-#include "models/random_chain.hpp"
-#include "models/robot_file.hpp"
-#include "models/scene.hpp"
+#include "models/robot/kinematics.hpp"
+#include "models/plant/plant.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/scene/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "models/backend.hpp"
-#include "models/robot_file.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/robot/robot_file.hpp"
 #include "tests/helpers.hpp"
 
 namespace pumasim {

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "experiments/cli.hpp"
-#include "experiments/run_folder.hpp"
+#include "experiments/simulation/run_folder.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"

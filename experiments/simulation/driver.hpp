@@ -1,0 +1,67 @@
+// The one integration loop: any integrator on the plant, stopping exactly
+// where the right-hand side changes -- controller samples, set-point updates,
+// the reference's breakpoints (the plant's time events) and, for integrators
+// that find them, friction roots; the plant updates its discrete state at
+// each such stop and the integrator restarts there (CVodeReInit, a fresh
+// multistep history). Outputs in between come from the integrator's dense
+// output, so the output grid changes neither the steps nor the cost. A
+// failure ends the run as a reported result.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "integrators/integrator.hpp"
+#include "models/plant/plant.hpp"
+
+namespace pumasim {
+
+// The plant as an OdeSystem: exact Jacobian, named states, friction roots.
+class PlantSystem final : public OdeSystem {
+ public:
+  explicit PlantSystem(Plant& p) : p_(p) {}
+  int size() const override { return p_.size(); }
+  void rhs(double t, const double* x, double* xdot) override { p_.rhs(t, x, xdot); }
+  void jacobian(double t, const double* x, Eigen::MatrixXd& J) override { p_.jacobian_exact(t, x, J); }
+  bool has_exact_jacobian() const override { return true; }
+  int time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
+  void rhs_split(double t, const double* x, double* fe, double* fi) override { p_.rhs_split(t, x, fe, fi); }
+  std::string state_name(int i) const override { return p_.layout().names[static_cast<std::size_t>(i)]; }
+  double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
+  int num_roots() const override { return p_.num_roots(); }
+  void roots(double t, const double* x, double* g) override { p_.roots(t, x, g); }
+
+ private:
+  Plant& p_;
+};
+
+struct RunResult {
+  bool ok = true;
+  std::string failure;  // what, when, which state components
+  double t_final = 0;
+  long time_events = 0;
+  long root_events = 0;
+  double wall_time = 0;  // [s]
+};
+
+using Observer = std::function<void(double t, const double* x)>;
+
+// How the driver stops the integrator.
+enum class Stops {
+  kEvents,             // at time events and roots only; outputs from the dense output (the default)
+  kEventsAndOutputs,   // also at every output time (the old behaviour: the output grid caps the step)
+  kOutputsLateEvents,  // at outputs and roots only: time events that passed are applied late, at the
+                       // next output, in order, with the state then (shows what stepping over samples does)
+};
+
+// Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
+// every multiple of output_interval reached. An output at an event's instant
+// sees the state after the event. A run that needs more than max_steps steps
+// in all (0: no limit) ends as a reported failure; so does one still running
+// after max_wall seconds of wall-clock time (0: no limit), checked after each
+// step (one step of any method is bounded: it either succeeds or fails).
+RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
+                    const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents,
+                    double max_wall = 0);
+
+}  // namespace pumasim

@@ -1,0 +1,72 @@
+#include "models/dynamics/backend.hpp"
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+
+
+namespace pumasim {
+namespace detail {
+// One file each in models/dynamics/backends/.
+BackendInfo aba_entry();
+BackendInfo crba_entry();
+BackendInfo lagrange_euler_entry();
+BackendInfo lagrange_symbolic_entry();
+BackendInfo lagrange_symbolic_puma560_entry();
+BackendInfo rnea_probing_entry();
+BackendInfo rnea_probing_shared_entry();
+}  // namespace detail
+
+namespace {
+
+// Sorted by name (checked below). A new back-end is one file in
+// models/dynamics/backends/ and one line here.
+const std::array<BackendInfo, 7>& registry() {
+  static const std::array<BackendInfo, 7> table{{
+      detail::aba_entry(),
+      detail::crba_entry(),
+      detail::lagrange_euler_entry(),
+      detail::lagrange_symbolic_entry(),
+      detail::lagrange_symbolic_puma560_entry(),
+      detail::rnea_probing_entry(),
+      detail::rnea_probing_shared_entry(),
+  }};
+  return table;
+}
+
+bool registry_sorted() {
+  return std::is_sorted(registry().begin(), registry().end(), [](const auto& a, const auto& b) {
+    return std::string_view(a.name) < std::string_view(b.name);
+  });
+}
+
+}  // namespace
+
+std::span<const BackendInfo> backends() {
+  static const bool sorted = registry_sorted();
+  if (!sorted) throw std::logic_error("backend registry is not sorted by name");
+  return registry();
+}
+
+std::string backend_names() {
+  std::string s;
+  for (const auto& b : backends()) {
+    if (!s.empty()) s += ", ";
+    s += b.name;
+  }
+  return s;
+}
+
+const BackendInfo& find_backend(std::string_view name) {
+  const auto all = backends();
+  const auto it = std::lower_bound(all.begin(), all.end(), name, [](const auto& b, auto key) {
+    return std::string_view(b.name) < key;
+  });
+  if (it == all.end() || std::string_view(it->name) != name) {
+    throw std::invalid_argument("unknown dynamics back-end '" + std::string(name) +
+                                "'; expected one of: " + backend_names());
+  }
+  return *it;
+}
+
+}  // namespace pumasim

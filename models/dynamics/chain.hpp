@@ -1,0 +1,205 @@
+// Chain<S, N>: the robot's parameters in the form the algorithms use.
+//
+// Every dynamics algorithm is templated on its scalar S (double, the
+// operation-counting Counted, the forward-mode Dual) and on its joint count N
+// (3 and 6 give fixed-size Eigen types and std::array storage for the PUMA;
+// Eigen::Dynamic serves any n). A Chain is built once from a RobotModel and is
+// then only read (Pinocchio's Model); each algorithm keeps its own workspace
+// (Pinocchio's Data), allocated in its constructor and never after.
+//
+// Frames: joint frame j has its z axis on joint j. It is joint frame j-1 moved
+// by a fixed rotation E_j and translation p_j, then rotated by Rz(q_j):
+//     R_j = E_j Rz(q_j)     (rotation joint frame j -> joint frame j-1)
+// so both DH conventions reduce to one recursion (robot_model.cpp converts).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
+
+#include "models/dynamics/robot_model.hpp"
+
+namespace pumasim {
+
+template <class S> using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <class S> using Mat3 = Eigen::Matrix<S, 3, 3>;
+template <class S, int N> using VecN = Eigen::Matrix<S, N, 1>;
+template <class S, int N> using MatN = Eigen::Matrix<S, N, N>;
+
+// Per-joint storage: in place for a fixed N, one allocation at construction otherwise.
+template <class T, int N>
+using PerJoint = std::conditional_t<N == Eigen::Dynamic, std::vector<T>, std::array<T, N>>;
+
+// Zero of a scalar or of a fixed-size Eigen type.
+template <class T>
+T zero_value() {
+  if constexpr (std::is_base_of_v<Eigen::EigenBase<T>, T>) {
+    return T::Zero();
+  } else {
+    return T(0);
+  }
+}
+
+template <class T, int N>
+PerJoint<T, N> make_per_joint(int n, const T& init = zero_value<T>()) {
+  if constexpr (N == Eigen::Dynamic) {
+    return std::vector<T>(static_cast<std::size_t>(n), init);
+  } else {
+    PerJoint<T, N> a;
+    a.fill(init);
+    return a;
+  }
+}
+
+template <class S, int N>
+VecN<S, N> make_vec(int n) {
+  VecN<S, N> v(n);
+  v.setZero();
+  return v;
+}
+
+template <class S, int N>
+MatN<S, N> make_mat(int n) {
+  MatN<S, N> m(n, n);
+  m.setZero();
+  return m;
+}
+
+// Skew-symmetric matrix of v: skew(v) * x = v x x.
+template <class S>
+Mat3<S> skew(const Vec3<S>& v) {
+  Mat3<S> m;
+  m << S(0), -v.z(), v.y(), v.z(), S(0), -v.x(), -v.y(), v.x(), S(0);
+  return m;
+}
+
+template <class S, int N>
+struct Chain {
+  using Scalar = S;
+  int n = 0;
+  PerJoint<Mat3<S>, N> E;    // fixed rotation part of joint frame j in frame j-1
+  PerJoint<Vec3<S>, N> p;    // origin of joint frame j in joint frame j-1 [m]
+  PerJoint<S, N> mass;       // link mass [kg]
+  PerJoint<Vec3<S>, N> com;  // centre of mass, joint frame j [m]
+  PerJoint<Vec3<S>, N> h;    // first moment of mass, mass * com [kg m]
+  PerJoint<Mat3<S>, N> Io;   // rotational inertia about the joint frame origin [kg m^2]
+  PerJoint<S, N> armature;   // reflected rotor inertia Z^2 Im, link side [kg m^2]
+  Vec3<S> gravity;           // gravitational acceleration in the base frame [m/s^2]
+  Mat3<S> E_tool;            // flange (last DH frame) in joint frame n
+  Vec3<S> p_tool;
+
+  explicit Chain(const RobotModel& model) : Chain(joint_frames(model), model.dof()) {}
+
+ private:
+  static Mat3<S> cast3(const Eigen::Matrix3d& m) { return m.template cast<S>(); }
+  static Vec3<S> cast3(const Eigen::Vector3d& v) { return v.template cast<S>(); }
+
+  Chain(const JointFrameData& f, int dof)
+      : n(dof),
+        E(make_per_joint<Mat3<S>, N>(dof)),
+        p(make_per_joint<Vec3<S>, N>(dof)),
+        mass(make_per_joint<S, N>(dof)),
+        com(make_per_joint<Vec3<S>, N>(dof)),
+        h(make_per_joint<Vec3<S>, N>(dof)),
+        Io(make_per_joint<Mat3<S>, N>(dof)),
+        armature(make_per_joint<S, N>(dof)),
+        gravity(cast3(f.gravity)),
+        E_tool(cast3(f.E_tool)),
+        p_tool(cast3(f.p_tool)) {
+    if (N != Eigen::Dynamic && dof != N) {
+      throw std::invalid_argument("Chain: fixed size " + std::to_string(N) + ", model has " +
+                                  std::to_string(dof) + " joints");
+    }
+    for (int j = 0; j < dof; ++j) {
+      E[j] = cast3(f.E[j]);
+      p[j] = cast3(f.p[j]);
+      mass[j] = S(f.mass[j]);
+      com[j] = cast3(f.com[j]);
+      const Eigen::Vector3d hd = f.mass[j] * f.com[j];
+      h[j] = cast3(hd);
+      // Parallel-axis theorem: I_o = I_c + m (|c|^2 1 - c c^T).
+      const Eigen::Matrix3d Iod =
+          f.I_com[j] + f.mass[j] * (f.com[j].squaredNorm() * Eigen::Matrix3d::Identity() -
+                                    f.com[j] * f.com[j].transpose());
+      Io[j] = cast3(Iod);
+      armature[j] = S(f.armature[j]);
+    }
+  }
+};
+
+// R_j = E_j Rz(q_j) for every joint: the one trigonometric pass of an algorithm.
+template <class S, int N>
+struct JointRotations {
+  PerJoint<Mat3<S>, N> R;
+
+  explicit JointRotations(int n) : R(make_per_joint<Mat3<S>, N>(n)) {}
+
+  template <class Q>
+  void compute(const Chain<S, N>& chain, const Q& q) {
+    using std::cos;
+    using std::sin;
+    for (int j = 0; j < chain.n; ++j) {
+      const S c = cos(S(q[j])), s = sin(S(q[j]));
+      const Mat3<S>& E = chain.E[j];
+      Mat3<S>& Rj = R[j];
+      Rj.col(0) = c * E.col(0) + s * E.col(1);
+      Rj.col(1) = c * E.col(1) - s * E.col(0);
+      Rj.col(2) = E.col(2);
+    }
+  }
+};
+
+// In-place Cholesky factorisation H = L L^T and solve, for small dense SPD
+// matrices; templated on the scalar so that its operations are counted too.
+// A matrix that is not positive definite yields NaN (sqrt of a negative
+// pivot), which the caller reports as a numerical failure; no branch, no throw.
+template <class S, int N>
+class Cholesky {
+ public:
+  explicit Cholesky(int n) : L_(make_mat<S, N>(n)), inv_diag_(make_vec<S, N>(n)) {}
+
+  template <class M>
+  void factor(const M& H) {
+    using std::sqrt;
+    const int n = static_cast<int>(L_.rows());
+    for (int j = 0; j < n; ++j) {
+      S d = H(j, j);
+      for (int k = 0; k < j; ++k) d -= L_(j, k) * L_(j, k);
+      L_(j, j) = sqrt(d);
+      inv_diag_[j] = S(1) / L_(j, j);
+      for (int i = j + 1; i < n; ++i) {
+        S v = H(i, j);
+        for (int k = 0; k < j; ++k) v -= L_(i, k) * L_(j, k);
+        L_(i, j) = v * inv_diag_[j];
+      }
+    }
+  }
+
+  // x <- H^{-1} x
+  template <class V>
+  void solve_in_place(V&& x) const {
+    const int n = static_cast<int>(L_.rows());
+    for (int i = 0; i < n; ++i) {
+      S v = x[i];
+      for (int k = 0; k < i; ++k) v -= L_(i, k) * x[k];
+      x[i] = v * inv_diag_[i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      S v = x[i];
+      for (int k = i + 1; k < n; ++k) v -= L_(k, i) * x[k];
+      x[i] = v * inv_diag_[i];
+    }
+  }
+
+ private:
+  MatN<S, N> L_;
+  VecN<S, N> inv_diag_;
+};
+
+}  // namespace pumasim

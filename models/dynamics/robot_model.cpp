@@ -1,0 +1,159 @@
+#include "models/dynamics/robot_model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace pumasim {
+namespace {
+
+Eigen::Matrix3d rot_x(double a) {
+  const double c = std::cos(a), s = std::sin(a);
+  Eigen::Matrix3d R;
+  R << 1, 0, 0, 0, c, -s, 0, s, c;
+  return R;
+}
+
+Eigen::Matrix3d rot_z(double a) {
+  const double c = std::cos(a), s = std::sin(a);
+  Eigen::Matrix3d R;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  return R;
+}
+
+Eigen::Matrix4d homogeneous(const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = R;
+  T.topRightCorner<3, 1>() = p;
+  return T;
+}
+
+}  // namespace
+
+const char* to_string(DhConvention c) {
+  return c == DhConvention::kStandard ? "standard" : "modified";
+}
+
+const NamedPose* RobotModel::pose(const std::string& pose_name) const {
+  for (const auto& p : poses) {
+    if (p.name == pose_name) return &p;
+  }
+  return nullptr;
+}
+
+Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q) {
+  const JointParams& J = model.joints.at(static_cast<std::size_t>(j));
+  const double theta = q + J.offset;
+  if (model.convention == DhConvention::kStandard) {
+    // Rz(theta) Tz(d) Tx(a) Rx(alpha)
+    return homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, J.d)) *
+           homogeneous(rot_x(J.alpha), Eigen::Vector3d(J.a, 0, 0));
+  }
+  // Rx(alpha) Tx(a) Rz(theta) Tz(d)
+  return homogeneous(rot_x(J.alpha), Eigen::Vector3d(J.a, 0, 0)) *
+         homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, J.d));
+}
+
+double potential_energy(const RobotModel& model, const Eigen::VectorXd& q) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  double V = 0;
+  for (int j = 0; j < model.dof(); ++j) {
+    T = T * dh_transform(model, j, q[j]);
+    const Eigen::Vector3d c = T.topLeftCorner<3, 3>() * model.joints[j].com + T.topRightCorner<3, 1>();
+    V -= model.joints[j].mass * model.gravity.dot(c);
+  }
+  return V;
+}
+
+RobotModel without_rotor_inertia(RobotModel model) {
+  for (auto& j : model.joints) j.rotor_inertia = 0.0;
+  model.name += " (no rotor inertia)";
+  return model;
+}
+
+RobotModel lock_joints(const RobotModel& model, int n_active, const Eigen::VectorXd& q_full) {
+  const int n = model.dof();
+  if (n_active < 1 || n_active > n) {
+    throw std::invalid_argument("lock_joints: expected 1 <= n_active <= " + std::to_string(n) +
+                                ", got " + std::to_string(n_active));
+  }
+  if (q_full.size() != n) {
+    throw std::invalid_argument("lock_joints: expected " + std::to_string(n) +
+                                " held joint angles, got " + std::to_string(q_full.size()));
+  }
+  RobotModel out = model;
+  out.joints.resize(static_cast<std::size_t>(n_active));
+  if (n_active < n) out.name += " (joints " + std::to_string(n_active + 1) + ".." +
+                                std::to_string(n) + " held)";
+  const int last = n_active - 1;
+  // Merge the held links into link `last`, all in link last's DH frame.
+  double m = model.joints[last].mass;
+  Eigen::Vector3d mc = m * model.joints[last].com;
+  struct Body { double m; Eigen::Vector3d c; Eigen::Matrix3d I; };
+  std::vector<Body> bodies{{m, model.joints[last].com, model.joints[last].inertia}};
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (int i = n_active; i < n; ++i) {
+    T = T * dh_transform(model, i, q_full[i]);
+    const JointParams& L = model.joints[i];
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    const Eigen::Vector3d c = R * L.com + T.topRightCorner<3, 1>();
+    bodies.push_back({L.mass, c, R * L.inertia * R.transpose()});
+    m += L.mass;
+    mc += L.mass * c;
+  }
+  JointParams& J = out.joints[last];
+  J.mass = m;
+  J.com = m > 0 ? Eigen::Vector3d(mc / m) : Eigen::Vector3d::Zero();
+  J.inertia.setZero();
+  for (const Body& b : bodies) {  // parallel-axis theorem about the merged COM
+    const Eigen::Vector3d d = b.c - J.com;
+    J.inertia += b.I + b.m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+  }
+  for (auto& p : out.poses) p.q = p.q.head(n_active).eval();
+  return out;
+}
+
+JointFrameData joint_frames(const RobotModel& model) {
+  const int n = model.dof();
+  JointFrameData f;
+  f.gravity = model.gravity;
+  for (int j = 0; j < n; ++j) {
+    const JointParams& J = model.joints[j];
+    Eigen::Matrix3d E;
+    Eigen::Vector3d p;
+    Eigen::Vector3d com = J.com;
+    Eigen::Matrix3d I = J.inertia;
+    if (model.convention == DhConvention::kStandard) {
+      // Joint frame j = DH frame j-1 * Rz(offset_j) * Rz(q_j), and
+      // DH frame j = joint frame j * Tz(d_j) Tx(a_j) Rx(alpha_j).
+      if (j == 0) {
+        E = rot_z(J.offset);
+        p.setZero();
+      } else {
+        const JointParams& P = model.joints[j - 1];
+        E = rot_x(P.alpha) * rot_z(J.offset);
+        p = Eigen::Vector3d(P.a, 0, P.d);
+      }
+      const Eigen::Matrix3d RF = rot_x(J.alpha);
+      com = RF * J.com + Eigen::Vector3d(J.a, 0, J.d);
+      I = RF * J.inertia * RF.transpose();
+    } else {
+      // Joint frame j = DH frame j = DH frame j-1 * Rx(alpha) Tx(a) Tz(d) Rz(offset) Rz(q).
+      E = rot_x(J.alpha) * rot_z(J.offset);
+      p = rot_x(J.alpha) * Eigen::Vector3d(J.a, 0, J.d);
+    }
+    f.E.push_back(E);
+    f.p.push_back(p);
+    f.mass.push_back(J.mass);
+    f.com.push_back(com);
+    f.I_com.push_back(I);
+    f.armature.push_back(J.gear_ratio * J.gear_ratio * J.rotor_inertia);
+  }
+  if (model.convention == DhConvention::kStandard && n > 0) {
+    const JointParams& L = model.joints[n - 1];
+    f.E_tool = rot_x(L.alpha);
+    f.p_tool = Eigen::Vector3d(L.a, 0, L.d);
+  }
+  return f;
+}
+
+}  // namespace pumasim

@@ -1,0 +1,184 @@
+// The coupled electro-mechanical plant as one state-space ODE x' = f(t, x).
+//
+// Blocks, per simulated joint (drive.hpp for the laws):
+//   reference -> PIV controller -> amplifier -> DC motor -> gear and rotor
+//   -> friction -> rigid body (any back-end from the registry)
+// A scene includes only what it needs, and leaving a block out removes its
+// states. The state is [q | qd | i | z] over the n simulated joints:
+//   q, qd   always (joints n+1..6 are held: their links ride on link n)
+//   i       motor currents, only with a drive whose La > 0 (La = 0: algebraic)
+//   z       PIV integrals, only with a continuous controller
+// Discrete parts are events for the integrators: controller samples and
+// set-point updates at known times (next_time_event / on_time_event), and,
+// for the hybrid friction model, root functions (roots / on_root).
+//
+// The torque that friction must resist at rest ("applied torque", motor
+// side) is K i - h_j / Z_j for the paper's rule and Karnopp (the coupling
+// through H's off-diagonal terms is neglected, as in their single-joint
+// models); the hybrid model computes it exactly from the constrained dynamics.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "models/dynamics/backend.hpp"
+#include "models/robot/drive.hpp"
+#include "models/reference/trajectory.hpp"
+
+namespace pumasim {
+
+enum class ControllerMode { kNone, kContinuous, kSampled };
+
+struct PlantConfig {
+  RobotModel robot;                      // all joints
+  int n = 6;                             // simulated joints: the first n
+  Eigen::Matrix<double, 6, 1> q_held = Eigen::Matrix<double, 6, 1>::Zero();  // joints > n [rad]
+  std::string backend = "crba";
+  bool drive = true;                     // amplifier + motor (needs a controller)
+  ControllerMode controller = ControllerMode::kContinuous;
+  double servo_period = 0.0;             // [s], sampled controller
+  double setpoint_interval = 0.0;        // [s], reference held between updates; 0 = continuous
+  std::vector<AmplifierParams> amplifier;  // one per simulated joint
+  std::vector<MotorParams> motor;
+  std::vector<FrictionParams> friction;
+  std::vector<PivParams> piv;
+  std::shared_ptr<const Reference> reference;  // what a controller follows
+  Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
+  // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
+  // (electrical input e_a i, copper loss (R0 + R) i^2, friction loss
+  // tau_f w_m, summed over the joints), integrated with the rest.
+  bool energy_ledger = false;
+};
+
+// The model the plant simulates: the first n joints of `robot`, the others
+// held at q_held with their links riding on link n.
+RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held);
+
+struct DriveSignals {
+  double u = 0;   // controller output (DAC) [V]
+  double ea = 0;  // amplifier output voltage [V]
+  double i = 0;   // motor current [A]
+};
+
+struct StateLayout {
+  int n = 0;      // simulated joints
+  int q = 0;      // offsets of the blocks; -1 when absent
+  int qd = 0;
+  int i = -1;
+  int z = -1;
+  int e = -1;     // energy ledger: e_in, e_copper, e_friction
+  int size = 0;
+  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1.., e_in, e_copper, e_friction
+  int index(const std::string& name) const;  // -1 if absent
+};
+
+class Plant {
+ public:
+  explicit Plant(PlantConfig config);  // std::invalid_argument on an inconsistent configuration
+  ~Plant();
+  Plant(const Plant&) = delete;
+  Plant& operator=(const Plant&) = delete;
+
+  const StateLayout& layout() const { return layout_; }
+  const PlantConfig& config() const { return cfg_; }
+  int size() const { return layout_.size; }
+  // A typical magnitude of state component i, in its unit (the integrators'
+  // absolute tolerance is atol times this).
+  double tolerance_scale(int i) const { return scale_[static_cast<std::size_t>(i)]; }
+
+  // x(0): on the reference at rest, currents and integrals in equilibrium
+  // with gravity; also (re)starts the discrete state at t = 0.
+  void initial_state(double* x);
+
+  // f(t, x). Allocation-free.
+  void rhs(double t, const double* x, double* xdot);
+  // IMEX split f = fe + fi: fi holds the stiff parts, the armature current
+  // equation and the friction torques' effect on qdd (f minus f without
+  // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
+  // integrals. Allocation-free.
+  void rhs_split(double t, const double* x, double* fe, double* fi);
+  // df/dx by forward differences (relative step sqrt(eps)) and exactly (dual numbers).
+  void jacobian_fd(double t, const double* x, Eigen::MatrixXd& J);
+  void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
+  // df/dt at (t, x): f depends on t only through a continuously followed
+  // reference, whose smooth piece since the last time event is continued for
+  // the difference (so that it never straddles a breakpoint): a second-order
+  // one-sided difference forward in t. Returns the right-hand sides it took
+  // (0 when f does not depend on t). Allocation-free.
+  int time_derivative(double t, const double* x, double* dfdt);
+
+  // Time events: controller samples and set-point updates. The next event time
+  // strictly after t (+inf if none); at such a time, update the discrete state.
+  double next_time_event(double t) const;
+  // May release stuck hybrid-friction joints (settle_modes), hence x non-const.
+  void on_time_event(double t, double* x);
+
+  // Root functions (hybrid friction, one per joint): zero at a slipping joint's
+  // speed reversal and at a stuck joint's break-away. on_root switches the
+  // joint's mode (a slipping joint's speed is set to exactly zero in x), then
+  // settle_modes releases every stuck joint now pushed past its static torque,
+  // so that after any discrete change each stuck joint's root function is >= 0.
+  int num_roots() const;
+  void roots(double t, const double* x, double* g);
+  void on_root(int joint, double t, double* x);
+  void settle_modes(double t, double* x);
+  SlipMode slip_mode(int joint) const { return mode_[static_cast<std::size_t>(joint)]; }
+
+  // Stored energy at x [J]: mechanical (1/2 qd' H qd + V(q), rotor inertia
+  // included) and magnetic (1/2 La i^2). With the ledger, the balance
+  //   (mechanical + magnetic)(t) - (mechanical + magnetic)(0) = e_in - e_copper - e_friction
+  // holds exactly for the ODE; its residual measures the integration error.
+  double mechanical_energy(const double* x, double* kinetic = nullptr);
+  double magnetic_energy(const double* x) const;
+
+  // Flange position for the state x (held joints included) [m].
+  Eigen::Vector3d tool_position(const double* x) const;
+  // Flange frame for the state x: orientation R (base frame) and position p [m].
+  void tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const;
+  // The reference the controller currently uses (held set-point or at t).
+  const ReferenceSample& reference_at(double t);
+  // Controller output, amplifier output voltage and motor current of every
+  // simulated joint at (t, x), with the current discrete state (held outputs
+  // and set-points: call it at the instant, not after the run).
+  void drive_signals(double t, const double* x, DriveSignals* out);
+  // True when the drive signals depend on a discrete state besides (t, x): a
+  // sampled controller's held output, or a held set-point.
+  bool holds_drive_state() const {
+    return cfg_.drive && (cfg_.controller == ControllerMode::kSampled || cfg_.setpoint_interval > 0);
+  }
+
+ private:
+  template <class S>
+  struct Workspace;
+  template <class S>
+  void eval(double t, const S* x, S* xdot, Workspace<S>& w);
+  template <class S>
+  void controller(double t, const S* x, Workspace<S>& w);
+  const ReferenceSample& current_reference(double t);
+  void sample_controller(double t, const double* x);
+
+  PlantConfig cfg_;
+  StateLayout layout_;
+  std::vector<double> scale_;  // tolerance_scale per component
+  RobotModel model_;  // the simulated joints (held links merged)
+  std::unique_ptr<Workspace<double>> wd_;
+  std::unique_ptr<Workspace<Dual>> wj_;
+  // Discrete state.
+  ReferenceSample ref_held_{}, ref_now_{};
+  double ref_time_ = std::numeric_limits<double>::quiet_NaN();
+  int ref_segment_ = 0;  // the reference's smooth piece since the last time event (Reference::eval)
+  std::vector<double> u_held_, integral_;
+  std::vector<SlipMode> mode_;
+  std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
+  std::vector<double> ft_[2];        // time_derivative scratch
+  bool extend_piece_ = false;        // inside time_derivative: the reference piece continued past its ends
+  bool friction_on_ = true;          // off only inside rhs_split
+  bool needs_bias_ = false;          // paper or Karnopp friction: the applied torque needs h
+  bool hybrid_ = false;              // some joint has the hybrid stick/slip model
+};
+
+}  // namespace pumasim

@@ -1,0 +1,404 @@
+#include "models/reference/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <Eigen/LU>
+
+namespace pumasim {
+
+Path::Path(Eigen::Vector2d start, double heading, double height, std::vector<PathSegment> segs)
+    : height_(height) {
+  Eigen::Vector2d p = start;
+  double h = heading;
+  for (const PathSegment& s : segs) {
+    const bool arc = s.radius > 0;
+    const double len = arc ? s.radius * std::abs(s.angle) : s.length;
+    if (!(len > 0)) throw std::invalid_argument("path segment of zero length");
+    const double kappa = arc ? (s.angle > 0 ? 1.0 : -1.0) / s.radius : 0.0;
+    pieces_.push_back({total_, len, p, h, kappa});
+    // Advance the turtle to the end of the piece.
+    if (arc) {
+      const double h1 = h + kappa * len;
+      p += Eigen::Vector2d(std::sin(h1) - std::sin(h), -std::cos(h1) + std::cos(h)) / kappa;
+      h = h1;
+    } else {
+      p += len * Eigen::Vector2d(std::cos(h), std::sin(h));
+    }
+    total_ += len;
+  }
+  if (pieces_.empty()) throw std::invalid_argument("path without segments");
+}
+
+void Path::eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const {
+  s = std::clamp(s, 0.0, total_);
+  eval_piece(piece(s), s, p, dp, ddp);
+}
+
+int Path::piece(double s) const {
+  std::size_t k = 0;
+  while (k + 1 < pieces_.size() && s > pieces_[k].s0 + pieces_[k].len) ++k;
+  return static_cast<int>(k);
+}
+
+void Path::eval_piece(int k, double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const {
+  const Piece& pc = pieces_[static_cast<std::size_t>(k)];
+  const double u = s - pc.s0, h = pc.heading0 + pc.curvature * u;
+  Eigen::Vector2d xy;
+  if (pc.curvature == 0.0) {
+    xy = pc.p0 + u * Eigen::Vector2d(std::cos(h), std::sin(h));
+  } else {
+    xy = pc.p0 + Eigen::Vector2d(std::sin(h) - std::sin(pc.heading0),
+                                 -std::cos(h) + std::cos(pc.heading0)) / pc.curvature;
+  }
+  p = Eigen::Vector3d(xy.x(), xy.y(), height_);
+  dp = Eigen::Vector3d(std::cos(h), std::sin(h), 0);
+  ddp = pc.curvature * Eigen::Vector3d(-std::sin(h), std::cos(h), 0);
+}
+
+const char* to_string(Interpolation i) {
+  switch (i) {
+    case Interpolation::kCartesian: return "cartesian";
+    case Interpolation::kJointCubic: return "joint-cubic";
+    case Interpolation::kJointQuintic: return "joint-quintic";
+  }
+  return "?";
+}
+
+std::vector<double> Path::breaks() const {
+  std::vector<double> out;
+  for (std::size_t k = 1; k < pieces_.size(); ++k) {
+    if (pieces_[k].curvature != pieces_[k - 1].curvature) out.push_back(pieces_[k].s0);
+  }
+  return out;
+}
+
+double Path::distance(const Eigen::Vector3d& p) const {
+  const Eigen::Vector2d xy = p.head<2>();
+  double best = std::numeric_limits<double>::infinity();
+  for (const Piece& pc : pieces_) {
+    Eigen::Vector3d a, b, d1, d2;
+    eval(pc.s0, a, d1, d2);
+    eval(pc.s0 + pc.len, b, d1, d2);
+    double d = std::min((xy - a.head<2>()).norm(), (xy - b.head<2>()).norm());  // the ends
+    if (pc.curvature == 0.0) {
+      const Eigen::Vector2d dir(std::cos(pc.heading0), std::sin(pc.heading0));
+      const double u = (xy - pc.p0).dot(dir);
+      if (u > 0 && u < pc.len) d = std::min(d, (xy - pc.p0 - u * dir).norm());
+    } else {
+      // Arc points: c + (sin h, -cos h) / kappa with h = heading0 + kappa u.
+      const Eigen::Vector2d c = pc.p0 + Eigen::Vector2d(-std::sin(pc.heading0), std::cos(pc.heading0)) / pc.curvature;
+      const Eigen::Vector2d r = xy - c;
+      if (r.norm() > 0) {
+        const double sg = pc.curvature > 0 ? 1.0 : -1.0;
+        const double h = std::atan2(sg * r.x(), -sg * r.y());
+        double u = std::remainder(h - pc.heading0, 2 * M_PI) / pc.curvature;
+        if (u < 0) u += 2 * M_PI / std::abs(pc.curvature);
+        if (u < pc.len) d = std::min(d, std::abs(r.norm() - 1.0 / std::abs(pc.curvature)));
+      }
+    }
+    best = std::min(best, std::hypot(d, p.z() - height_));
+  }
+  return best;
+}
+
+Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held,
+                     PumaConfig config, Eigen::Matrix3d R_fixed, Path path, Timing timing,
+                     Interpolation interpolation, int via_segments)
+    : robot_(std::move(robot)),
+      n_(n),
+      q_held_(q_held),
+      config_(config),
+      R_fixed_(R_fixed),
+      path_(std::move(path)),
+      timing_(std::move(timing)),
+      interp_(interpolation) {
+  if (const std::string why = puma_ik_unsupported(robot_); !why.empty()) {
+    throw std::invalid_argument(why);
+  }
+  if (n_ != 3 && n_ != 6) throw std::invalid_argument("reference: expected 3 or 6 joints");
+  // The branch table: the first point's angles (the configured wrist
+  // solution) nearest the middle of each range, then each point's solution
+  // and angles nearest the previous one's. 2000 points: a few
+  // ms once per scene. A point out of reach, a joint leaving its range or
+  // moving more than pi/4 between two points (a pass close to a singularity)
+  // is reported here, before any run.
+  const int points = 2000;
+  const double L = path_.length();
+  Eigen::Matrix<double, 6, 1> prev;
+  for (int j = 0; j < 6; ++j) prev[j] = 0.5 * (robot_.joints[j].q_min + robot_.joints[j].q_max);
+  branch_.reserve(points);
+  for (int k = 0; k < points; ++k) {
+    const double s = L * k / (points - 1);
+    Eigen::Vector3d p, dp, ddp;
+    path_.eval(s, p, dp, ddp);
+    Eigen::Matrix<double, 6, 1> q;
+    if (!joint_angles(p, prev, k > 0, q)) {
+      throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
+                               std::to_string(p.y()) + ", " + std::to_string(p.z()) + ") m at s = " +
+                               std::to_string(s) + " m is out of reach");
+    }
+    for (int j = 0; j < n_; ++j) {
+      const JointParams& J = robot_.joints[j];
+      if (k > 0 && std::abs(q[j] - prev[j]) > M_PI / 4) {
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " turns by " +
+                                 std::to_string(q[j] - prev[j]) + " rad between s = " +
+                                 std::to_string(L * (k - 1) / (points - 1)) + " and " + std::to_string(s) +
+                                 " m of the path (too close to a singularity)");
+      }
+      if (q[j] < J.q_min - 1e-9 || q[j] > J.q_max + 1e-9) {
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " at " + std::to_string(q[j]) +
+                                 " rad leaves its limits [" + std::to_string(J.q_min) + ", " +
+                                 std::to_string(J.q_max) + "] at s = " + std::to_string(s) + " m of the path");
+      }
+    }
+    branch_.push_back(q);
+    prev = q;
+  }
+  if (interp_ != Interpolation::kCartesian) {
+    if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
+    build_joint_spline(via_segments);
+    breakpoints_.assign(knots_.begin() + 1, knots_.end());
+  } else {
+    breakpoints_ = timing_.breakpoints();
+    for (double s : path_.breaks()) breakpoints_.push_back(timing_.time_at(s));
+  }
+  std::sort(breakpoints_.begin(), breakpoints_.end());
+  // One instant for breakpoints that coincide to rounding (a piece of the
+  // timing law ending where a path piece does).
+  seg_tol_ = 1e-12 * std::max(1.0, timing_.duration());
+  breakpoints_.erase(std::unique(breakpoints_.begin(), breakpoints_.end(),
+                                 [this](double a, double b) { return b - a <= seg_tol_; }),
+                     breakpoints_.end());
+  for (std::size_t k = 0; k <= breakpoints_.size(); ++k) {
+    const double a = k == 0 ? 0.0 : breakpoints_[k - 1];
+    const double mid = k < breakpoints_.size() ? 0.5 * (a + breakpoints_[k]) : a + 1.0;
+    if (interp_ == Interpolation::kCartesian) {
+      double s, sd, sdd;
+      timing_.eval(mid, s, sd, sdd);
+      seg_timing_.push_back(timing_.piece(mid));
+      seg_path_.push_back(path_.piece(std::clamp(s, 0.0, path_.length())));
+    } else {
+      const auto after = std::upper_bound(knots_.begin(), knots_.end(), std::min(mid, timing_.duration()));
+      seg_timing_.push_back(static_cast<int>(std::clamp<std::ptrdiff_t>(after - knots_.begin() - 1, 0,
+                                                                        std::ssize(coef_) - 1)));
+      seg_path_.push_back(0);
+    }
+  }
+}
+
+double Reference::next_breakpoint(double t) const {
+  const auto it = std::upper_bound(breakpoints_.begin(), breakpoints_.end(), t);
+  return it == breakpoints_.end() ? std::numeric_limits<double>::infinity() : *it;
+}
+
+int Reference::segment_after(double t) const {
+  return static_cast<int>(std::upper_bound(breakpoints_.begin(), breakpoints_.end(), t + seg_tol_) -
+                          breakpoints_.begin());
+}
+
+void Reference::build_joint_spline(int M) {
+  // Via-points at equal arc-length steps, at the times the timing law
+  // reaches them; q, qd, qdd there from the Cartesian reference.
+  knots_.resize(M + 1);
+  std::vector<ReferenceSample> via(M + 1);
+  for (int k = 0; k <= M; ++k) {
+    knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_.length() * k / M);
+    eval_cartesian(knots_[k], via[k], -1);
+  }
+  for (int k = 0; k < M; ++k) {
+    if (!(knots_[k + 1] > knots_[k])) throw std::invalid_argument("reference: via-points at the same time");
+  }
+  coef_.assign(M, Eigen::Matrix<double, 6, 6>::Zero());
+  for (int j = 0; j < n_; ++j) {
+    if (interp_ == Interpolation::kJointQuintic) {
+      // Hermite quintic on each piece: q, qd, qdd at both ends.
+      for (int k = 0; k < M; ++k) {
+        const double h = knots_[k + 1] - knots_[k];
+        const double q0 = via[k].q[j], v0 = via[k].qd[j], a0 = via[k].qdd[j];
+        const double q1 = via[k + 1].q[j], v1 = via[k + 1].qd[j], a1 = via[k + 1].qdd[j];
+        auto& c = coef_[k];
+        c(j, 0) = q0, c(j, 1) = v0, c(j, 2) = a0 / 2;
+        c(j, 3) = (20 * (q1 - q0) - (8 * v1 + 12 * v0) * h - (3 * a0 - a1) * h * h) / (2 * h * h * h);
+        c(j, 4) = (30 * (q0 - q1) + (14 * v1 + 16 * v0) * h + (3 * a0 - 2 * a1) * h * h) / (2 * std::pow(h, 4));
+        c(j, 5) = (12 * (q1 - q0) - 6 * (v1 + v0) * h + (a1 - a0) * h * h) / (2 * std::pow(h, 5));
+      }
+    } else {
+      // C2 cubic spline through the via-points, its end slopes clamped to the
+      // reference's end speeds: the knots' second derivatives m solve a
+      // tridiagonal system (Thomas algorithm; diagonally dominant).
+      std::vector<double> lo(M + 1), di(M + 1), up(M + 1), r(M + 1), m(M + 1);
+      auto hk = [&](int k) { return knots_[k + 1] - knots_[k]; };
+      auto slope = [&](int k) { return (via[k + 1].q[j] - via[k].q[j]) / hk(k); };
+      di[0] = 2 * hk(0), up[0] = hk(0), r[0] = 6 * (slope(0) - via[0].qd[j]);
+      for (int k = 1; k < M; ++k) {
+        lo[k] = hk(k - 1), di[k] = 2 * (hk(k - 1) + hk(k)), up[k] = hk(k);
+        r[k] = 6 * (slope(k) - slope(k - 1));
+      }
+      lo[M] = hk(M - 1), di[M] = 2 * hk(M - 1), r[M] = 6 * (via[M].qd[j] - slope(M - 1));
+      for (int k = 1; k <= M; ++k) {
+        const double w = lo[k] / di[k - 1];
+        di[k] -= w * up[k - 1];
+        r[k] -= w * r[k - 1];
+      }
+      m[M] = r[M] / di[M];
+      for (int k = M - 1; k >= 0; --k) m[k] = (r[k] - up[k] * m[k + 1]) / di[k];
+      for (int k = 0; k < M; ++k) {
+        const double h = hk(k);
+        auto& c = coef_[k];
+        c(j, 0) = via[k].q[j];
+        c(j, 1) = slope(k) - h * (2 * m[k] + m[k + 1]) / 6;
+        c(j, 2) = m[k] / 2;
+        c(j, 3) = (m[k + 1] - m[k]) / (6 * h);
+      }
+    }
+  }
+}
+
+void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bool extend) const {
+  const double T = timing_.duration();
+  // A moving piece continued past its ends (extend), or t within [0, T].
+  const bool continued = extend && segment >= 0 && segment < std::ssize(breakpoints_);
+  const double tc = continued ? t : std::clamp(t, 0.0, T);
+  // The piece [t_k, t_k+1) holding tc (or the segment's); the last one also holds T.
+  const auto after = std::upper_bound(knots_.begin(), knots_.end(), tc) - knots_.begin();
+  const std::size_t k =
+      segment >= 0 ? static_cast<std::size_t>(seg_timing_[static_cast<std::size_t>(segment)])
+                   : static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
+  const double u = tc - knots_[k];
+  const auto& c = coef_[k];
+  Eigen::Matrix<double, 6, 1> q = q_held_, qd = Eigen::Matrix<double, 6, 1>::Zero(),
+                              qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int j = 0; j < n_; ++j) {
+    double p = c(j, 5), v = 5 * c(j, 5), a = 20 * c(j, 5);
+    for (int e = 4; e >= 0; --e) p = p * u + c(j, e);
+    for (int e = 4; e >= 1; --e) v = v * u + e * c(j, e);
+    for (int e = 4; e >= 2; --e) a = a * u + e * (e - 1) * c(j, e);
+    q[j] = p;
+    // Moving inside (0, T); with a segment, up to its ends (the hold after T is the last).
+    const bool moving = continued || (segment >= 0 ? segment < std::ssize(breakpoints_) && t > 0 : t > 0 && t < T);
+    if (moving) qd[j] = v, qdd[j] = a;
+  }
+  Eigen::Matrix<double, 6, 6> J;
+  jacobian(q, J);
+  out.q = q, out.qd = qd, out.qdd = qdd;
+  out.p = position(q);
+  out.v = J.topRows<3>() * qd;
+}
+
+bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near,
+                             bool track_wrist, Eigen::Matrix<double, 6, 1>& q) const {
+  q = q_held_;
+  bool ok;
+  if (n_ == 3) {
+    Eigen::Vector3d q3;
+    ok = puma_ik_position(robot_, p, config_, q3);
+    q.head<3>() = q3;
+  } else {
+    ok = puma_ik(robot_, p, R_fixed_, config_, q);
+  }
+  for (int j = 0; j < n_; ++j) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+  if (n_ == 6 && track_wrist) {
+    // The other wrist solution (q4 + pi, -q5, q6 + pi) gives the same pose;
+    // through a wrist singularity (q5 = 0) the continuous motion passes from
+    // one to the other, so take whichever is nearer.
+    Eigen::Vector3d alt(q[3] + M_PI, -q[4], q[5] + M_PI);
+    for (int j = 0; j < 3; ++j) alt[j] += 2 * M_PI * std::round((near[3 + j] - alt[j]) / (2 * M_PI));
+    if ((alt - near.tail<3>()).squaredNorm() < (q.tail<3>() - near.tail<3>()).squaredNorm()) q.tail<3>() = alt;
+  }
+  return ok;
+}
+
+Eigen::Vector3d Reference::position(const Eigen::Matrix<double, 6, 1>& q_full) const {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  forward_kinematics<double>(robot_, q_full, R, p);
+  return p;
+}
+
+void Reference::jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const {
+  geometric_jacobian(robot_, q, n_, J);
+}
+
+void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
+                              Eigen::Matrix<double, 6, 6>& Jdot) const {
+  Eigen::Matrix<Dual, 6, 1> qq;
+  for (int j = 0; j < 6; ++j) qq[j] = Dual(q[j], qd[j]);
+  Eigen::Matrix<Dual, 6, 6> JJ;
+  geometric_jacobian(robot_, qq, n_, JJ);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) Jdot(r, c) = JJ(r, c).deriv();
+}
+
+void Reference::eval(double t, ReferenceSample& out, int segment, bool extend) const {
+  const int m = static_cast<int>(breakpoints_.size());
+  const bool inside = segment >= 0 && segment <= m &&
+                      (extend ||
+                       ((segment == 0 || t >= breakpoints_[static_cast<std::size_t>(segment - 1)] - seg_tol_) &&
+                        (segment == m || t <= breakpoints_[static_cast<std::size_t>(segment)] + seg_tol_)));
+  if (!inside) segment = -1;
+  if (interp_ == Interpolation::kCartesian) {
+    eval_cartesian(t, out, segment);
+  } else {
+    eval_joint_space(t, out, segment, extend);
+  }
+}
+
+void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) const {
+  double s, sd, sdd;
+  Eigen::Vector3d p, dp, ddp;
+  if (segment < 0) {
+    timing_.eval(t, s, sd, sdd);
+    path_.eval(s, p, dp, ddp);
+  } else {
+    timing_.eval_piece(seg_timing_[static_cast<std::size_t>(segment)], t, s, sd, sdd);
+    path_.eval_piece(seg_path_[static_cast<std::size_t>(segment)], s, p, dp, ddp);
+  }
+  out.p = p;
+  out.v = dp * sd;
+  const Eigen::Vector3d a = ddp * sd * sd + dp * sdd;
+  // Joint positions: the IK's branch nearest the table's angles at this s.
+  const double L = path_.length();
+  const auto k = static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
+  Eigen::Matrix<double, 6, 1> q;
+  const bool ok = joint_angles(p, branch_[k], true, q);
+  if (!ok) {
+    throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
+                             std::to_string(p.y()) + ", " + std::to_string(p.z()) +
+                             ") m at t = " + std::to_string(t) + " s is out of reach");
+  }
+  // Rates: J qd = [v; 0] and J qdd = [a; 0] - Jdot qd, over the simulated joints
+  // (n = 3: position rows only). Jdot qd exactly: the Jacobian on dual numbers
+  // q + eps qd (a central difference here put noise of about 1e-10 into qdd,
+  // which a tight-tolerance reference run could not get past).
+  Eigen::Matrix<double, 6, 6> J;
+  jacobian(q, J);
+  const int rows = n_ == 3 ? 3 : 6;
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  rhs.head<3>() = out.v;
+  Eigen::Matrix<double, 6, 1> qd = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> Jdot;
+  if (rows == 3) {
+    const Eigen::Matrix3d A = J.topLeftCorner<3, 3>();
+    const Eigen::PartialPivLU<Eigen::Matrix3d> lu(A);
+    qd.head<3>() = lu.solve(out.v);
+    jacobian_rate(q, qd, Jdot);
+    const Eigen::Vector3d Jdot_qd = Jdot.topLeftCorner<3, 3>() * qd.head<3>();
+    qdd.head<3>() = lu.solve(a - Jdot_qd);
+  } else {
+    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(J);
+    qd = lu.solve(rhs);
+    jacobian_rate(q, qd, Jdot);
+    Eigen::Matrix<double, 6, 1> acc = Eigen::Matrix<double, 6, 1>::Zero();
+    acc.head<3>() = a;
+    qdd = lu.solve(acc - Jdot * qd);
+  }
+  out.q = q;
+  out.qd = qd;
+  out.qdd = qdd;
+}
+
+}  // namespace pumasim

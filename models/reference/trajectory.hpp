@@ -1,0 +1,148 @@
+// Reference trajectories: a Cartesian path of lines and arcs in a horizontal
+// plane, a speed profile along it, and the joint references q_ref, qd_ref and
+// qdd_ref that the PUMA's closed-form inverse kinematics gives for it.
+//
+// The path is drawn like a turtle: a start point and heading in the plane
+// z = height (base frame), then segments that go straight or turn along an arc,
+// so that the tangent is continuous everywhere. A timing law (timing.hpp)
+// gives the arc length s(t). The tracked point is the flange origin,
+// which for the PUMA 560 (d6 = 0) is the wrist centre.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "models/robot/kinematics.hpp"
+#include "models/dynamics/robot_model.hpp"
+#include "models/reference/timing.hpp"
+
+namespace pumasim {
+
+struct PathSegment {
+  double length = 0;  // straight segment [m] (when radius == 0)
+  double radius = 0;  // arc radius [m]
+  double angle = 0;   // arc turning angle [rad], positive = left turn
+};
+
+class Path {
+ public:
+  Path(Eigen::Vector2d start, double heading, double height, std::vector<PathSegment> segments);
+  double length() const { return total_; }
+  // Position, first and second derivative with respect to the arc length s.
+  void eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
+  // The piece holding s, and the same evaluation on piece k (a line or arc
+  // continued past its ends: at a break, the limit from inside piece k).
+  int piece(double s) const;
+  void eval_piece(int k, double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
+  // Distance from p to the nearest point of the path [m] (exact for lines and arcs).
+  double distance(const Eigen::Vector3d& p) const;
+  // The arc lengths in (0, L) where the curvature jumps (a line meets an arc,
+  // or arcs of different radius or turning direction meet).
+  std::vector<double> breaks() const;
+
+ private:
+  struct Piece {
+    double s0, len;
+    Eigen::Vector2d p0;
+    double heading0;
+    double curvature;  // 0 for a line, +-1/r for an arc
+  };
+  std::vector<Piece> pieces_;
+  double height_, total_ = 0;
+};
+
+// How the joints follow the path: through the closed-form inverse kinematics
+// at every instant (Cartesian timing), or by interpolating in joint space
+// between via-points of the path (the joint angles of the Cartesian reference
+// at the via-points' times): a C2 cubic spline (clamped to the reference's end
+// speeds), or quintic Hermite pieces matching the reference's q, qd, qdd at
+// each via-point. Between via-points the flange then leaves the path.
+enum class Interpolation { kCartesian, kJointCubic, kJointQuintic };
+// "cartesian", "joint-cubic", "joint-quintic" (the scene's names).
+const char* to_string(Interpolation i);
+
+struct ReferenceSample {
+  Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
+  Eigen::Vector3d p, v;                    // Cartesian position [m], velocity [m/s]
+};
+
+// Joint references for the first n joints of `robot`; the others are held at
+// q_held. n = 3: the wrist centre follows the path; n = 6: the flange also
+// keeps the orientation R_fixed.
+class Reference {
+ public:
+  // via_segments: with joint-space interpolation, the via-points split the
+  // path into this many pieces of equal length (>= 1).
+  Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held, PumaConfig config,
+            Eigen::Matrix3d R_fixed, Path path, Timing timing,
+            Interpolation interpolation = Interpolation::kCartesian, int via_segments = 0);
+  const Path& path() const { return path_; }
+  const Timing& timing() const { return timing_; }
+  Interpolation interpolation() const { return interp_; }
+  int simulated_joints() const { return n_; }
+  // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
+  // With a segment (the smooth piece between breakpoints segment - 1 and
+  // segment, see breakpoints()) and t within rounding of it, that piece's
+  // formula is evaluated, so that at a breakpoint the value is the limit from
+  // inside the segment: a step that ends there sees the left limit, one that
+  // starts there the right limit. Otherwise the segment is found from t.
+  // With extend, the segment's formula is evaluated at any t (its smooth
+  // continuation past the piece's ends, for differences in t that must not see
+  // a kink; the caller keeps t near the piece).
+  void eval(double t, ReferenceSample& out, int segment = -1, bool extend = false) const;
+  // The segment a step starting at t lies in: the number of breakpoints <= t
+  // (to rounding).
+  int segment_after(double t) const;
+  // The instants where the reference is not infinitely differentiable in t,
+  // sorted: the timing law's breakpoints and the times at which it crosses the
+  // path's curvature jumps (Cartesian), or the spline's knots (joint space).
+  // The plant makes them time events, so that no integrator steps across one.
+  const std::vector<double>& breakpoints() const { return breakpoints_; }
+  // The first breakpoint strictly after t (+inf if none).
+  double next_breakpoint(double t) const;
+  // The flange position for joint angles q (simulated joints first).
+  Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
+
+ private:
+  void eval_cartesian(double t, ReferenceSample& out, int segment) const;
+  void eval_joint_space(double t, ReferenceSample& out, int segment, bool extend) const;
+  void build_joint_spline(int segments);
+  // Columns for the simulated joints of [Jv; Jw] at q (closed form).
+  void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
+  // Its time derivative along qd (exact: one pass on dual numbers).
+  void jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
+                     Eigen::Matrix<double, 6, 6>& Jdot) const;
+  // IK at the path point p, each angle the representative (mod 2 pi) nearest
+  // `near`, and with track_wrist the wrist solution nearest it; false if out
+  // of reach.
+  bool joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near, bool track_wrist,
+                    Eigen::Matrix<double, 6, 1>& q) const;
+
+  RobotModel robot_;
+  int n_;
+  Eigen::Matrix<double, 6, 1> q_held_;
+  PumaConfig config_;
+  Eigen::Matrix3d R_fixed_;
+  Path path_;
+  Timing timing_;
+  Interpolation interp_;
+  // Joint-space interpolation: knot times, and per piece the coefficients
+  // c(j, k) of (t - t_k)^k for each simulated joint j.
+  std::vector<double> knots_;
+  std::vector<Eigen::Matrix<double, 6, 6>> coef_;
+  // Joint angles along the path, unwrapped by continuity, at equal steps of
+  // arc length: the wrist solution, and the branch of a joint whose range
+  // exceeds 2 pi (the PUMA's wrist roll), are chosen nearest these, so the
+  // reference stays continuous where the IK's (-pi, pi] would jump and through
+  // a wrist singularity.
+  std::vector<Eigen::Matrix<double, 6, 1>> branch_;
+  std::vector<double> breakpoints_;
+  // Per segment: the timing law's and the path's piece (Cartesian), or the
+  // spline piece (joint space), found at the segment's middle.
+  std::vector<int> seg_timing_, seg_path_;
+  double seg_tol_ = 0;  // how close to a segment's ends t counts as inside it [s]
+};
+
+}  // namespace pumasim

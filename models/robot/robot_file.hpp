@@ -1,0 +1,22 @@
+// Robot files: a RobotModel in TOML (format documented in models/robots/README.md).
+#pragma once
+
+#include <string>
+
+#include "models/dynamics/robot_model.hpp"
+#include "models/robot/strict_toml.hpp"
+
+namespace pumasim {
+
+// Loads and checks a robot file; ConfigError naming file, line and key otherwise.
+RobotModel load_robot_file(const std::string& path);
+
+// `name_or_path` is a path when it contains '/' or ends in ".toml"; otherwise
+// the shipped robot file <robots dir>/<name>.toml ("puma560").
+RobotModel load_robot(const std::string& name_or_path);
+
+// The directory of the shipped robot files: $PUMASIM_ROBOTS_DIR if set, else
+// the source tree's models/robots.
+std::string robots_dir();
+
+}  // namespace pumasim

@@ -1,0 +1,78 @@
+// Scenes: which joints, which blocks, which back-end and integrator, the
+// reference, duration and output interval, in one TOML file read strictly
+// (format in experiments/scenes/README.md). A scene resolves to a
+// PlantConfig; resolved_toml() writes it back with every default filled in.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "models/plant/plant.hpp"
+#include "models/robot/strict_toml.hpp"
+#include "models/reference/time_optimal.hpp"
+
+namespace pumasim {
+
+struct IntegratorSettings {
+  std::string name = "rk4";  // checked against the integrator registry by the command line
+  std::string name_where;    // "file:line: integrator.name: " when the scene sets it (for that check's message)
+  double dt = 5e-4;          // [s] fixed-step methods
+  double rtol = 1e-6;        // adaptive methods
+  double atol = 1e-8;
+};
+
+struct ReferenceSettings {
+  double height = 0.0;                   // plane z [m]
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();
+  double heading = 0.0;                  // [rad]
+  std::vector<PathSegment> segments;
+  // Timing law (models/reference/timing.hpp): "table" (the paper's piecewise-linear
+  // speed: profile with max_speed or traversal_time), "trapezoid", "scurve",
+  // "quintic" (traversal_time; blend, jerk_fraction), "time-optimal" ([planning]).
+  std::string timing = "table";
+  std::vector<Eigen::Vector2d> profile;  // (t/T, v/v_max)
+  double max_speed = 0.0;                // [m/s] (table; 0: from traversal_time)
+  double traversal_time = 0.0;           // [s] (0: from max_speed)
+  double blend = 0.2;                    // trapezoid, scurve: acceleration phase / T
+  double jerk_fraction = 0.25;           // scurve: jerk phase / acceleration phase
+  Interpolation interpolation = Interpolation::kCartesian;
+  int via_segments = 10;                 // joint-space interpolation
+  // time-optimal: the drives' limits as the planner uses them.
+  double voltage_fraction = 0.8;         // of min(K_A u_max, V_max), the rest left to feedback
+  std::vector<double> current_limit;     // [A] per joint (inf: none)
+  std::vector<double> joint_speed_limit; // [rad/s] per joint (inf: none)
+  int grid = 1000;                       // arc-length grid intervals
+  PumaConfig config;
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();  // 6 joints: flange orientation
+};
+
+struct Scene {
+  std::string name;
+  std::string file;
+  std::string robot_spec;  // as written in the file
+  bool rotor_inertia = true;  // false: the robot's rotor inertias removed (scene.rotor_inertia)
+  double duration = 0.0;         // [s]
+  double output_interval = 0.01; // [s]
+  IntegratorSettings integrator;
+  bool has_reference = false;
+  ReferenceSettings reference;
+  PlantConfig plant;
+};
+
+// What reference.timing = "time-optimal" plans with: the path's reference at
+// unit speed (its derivatives q'(s), q''(s)) and the planner with the drives'
+// limits (a fraction of min(K_A u_max, V_max), current and speed limits).
+struct PlanningSetup {
+  std::unique_ptr<Reference> unit;
+  std::unique_ptr<TimeOptimalPlanner> planner;
+};
+PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r);
+
+// Loads and checks a scene; ConfigError naming file, line and key otherwise.
+// overrides: "section.key=value" (TOML value syntax), applied before the checks.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// The scene with every default filled in, as TOML.
+std::string resolved_toml(const Scene& scene);
+
+}  // namespace pumasim
