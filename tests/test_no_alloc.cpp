@@ -1,13 +1,19 @@
 // The dynamics calls allocate nothing on the heap. Two independent proofs:
 //  1. Eigen's own guard: this file is compiled with EIGEN_RUNTIME_NO_MALLOC and
 //     instantiates the algorithms itself; with set_is_malloc_allowed(false) any
-//     Eigen heap allocation inside them aborts the test.
+//     Eigen heap allocation inside them aborts the test. The guard reports
+//     through eigen_assert, so this file keeps asserts in every build
+//     (tests/CMakeLists.txt: -UNDEBUG; checked below).
 //  2. A counting malloc: this test binary interposes malloc/calloc/realloc (glibc
 //     forwards to __libc_*), so every heap allocation of the process -- operator
 //     new, std::vector, Eigen -- is counted, including those inside the compiled
 //     library behind the DynamicsBackend interface.
 #define EIGEN_RUNTIME_NO_MALLOC
 #include <gtest/gtest.h>
+
+#ifdef NDEBUG
+#error "test_no_alloc.cpp needs asserts: Eigen's malloc guard reports through eigen_assert"
+#endif
 
 #include <atomic>
 #include <cstdlib>
@@ -108,6 +114,17 @@ struct EigenGuard {
     EXPECT_TRUE(qdd.allFinite()) << Algo<double, Eigen::Dynamic>::kName;
   }
 };
+
+// The guard is live in this build: an Eigen allocation while it is closed aborts.
+TEST(NoAllocationDeathTest, EigenRuntimeGuardFiresOnAnAllocation) {
+  EXPECT_DEATH(
+      {
+        Eigen::internal::set_is_malloc_allowed(false);
+        Eigen::VectorXd v(16);
+        v.setZero();
+      },
+      "");
+}
 
 TEST(NoAllocation, EigenRuntimeGuardOnTheAlgorithms) {
   const RobotModel m = random_chain(7, 5);
