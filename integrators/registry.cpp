@@ -98,33 +98,33 @@ namespace {
 constexpr auto F = IntegratorKind::kFixedStep;
 constexpr auto A = IntegratorKind::kAdaptive;
 constexpr std::array<IntegratorInfo, 13> kIntegrators{{
-    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2},
-    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3},
-    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4},
+    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2, 1},
+    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
+    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4, 3},
     {"arkode-dirk", "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
-     &detail::make_arkode_dirk, A, 4, false, true, 0, 0.0, 3},
+     &detail::make_arkode_dirk, A, 4, false, true, 0, 0.0, 3, 0},
     {"arkode-erk", "SUNDIALS ARKODE, explicit RK (order 4); adaptive", &detail::make_arkode_erk, A, 4, false, false, 0,
-     0.0, 3},
+     0.0, 3, 0},
     {"arkode-imex", "SUNDIALS ARKODE, additive IMEX RK (order 4): the system's stiff part implicit; adaptive",
-     &detail::make_arkode_imex, A, 4, false, true, 0, 0.0, 3},
+     &detail::make_arkode_imex, A, 4, false, true, 0, 0.0, 3, 0},
     {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams, A, 12,
-     true, true, 0, 0.0, 12},
+     true, true, 0, 0.0, 12, 0},
     {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf, A, 5, true, true, 0,
-     0.0, 5},
-    {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1},
+     0.0, 5, 0},
+    {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1, 0},
     {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
-     false, false, 0, 0.0, 4},
+     false, false, 0, 0.0, 4, 0},
     {"odeint-rodas4p",
      "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order reduction), "
      "adaptive, linearly implicit, the system's Jacobian",
-     &detail::make_odeint_rodas4p, A, 4, false, true, 0, 0.0, 3},
+     &detail::make_odeint_rodas4p, A, 4, false, true, 0, 0.0, 3, 0},
     {"odeint-rosenbrock4",
      "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; order "
      "4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly implicit, the "
      "system's Jacobian",
-     &detail::make_odeint_rosenbrock4, A, 4, false, true, 0, 0.0, 3},
+     &detail::make_odeint_rosenbrock4, A, 4, false, true, 0, 0.0, 3, 0},
     {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4, F, 4, false, false, 4, 2.785293563405282,
-     3},
+     3, 0},
 }};
 
 }  // namespace

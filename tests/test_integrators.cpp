@@ -137,7 +137,8 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
     EXPECT_LT(integ->stats().steps, 2000) << n;
     return;
   }
-  const double bound = n == "euler" ? 2.0 : n == "rk4" ? 2.785 : n == "ab2" ? 1.0 : n == "ab3" ? 6.0 / 11 : 0.3;
+  const double bound = find_integrator(n).real_stability;  // the registry's closed form
+  ASSERT_GT(bound, 0) << n << ": an explicit fixed-step entry without its stability interval";
   Linear sys(-100.0);
   const double inside = 0.9 * bound / 100, outside = 1.1 * bound / 100;
   EXPECT_LT(std::abs(solve(name(), sys, fixed(inside), 400 * inside)), 1.0) << n;
@@ -186,10 +187,12 @@ TEST_P(EveryIntegrator, CountsItsStatistics) {
   EXPECT_GE(s.rhs_evaluations, s.steps);
   if (!caps().adaptive) {
     EXPECT_EQ(s.steps, 100);
-    const std::string n = name();
-    const long k = n == "ab2" ? 2 : n == "ab3" ? 3 : n == "ab4" ? 4 : 0;
-    const long expected = n == "euler" ? 100 : n == "rk4" ? 400 : 100 + 3 * (k - 1);  // AB: RK4 start
-    EXPECT_EQ(s.rhs_evaluations, expected) << n;
+    // From the registry: rhs_per_step per step, and the RK4 starter's steps
+    // (4 right-hand sides each) in place of the method's own.
+    const IntegratorInfo& info = find_integrator(name());
+    ASSERT_GT(info.rhs_per_step, 0) << name() << ": a fixed-step entry without its right-hand sides per step";
+    const long expected = 100L * info.rhs_per_step + info.starter_steps * (4L - info.rhs_per_step);
+    EXPECT_EQ(s.rhs_evaluations, expected) << name();
   }
   EXPECT_GT(s.wall_time, 0.0);
 }

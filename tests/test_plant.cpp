@@ -400,7 +400,9 @@ void expect_time_derivative_is_the_steps_limit(const std::string& scene, std::ve
     expect_ratios(forward, 1.7, 2.3, "forward from t = " + std::to_string(b) + " (h)");
     if (b > 0 && backward.back() > 0.25 * backward.front()) kink_seen = true;
   }
-  if (starts.size() > 1) EXPECT_TRUE(kink_seen) << "no breakpoint where the backward quotient fails to converge";
+  if (starts.size() > 1) {
+    EXPECT_TRUE(kink_seen) << "no breakpoint where the backward quotient fails to converge";
+  }
   // Just before the end of the motion: the piece before it, continued.
   const double te = T - 2e-6;
   plant.time_derivative(te, x.data(), ft.data());
