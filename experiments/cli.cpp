@@ -40,16 +40,18 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-constexpr const char* kUsage =
-    "usage: pumasim <command> [options]\n"
-    "commands:\n"
+// Each command's lines of `pumasim help`.
+constexpr const char* kUsage_dynamics =
     "  dynamics --robot <name-or-file> --backend <name> --q=<csv|pose> [--qd=<csv>]\n"
     "           [--qdd=<csv>] [--tau=<csv>] [--no-rotor-inertia]\n"
-    "      prints H, h, g (and tau from qdd, qdd from tau) as one JSON object\n"
-    "  backends   lists the dynamics back-ends\n"
+    "      prints H, h, g (and tau from qdd, qdd from tau) as one JSON object\n";
+constexpr const char* kUsage_backends =
+    "  backends   lists the dynamics back-ends\n";
+constexpr const char* kUsage_check =
     "  check <scene.toml> [--set section.key=value ...]\n"
     "      checks a scene; prints it resolved (every default filled in), its state\n"
-    "      layout and initial state\n"
+    "      layout and initial state\n";
+constexpr const char* kUsage_run =
     "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
     "      [--t-end X] [--out DIR [--force]] [--exact-jacobian] [--max-steps N] [--max-wall S]\n"
     "      [--late-events | --stop-at-outputs]\n"
@@ -71,17 +73,20 @@ constexpr const char* kUsage =
     "      The integrator stops only where the right-hand side changes (samples,\n"
     "      set-point updates, the reference's breakpoints, roots); outputs come from\n"
     "      its dense output. --stop-at-outputs also stops it at every output time\n"
-    "      (the output grid then caps the step: for comparison only).\n"
+    "      (the output grid then caps the step: for comparison only).\n";
+constexpr const char* kUsage_stiffness =
     "  stiffness <scene.toml> [--t-end X] [--samples N] [--bisect] [--set section.key=value ...]\n"
     "      eigenvalues of the plant Jacobian along a run (default 20 samples over\n"
     "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
     "      by state; each explicit method's largest stable step from its stability\n"
-    "      region and, with --bisect, found on the scene\n"
+    "      region and, with --bisect, found on the scene\n";
+constexpr const char* kUsage_conditioning =
     "  conditioning <scene.toml> [--samples N] [--set section.key=value ...]\n"
     "      cond(H) along the scene's reference (default 200 samples) and every\n"
-    "      back-end's forward-dynamics error there (tau from the reference's qdd)\n"
-    "  integrators   lists the integrators\n"
-
+    "      back-end's forward-dynamics error there (tau from the reference's qdd)\n";
+constexpr const char* kUsage_integrators =
+    "  integrators   lists the integrators\n";
+constexpr const char* kUsage_help =
     "  help       prints this text\n";
 
 // --key=value, --key value, or a bare --flag; values may start with '-'.
@@ -716,24 +721,48 @@ int cmd_backends(std::ostream& out) {
   return kExitOk;
 }
 
+// The commands: `pumasim help` and the messages that name the commands are
+// generated from this table.
+struct Command {
+  const char* name;
+  const char* usage;
+  int (*run)(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+};
+int cmd_help(const std::vector<std::string>&, std::ostream& out, std::ostream&);
+constexpr Command kCommands[] = {
+    {"dynamics", kUsage_dynamics, [](const auto& a, auto& o, auto&) { return cmd_dynamics(a, o); }},
+    {"backends", kUsage_backends, [](const auto&, auto& o, auto&) { return cmd_backends(o); }},
+    {"check", kUsage_check, [](const auto& a, auto& o, auto&) { return cmd_check(a, o); }},
+    {"run", kUsage_run, &cmd_run},
+    {"stiffness", kUsage_stiffness, [](const auto& a, auto& o, auto&) { return cmd_stiffness(a, o); }},
+    {"conditioning", kUsage_conditioning, [](const auto& a, auto& o, auto&) { return cmd_conditioning(a, o); }},
+    {"integrators", kUsage_integrators, [](const auto&, auto& o, auto&) { return cmd_integrators(o); }},
+    {"help", kUsage_help, &cmd_help},
+};
+
+int cmd_help(const std::vector<std::string>&, std::ostream& out, std::ostream&) {
+  out << "usage: pumasim <command> [options]\ncommands:\n";
+  for (const Command& c : kCommands) out << c.usage;
+  return kExitOk;
+}
+
+std::string command_names() {
+  std::string s;
+  for (const Command& c : kCommands) s += std::string(s.empty() ? "" : ", ") + c.name;
+  return s;
+}
+
 }  // namespace
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
-    if (args.empty()) throw UsageError("missing command; expected run, check, dynamics, backends, integrators or help");
-    const std::string& cmd = args[0];
-    if (cmd == "dynamics") return cmd_dynamics(args, out);
-    if (cmd == "backends") return cmd_backends(out);
-    if (cmd == "check") return cmd_check(args, out);
-    if (cmd == "run") return cmd_run(args, out, err);
-    if (cmd == "integrators") return cmd_integrators(out);
-    if (cmd == "stiffness") return cmd_stiffness(args, out);
-    if (cmd == "conditioning") return cmd_conditioning(args, out);
-    if (cmd == "help" || cmd == "--help" || cmd == "-h") {
-      out << kUsage;
-      return kExitOk;
+    if (args.empty()) throw UsageError("missing command; expected one of: " + command_names());
+    std::string cmd = args[0];
+    if (cmd == "--help" || cmd == "-h") cmd = "help";
+    for (const Command& c : kCommands) {
+      if (cmd == c.name) return c.run(args, out, err);
     }
-    throw UsageError("unknown command '" + cmd + "'; expected run, check, dynamics, backends, integrators or help");
+    throw UsageError("unknown command '" + cmd + "'; expected one of: " + command_names());
   } catch (const UsageError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const ConfigError& e) {
