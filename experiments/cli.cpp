@@ -22,6 +22,7 @@
 #include <sundials/sundials_config.h>
 
 #include "experiments/simulation/driver.hpp"
+#include "experiments/simulation/run_recorder.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
@@ -323,14 +324,6 @@ int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
   return kExitOk;
 }
 
-std::string unit_of(const std::string& state) {
-  if (state.rfind("qd", 0) == 0) return "rad/s";
-  if (state.rfind("q", 0) == 0) return "rad";
-  if (state.rfind("i_motor", 0) == 0) return "A";
-  if (state.rfind("z_piv", 0) == 0) return "rad s";
-  if (state.rfind("e_", 0) == 0) return "J";
-  return "-";
-}
 
 std::string shell_line(const char* cmd) {
   std::string outp;
@@ -428,36 +421,8 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
 
   Plant plant(sc.plant);
   auto integ = iinfo.make(io);
-  const StateLayout& L = plant.layout();
-  const int n = L.n;
-  // Trajectory rows, written once the run is over.
-  std::ostringstream csv;
-  csv << "t [s]";
-  for (const auto& name : L.names) csv << "," << name << " [" << unit_of(name) << "]";
-  if (sc.plant.reference) {
-    for (int j = 0; j < n; ++j) csv << ",q_ref" << j + 1 << " [rad]";
-  }
-  csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
-  if (sc.plant.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
-  if (sc.plant.drive) {
-    for (int j = 0; j < n; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
-  }
-  const int led = L.e;  // the ledger's first state, -1 without
-  if (led >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
-  csv << "\n";
-  // The run only copies the state at each output (the wall time is the
-  // simulation's); rows are formatted, with reference and kinematics, after.
-  const int m = plant.size();
-  std::vector<double> saved;  // [t, x...] per output
-  const bool drive = sc.plant.drive;
-  std::vector<double> signals;  // [u, e_a, i] per joint per output
-  std::vector<DriveSignals> now(static_cast<std::size_t>(n));
-  // A continuous controller on a continuous reference: the drive signals are
-  // a function of (t, x), computed after the run; otherwise (sampled output,
-  // held set-points) they are taken at each output instant, inside the run.
-  const bool held = plant.holds_drive_state();
-  if (held) signals.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * 3 * n));
-  saved.reserve(static_cast<std::size_t>((sc.duration / sc.output_interval + 2) * (m + 1)));
+  const int n = plant.layout().n;
+  RunRecorder recorder(plant, sc.duration, sc.output_interval);
   const bool tty = isatty(STDERR_FILENO);
   auto last_progress = std::chrono::steady_clock::now();
   if (opt.flags.count("late-events") && opt.flags.count("stop-at-outputs")) {
@@ -467,87 +432,14 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
                       : opt.flags.count("stop-at-outputs") ? Stops::kEventsAndOutputs
                                                             : Stops::kEvents;
   const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
-    saved.push_back(t);
-    saved.insert(saved.end(), x, x + m);
-    if (held) {  // the controller's discrete state (held output or set-point) is only known now
-      plant.drive_signals(t, x, now.data());
-      for (const DriveSignals& d : now) signals.insert(signals.end(), {d.u, d.ea, d.i});
-    }
+    recorder.observe(t, x);
     if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
       err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
       last_progress = std::chrono::steady_clock::now();
     }
   }, max_steps, stops, max_wall);
-  double max_err = 0, sum_sq = 0, max_dev = 0, sum_sq_dev = 0;
-  long samples = 0, rows = 0;
-  // Drive signals at the outputs: peaks, and the outputs at which the
-  // controller's DAC or the amplifier is at its limit.
-  std::vector<double> peak_u(n, 0.0), peak_ea(n, 0.0), peak_i(n, 0.0);
-  std::vector<long> saturated(n, 0);
-  ReferenceSample ref;
-  // Energy ledger: residual of (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction),
-  // and the scale it is judged against (the largest term seen, kinetic energy included).
-  double E0 = 0, max_residual = 0, energy_scale = 0;
-  char buf[40];
-  auto num = [&](double v) { std::snprintf(buf, sizeof buf, ",%.17g", v); csv << buf; };
-  for (std::size_t row = 0; row + m < saved.size(); row += static_cast<std::size_t>(m + 1)) {
-    const double t = saved[row];
-    const double* x = &saved[row + 1];
-    ++rows;
-    std::snprintf(buf, sizeof buf, "%.17g", t);
-    csv << buf;
-    for (int i = 0; i < m; ++i) num(x[i]);
-    Eigen::Matrix3d R_tool;
-    Eigen::Vector3d p;
-    plant.tool_pose(x, R_tool, p);
-    if (sc.plant.reference) {
-      sc.plant.reference->eval(std::min(t, sc.plant.reference->timing().duration()), ref);
-      for (int j = 0; j < n; ++j) num(ref.q[j]);
-    }
-    num(p.x()), num(p.y()), num(p.z());
-    Eigen::Quaterniond quat(R_tool);
-    if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
-    num(quat.w()), num(quat.x()), num(quat.y()), num(quat.z());
-    if (sc.plant.reference) {
-      const double e = (p - ref.p).norm();
-      // Deviation: the distance to the geometric path, whatever the timing
-      // (a joint-space interpolation leaves the path between via-points).
-      const double dev = sc.plant.reference->path().distance(p);
-      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e), num(1e3 * dev);
-      max_err = std::max(max_err, e);
-      sum_sq += e * e;
-      max_dev = std::max(max_dev, dev);
-      sum_sq_dev += dev * dev;
-      ++samples;
-    }
-    if (drive) {
-      if (!held) plant.drive_signals(t, x, now.data());
-      for (int j = 0; j < n; ++j) {
-        const auto at = static_cast<std::size_t>(3 * ((rows - 1) * n + j));
-        const DriveSignals d = held ? DriveSignals{signals[at], signals[at + 1], signals[at + 2]}
-                                    : now[static_cast<std::size_t>(j)];
-        num(d.u), num(d.ea);
-        peak_u[j] = std::max(peak_u[j], std::abs(d.u));
-        peak_ea[j] = std::max(peak_ea[j], std::abs(d.ea));
-        peak_i[j] = std::max(peak_i[j], std::abs(d.i));
-        const double u_lim = sc.plant.piv[j].output_limit, v_lim = sc.plant.amplifier[j].voltage_limit;
-        if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(sc.plant.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
-          ++saturated[j];
-        }
-      }
-    }
-    if (led >= 0) {
-      double kin = 0;
-      const double Em = plant.mechanical_energy(x, &kin), Eg = plant.magnetic_energy(x);
-      if (row == 0) E0 = Em + Eg;
-      const double res = (Em + Eg - E0) - (x[led] - x[led + 1] - x[led + 2]);
-      num(Em), num(Eg), num(res);
-      max_residual = std::max(max_residual, std::abs(res));
-      energy_scale = std::max({energy_scale, kin, Eg, std::abs(Em + Eg - E0), std::abs(x[led]),
-                               std::abs(x[led + 1]), std::abs(x[led + 2])});
-    }
-    csv << "\n";
-  }
+  const std::string csv = recorder.finish();
+  const RunFigures& fig = recorder.figures();
   if (tty) err << "\r" << std::string(60, ' ') << "\r";
   const IntegratorStats& st = integ->stats();
   std::ostringstream js;
@@ -584,13 +476,13 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   js << ",\n  \"wall_time_s\": ";
   json_number(js, r.wall_time);
   js << ",\n  \"max_path_error_mm\": ";
-  json_number(js, samples ? 1e3 * max_err : std::nan(""));
+  json_number(js, fig.samples ? 1e3 * fig.max_path_error : std::nan(""));
   js << ",\n  \"rms_path_error_mm\": ";
-  json_number(js, samples ? 1e3 * std::sqrt(sum_sq / samples) : std::nan(""));
+  json_number(js, fig.samples ? 1e3 * fig.rms_path_error : std::nan(""));
   js << ",\n  \"max_path_deviation_mm\": ";
-  json_number(js, samples ? 1e3 * max_dev : std::nan(""));
+  json_number(js, fig.samples ? 1e3 * fig.max_path_deviation : std::nan(""));
   js << ",\n  \"rms_path_deviation_mm\": ";
-  json_number(js, samples ? 1e3 * std::sqrt(sum_sq_dev / samples) : std::nan(""));
+  json_number(js, fig.samples ? 1e3 * fig.rms_path_deviation : std::nan(""));
   js << ",\n  \"reference_duration_s\": ";
   json_number(js, sc.plant.reference ? sc.plant.reference->timing().duration() : std::nan(""));
   if (sc.plant.drive) {
@@ -602,16 +494,16 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       }
       js << "]";
     };
-    list("peak_controller_output_V", [&](int j) { return peak_u[j]; });
-    list("peak_voltage_V", [&](int j) { return peak_ea[j]; });
-    list("peak_current_A", [&](int j) { return peak_i[j]; });
-    list("saturated_fraction", [&](int j) { return rows ? static_cast<double>(saturated[j]) / rows : 0.0; });
+    list("peak_controller_output_V", [&](int j) { return fig.peak_u[j]; });
+    list("peak_voltage_V", [&](int j) { return fig.peak_ea[j]; });
+    list("peak_current_A", [&](int j) { return fig.peak_i[j]; });
+    list("saturated_fraction", [&](int j) { return fig.saturated_fraction[j]; });
   }
-  if (led >= 0) {
+  if (fig.ledger) {
     js << ",\n  \"max_ledger_residual_J\": ";
-    json_number(js, max_residual);
+    json_number(js, fig.max_ledger_residual);
     js << ",\n  \"ledger_energy_scale_J\": ";
-    json_number(js, energy_scale);
+    json_number(js, fig.ledger_energy_scale);
   }
   js << "\n}\n";
 
@@ -629,7 +521,7 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
        << ",\n  \"machine\": " << json_string(std::string(u.sysname) + " " + u.release + " " + u.machine)
        << ",\n  \"cpus\": " << std::thread::hardware_concurrency() << "\n}\n";
 
-  write_run_folder(dir, {{"trajectory.csv", csv.str()}, {"stats.json", js.str()}, {"meta.json", meta.str()},
+  write_run_folder(dir, {{"trajectory.csv", csv}, {"stats.json", js.str()}, {"meta.json", meta.str()},
                          {"scene.resolved.toml", resolved_toml(sc)}},
                    force);
   out << js.str();  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr

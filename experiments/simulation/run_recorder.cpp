@@ -1,0 +1,143 @@
+#include "experiments/simulation/run_recorder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+namespace pumasim {
+
+std::string unit_of_state(const std::string& state) {
+  if (state.rfind("qd", 0) == 0) return "rad/s";
+  if (state.rfind("q", 0) == 0) return "rad";
+  if (state.rfind("i_motor", 0) == 0) return "A";
+  if (state.rfind("z_piv", 0) == 0) return "rad s";
+  if (state.rfind("e_", 0) == 0) return "J";
+  return "-";
+}
+
+RunRecorder::RunRecorder(Plant& plant, double duration, double output_interval)
+    : plant_(plant),
+      cfg_(plant.config()),
+      m_(plant.size()),
+      n_(plant.layout().n),
+      held_(plant.holds_drive_state()),
+      now_(static_cast<std::size_t>(plant.layout().n)) {
+  const auto outputs = static_cast<std::size_t>(duration / output_interval + 2);
+  saved_.reserve(outputs * static_cast<std::size_t>(m_ + 1));
+  if (held_) signals_.reserve(outputs * 3 * static_cast<std::size_t>(n_));
+}
+
+void RunRecorder::observe(double t, const double* x) {
+  saved_.push_back(t);
+  saved_.insert(saved_.end(), x, x + m_);
+  if (held_) {  // the controller's discrete state (held output or set-point) is only known now
+    plant_.drive_signals(t, x, now_.data());
+    for (const DriveSignals& d : now_) signals_.insert(signals_.end(), {d.u, d.ea, d.i});
+  }
+}
+
+std::string RunRecorder::header() const {
+  std::ostringstream csv;
+  csv << "t [s]";
+  for (const auto& name : plant_.layout().names) csv << "," << name << " [" << unit_of_state(name) << "]";
+  if (cfg_.reference) {
+    for (int j = 0; j < n_; ++j) csv << ",q_ref" << j + 1 << " [rad]";
+  }
+  csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
+  if (cfg_.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
+  if (cfg_.drive) {
+    for (int j = 0; j < n_; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
+  }
+  if (plant_.layout().e >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
+  csv << "\n";
+  return csv.str();
+}
+
+std::string RunRecorder::finish() {
+  std::ostringstream csv;
+  csv << header();
+  const int n = n_, m = m_, led = plant_.layout().e;
+  fig_ = RunFigures{};
+  fig_.ledger = led >= 0;
+  fig_.peak_u.assign(n, 0.0), fig_.peak_ea.assign(n, 0.0), fig_.peak_i.assign(n, 0.0);
+  std::vector<long> saturated(n, 0);
+  double sum_sq = 0, sum_sq_dev = 0, E0 = 0;
+  ReferenceSample ref;
+  char buf[40];
+  auto num = [&](double v) {
+    std::snprintf(buf, sizeof buf, ",%.17g", v);
+    csv << buf;
+  };
+  for (std::size_t row = 0; row + m < saved_.size(); row += static_cast<std::size_t>(m + 1)) {
+    const double t = saved_[row];
+    const double* x = &saved_[row + 1];
+    ++fig_.rows;
+    std::snprintf(buf, sizeof buf, "%.17g", t);
+    csv << buf;
+    for (int i = 0; i < m; ++i) num(x[i]);
+    Eigen::Matrix3d R_tool;
+    Eigen::Vector3d p;
+    plant_.tool_pose(x, R_tool, p);
+    if (cfg_.reference) {
+      cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), ref);
+      for (int j = 0; j < n; ++j) num(ref.q[j]);
+    }
+    num(p.x()), num(p.y()), num(p.z());
+    Eigen::Quaterniond quat(R_tool);
+    if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
+    num(quat.w()), num(quat.x()), num(quat.y()), num(quat.z());
+    if (cfg_.reference) {
+      const double e = (p - ref.p).norm();
+      // Deviation: the distance to the geometric path, whatever the timing
+      // (a joint-space interpolation leaves the path between via-points).
+      const double dev = cfg_.reference->path().distance(p);
+      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e), num(1e3 * dev);
+      fig_.max_path_error = std::max(fig_.max_path_error, e);
+      sum_sq += e * e;
+      fig_.max_path_deviation = std::max(fig_.max_path_deviation, dev);
+      sum_sq_dev += dev * dev;
+      ++fig_.samples;
+    }
+    if (cfg_.drive) {
+      if (!held_) plant_.drive_signals(t, x, now_.data());
+      for (int j = 0; j < n; ++j) {
+        const auto at = static_cast<std::size_t>(3 * ((fig_.rows - 1) * n + j));
+        const DriveSignals d = held_ ? DriveSignals{signals_[at], signals_[at + 1], signals_[at + 2]}
+                                     : now_[static_cast<std::size_t>(j)];
+        num(d.u), num(d.ea);
+        fig_.peak_u[j] = std::max(fig_.peak_u[j], std::abs(d.u));
+        fig_.peak_ea[j] = std::max(fig_.peak_ea[j], std::abs(d.ea));
+        fig_.peak_i[j] = std::max(fig_.peak_i[j], std::abs(d.i));
+        const double u_lim = cfg_.piv[j].output_limit, v_lim = cfg_.amplifier[j].voltage_limit;
+        if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(cfg_.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
+          ++saturated[j];
+        }
+      }
+    }
+    if (led >= 0) {  // (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction)
+      double kin = 0;
+      const double Em = plant_.mechanical_energy(x, &kin), Eg = plant_.magnetic_energy(x);
+      if (row == 0) E0 = Em + Eg;
+      const double res = (Em + Eg - E0) - (x[led] - x[led + 1] - x[led + 2]);
+      num(Em), num(Eg), num(res);
+      fig_.max_ledger_residual = std::max(fig_.max_ledger_residual, std::abs(res));
+      fig_.ledger_energy_scale = std::max({fig_.ledger_energy_scale, kin, Eg, std::abs(Em + Eg - E0),
+                                           std::abs(x[led]), std::abs(x[led + 1]), std::abs(x[led + 2])});
+    }
+    csv << "\n";
+  }
+  if (fig_.samples) {
+    fig_.rms_path_error = std::sqrt(sum_sq / fig_.samples);
+    fig_.rms_path_deviation = std::sqrt(sum_sq_dev / fig_.samples);
+  }
+  fig_.saturated_fraction.assign(n, 0.0);
+  for (int j = 0; j < n; ++j) {
+    if (fig_.rows) fig_.saturated_fraction[j] = static_cast<double>(saturated[j]) / fig_.rows;
+  }
+  return csv.str();
+}
+
+}  // namespace pumasim
