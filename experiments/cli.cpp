@@ -19,6 +19,7 @@
 
 #include <Eigen/Geometry>
 #include <boost/version.hpp>
+#include <nlohmann/json.hpp>
 #include <sundials/sundials_config.h>
 
 #include "experiments/simulation/driver.hpp"
@@ -190,38 +191,16 @@ Eigen::VectorXd parse_vector(const std::string& text, int n, const std::string& 
   return Eigen::Map<Eigen::VectorXd>(v.data(), n);
 }
 
-void json_number(std::ostream& o, double x) {
-  if (!std::isfinite(x)) {
-    o << "null";
-    return;
-  }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  o << buf;
-}
+// JSON documents are built with nlohmann-json (ordered: keys in the order
+// written); a number that is not finite is written as null.
+using Json = nlohmann::ordered_json;
 
-void json_vector(std::ostream& o, const Eigen::VectorXd& v) {
-  o << '[';
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    if (i) o << ", ";
-    json_number(o, v[i]);
-  }
-  o << ']';
-}
+Json json_number(double x) { return std::isfinite(x) ? Json(x) : Json(nullptr); }
 
-std::string json_string(const std::string& s) {
-  std::string r = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') r += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      r += buf;
-      continue;
-    }
-    r += c;
-  }
-  return r + "\"";
+Json json_vector(const Eigen::VectorXd& v) {
+  Json a = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(json_number(v[i]));
+  return a;
 }
 
 int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) {
@@ -242,7 +221,6 @@ int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) 
   if (auto s = opt.get("qdd")) qdd_in = parse_vector(*s, n, "--qdd");
   if (auto s = opt.get("tau")) tau_in = parse_vector(*s, n, "--tau");
   // Everything is checked before anything is printed: nothing half-written.
-  std::ostringstream out;
 
   Eigen::MatrixXd H(n, n);
   Eigen::VectorXd h(n), g(n);
@@ -250,43 +228,32 @@ int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) 
   backend->bias(q, qd, h);
   backend->gravity(q, g);
 
-  out << "{\n  \"backend\": " << json_string(backend->name()) << ",\n";
-  out << "  \"robot\": " << json_string(model.name) << ",\n";
-  out << "  \"n\": " << n << ",\n";
-  out << "  \"rotor_inertia_included\": " << (rotor ? "true" : "false") << ",\n";
-  out << "  \"q\": ";
-  json_vector(out, q);
-  out << ",\n  \"qd\": ";
-  json_vector(out, qd);
-  out << ",\n  \"mass_matrix\": [";
-  for (int i = 0; i < n; ++i) {
-    out << (i ? ",\n    " : "\n    ");
-    json_vector(out, H.row(i).transpose());
-  }
-  out << "\n  ],\n  \"bias\": ";
-  json_vector(out, h);
-  out << ",\n  \"gravity\": ";
-  json_vector(out, g);
+  Json doc;
+  doc["backend"] = backend->name();
+  doc["robot"] = model.name;
+  doc["n"] = n;
+  doc["rotor_inertia_included"] = rotor;
+  doc["q"] = json_vector(q);
+  doc["qd"] = json_vector(qd);
+  doc["mass_matrix"] = Json::array();
+  for (int i = 0; i < n; ++i) doc["mass_matrix"].push_back(json_vector(H.row(i).transpose()));
+  doc["bias"] = json_vector(h);
+  doc["gravity"] = json_vector(g);
   if (qdd_in) {
     const Eigen::VectorXd& qdd = *qdd_in;
     Eigen::VectorXd tau(n);
     backend->inverse_dynamics(q, qd, qdd, tau);
-    out << ",\n  \"qdd_in\": ";
-    json_vector(out, qdd);
-    out << ",\n  \"tau\": ";
-    json_vector(out, tau);
+    doc["qdd_in"] = json_vector(qdd);
+    doc["tau"] = json_vector(tau);
   }
   if (tau_in) {
     const Eigen::VectorXd& tau = *tau_in;
     Eigen::VectorXd qdd(n);
     backend->forward_dynamics(q, qd, tau, qdd);
-    out << ",\n  \"tau_in\": ";
-    json_vector(out, tau);
-    out << ",\n  \"qdd\": ";
-    json_vector(out, qdd);
+    doc["tau_in"] = json_vector(tau);
+    doc["qdd"] = json_vector(qdd);
   }
-  out << "\n}\n";
-  final_out << out.str();
+  final_out << doc.dump(2) << "\n";
   return kExitOk;
 }
 
@@ -441,90 +408,78 @@ int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostrea
   const std::string csv = recorder.finish();
   const RunFigures& fig = recorder.figures();
   if (tty) err << "\r" << std::string(60, ' ') << "\r";
-  const IntegratorStats& st = integ->stats();
-  std::ostringstream js;
-  js << "{\n  \"scene\": " << json_string(sc.name) << ",\n  \"integrator\": " << json_string(sc.integrator.name)
-     << ",\n  \"backend\": " << json_string(sc.plant.backend) << ",\n  \"ok\": " << (r.ok ? "true" : "false")
-     << ",\n  \"failure\": " << json_string(r.failure) << ",\n  \"t_end\": ";
-  json_number(js, sc.duration);
-  js << ",\n  \"t_reached\": ";
-  json_number(js, r.t_final);
-  js << ",\n  \"dt\": ";
-  json_number(js, adaptive ? std::nan("") : io.dt);
-  js << ",\n  \"rtol\": ";
-  json_number(js, adaptive ? io.rtol : std::nan(""));
-  js << ",\n  \"atol\": ";
-  json_number(js, adaptive ? io.atol : std::nan(""));
-  js << ",\n  \"atol_per_component\": {";  // atol * the plant's typical magnitude of each state
+  Json js;
+  js["scene"] = sc.name;
+  js["integrator"] = sc.integrator.name;
+  js["backend"] = sc.plant.backend;
+  js["ok"] = r.ok;
+  js["failure"] = r.failure;
+  js["t_end"] = json_number(sc.duration);
+  js["t_reached"] = json_number(r.t_final);
+  js["dt"] = json_number(adaptive ? std::nan("") : io.dt);
+  js["rtol"] = json_number(adaptive ? io.rtol : std::nan(""));
+  js["atol"] = json_number(adaptive ? io.atol : std::nan(""));
+  Json& atol = js["atol_per_component"] = Json::object();  // atol * the plant's typical magnitude of each state
   for (int k = 0; k < plant.size(); ++k) {
-    js << (k ? ", " : "") << '"' << plant.layout().names[static_cast<std::size_t>(k)] << "\": ";
-    json_number(js, adaptive ? io.atol * plant.tolerance_scale(k) : std::nan(""));
+    atol[plant.layout().names[static_cast<std::size_t>(k)]] =
+        json_number(adaptive ? io.atol * plant.tolerance_scale(k) : std::nan(""));
   }
-  js << "}";
-  js << ",\n  \"exact_jacobian\": " << (io.exact_jacobian ? "true" : "false");
-  js << ",\n  \"late_events\": " << (opt.flags.count("late-events") ? "true" : "false");
-  js << ",\n  \"stops\": "
-     << json_string(stops == Stops::kEvents             ? "events (outputs from the dense output)"
-                    : stops == Stops::kEventsAndOutputs ? "events and outputs"
-                                                        : "outputs (time events applied late)");
-  js << ",\n  \"steps\": " << st.steps << ",\n  \"rhs_evaluations\": " << st.rhs_evaluations
-     << ",\n  \"jacobian_evaluations\": " << st.jacobian_evaluations << ",\n  \"linear_solves\": " << st.linear_solves
-     << ",\n  \"rejected_steps\": " << st.rejected_steps << ",\n  \"nonlinear_iterations\": " << st.nonlinear_iterations
-     << ",\n  \"restarts\": " << st.restarts << ",\n  \"time_events\": " << r.time_events
-     << ",\n  \"root_events\": " << r.root_events << ",\n  \"integration_wall_time_s\": ";
-  json_number(js, st.wall_time);
-  js << ",\n  \"wall_time_s\": ";
-  json_number(js, r.wall_time);
-  js << ",\n  \"max_path_error_mm\": ";
-  json_number(js, fig.samples ? 1e3 * fig.max_path_error : std::nan(""));
-  js << ",\n  \"rms_path_error_mm\": ";
-  json_number(js, fig.samples ? 1e3 * fig.rms_path_error : std::nan(""));
-  js << ",\n  \"max_path_deviation_mm\": ";
-  json_number(js, fig.samples ? 1e3 * fig.max_path_deviation : std::nan(""));
-  js << ",\n  \"rms_path_deviation_mm\": ";
-  json_number(js, fig.samples ? 1e3 * fig.rms_path_deviation : std::nan(""));
-  js << ",\n  \"reference_duration_s\": ";
-  json_number(js, sc.plant.reference ? sc.plant.reference->timing().duration() : std::nan(""));
+  js["exact_jacobian"] = io.exact_jacobian;
+  js["late_events"] = opt.flags.count("late-events") > 0;
+  js["stops"] = stops == Stops::kEvents             ? "events (outputs from the dense output)"
+                : stops == Stops::kEventsAndOutputs ? "events and outputs"
+                                                    : "outputs (time events applied late)";
+  const IntegratorStats& st = integ->stats();
+  js["steps"] = st.steps;
+  js["rhs_evaluations"] = st.rhs_evaluations;
+  js["jacobian_evaluations"] = st.jacobian_evaluations;
+  js["linear_solves"] = st.linear_solves;
+  js["rejected_steps"] = st.rejected_steps;
+  js["nonlinear_iterations"] = st.nonlinear_iterations;
+  js["restarts"] = st.restarts;
+  js["time_events"] = r.time_events;
+  js["root_events"] = r.root_events;
+  js["integration_wall_time_s"] = json_number(st.wall_time);
+  js["wall_time_s"] = json_number(r.wall_time);
+  const double none = std::nan("");
+  js["max_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_error : none);
+  js["rms_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_error : none);
+  js["max_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_deviation : none);
+  js["rms_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_deviation : none);
+  js["reference_duration_s"] = json_number(sc.plant.reference ? sc.plant.reference->timing().duration() : none);
   if (sc.plant.drive) {
-    auto list = [&](const char* key, auto value) {
-      js << ",\n  \"" << key << "\": [";
-      for (int j = 0; j < n; ++j) {
-        js << (j ? ", " : "");
-        json_number(js, value(j));
-      }
-      js << "]";
-    };
-    list("peak_controller_output_V", [&](int j) { return fig.peak_u[j]; });
-    list("peak_voltage_V", [&](int j) { return fig.peak_ea[j]; });
-    list("peak_current_A", [&](int j) { return fig.peak_i[j]; });
-    list("saturated_fraction", [&](int j) { return fig.saturated_fraction[j]; });
+    auto list = [](const std::vector<double>& v) { return json_vector(Eigen::Map<const Eigen::VectorXd>(v.data(), std::ssize(v))); };
+    js["peak_controller_output_V"] = list(fig.peak_u);
+    js["peak_voltage_V"] = list(fig.peak_ea);
+    js["peak_current_A"] = list(fig.peak_i);
+    js["saturated_fraction"] = list(fig.saturated_fraction);
   }
   if (fig.ledger) {
-    js << ",\n  \"max_ledger_residual_J\": ";
-    json_number(js, fig.max_ledger_residual);
-    js << ",\n  \"ledger_energy_scale_J\": ";
-    json_number(js, fig.ledger_energy_scale);
+    js["max_ledger_residual_J"] = json_number(fig.max_ledger_residual);
+    js["ledger_energy_scale_J"] = json_number(fig.ledger_energy_scale);
   }
-  js << "\n}\n";
+  const std::string stats = js.dump(2) + "\n";
 
   utsname u{};
   uname(&u);
-  std::ostringstream meta;
-  meta << "{\n  \"git_revision\": " << json_string(shell_line("git rev-parse --short HEAD 2>/dev/null"))
-       << ",\n  \"git_dirty\": " << (shell_line("git status --porcelain 2>/dev/null | head -1").empty() ? "false" : "true")
-       << ",\n  \"compiler\": " << json_string(std::string("g++ ") + __VERSION__)
-       << ",\n  \"flags\": " << json_string(PUMASIM_CXX_FLAGS)
-       << ",\n  \"eigen\": \"" << EIGEN_WORLD_VERSION << "." << EIGEN_MAJOR_VERSION << "." << EIGEN_MINOR_VERSION
-       << "\",\n  \"sundials\": " << json_string(SUNDIALS_VERSION)
-       << ",\n  \"boost\": \"" << BOOST_VERSION / 100000 << "." << BOOST_VERSION / 100 % 1000 << "\""
-       << ",\n  \"tomlplusplus\": \"" << TOML_LIB_MAJOR << "." << TOML_LIB_MINOR << "." << TOML_LIB_PATCH << "\""
-       << ",\n  \"machine\": " << json_string(std::string(u.sysname) + " " + u.release + " " + u.machine)
-       << ",\n  \"cpus\": " << std::thread::hardware_concurrency() << "\n}\n";
+  Json meta;
+  meta["git_revision"] = shell_line("git rev-parse --short HEAD 2>/dev/null");
+  meta["git_dirty"] = !shell_line("git status --porcelain 2>/dev/null | head -1").empty();
+  meta["compiler"] = std::string("g++ ") + __VERSION__;
+  meta["flags"] = PUMASIM_CXX_FLAGS;
+  meta["eigen"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
+                  std::to_string(EIGEN_MINOR_VERSION);
+  meta["sundials"] = SUNDIALS_VERSION;
+  meta["boost"] = std::to_string(BOOST_VERSION / 100000) + "." + std::to_string(BOOST_VERSION / 100 % 1000);
+  meta["tomlplusplus"] = std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) + "." +
+                         std::to_string(TOML_LIB_PATCH);
+  meta["machine"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  meta["cpus"] = std::thread::hardware_concurrency();
 
-  write_run_folder(dir, {{"trajectory.csv", csv}, {"stats.json", js.str()}, {"meta.json", meta.str()},
+  write_run_folder(dir, {{"trajectory.csv", csv}, {"stats.json", stats}, {"meta.json", meta.dump(2) + "\n"},
                          {"scene.resolved.toml", resolved_toml(sc)}},
                    force);
-  out << js.str();  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
+  out << stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
   err << "results: " << dir.string() << "/\n";
   if (!r.ok) err << "pumasim run: " << r.failure << "\n";
   return r.ok ? kExitOk : kExitInternal;

@@ -9,6 +9,7 @@ PACKAGES=(
   libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
   libboost-dev                         # Boost 1.74 headers: Odeint
   libtomlplusplus-dev                  # toml++: robot and scene files
+  nlohmann-json3-dev                   # nlohmann-json: the JSON the programs write
   libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark
   python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
 )
