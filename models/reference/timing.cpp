@@ -145,12 +145,12 @@ Timing Timing::from(Builder& b, const char* kind) {
 }
 
 void Timing::eval(double t, double& s, double& sd, double& sdd) const {
-  if (pieces_.empty()) {  // quintic
-    const double r = std::clamp(t / T_, 0.0, 1.0), r2 = r * r;
-    s = L_ * r2 * r * (10 - 15 * r + 6 * r2);
-    sd = t <= 0 || t >= T_ ? 0.0 : L_ / T_ * 30 * r2 * (1 - r) * (1 - r);
-    sdd = t <= 0 || t >= T_ ? 0.0 : L_ / (T_ * T_) * 60 * r * (1 - r) * (1 - 2 * r);
-    return;
+  if (pieces_.empty()) {  // quintic: at rest before 0, the polynomial, the hold from T
+    if (t <= 0) {
+      s = 0, sd = 0, sdd = 0;
+      return;
+    }
+    return eval_piece(t >= T_ ? 1 : 0, t, s, sd, sdd);
   }
   if (t <= 0) {
     s = 0, sd = pieces_.front().v0, sdd = 0;
