@@ -12,6 +12,7 @@ PACKAGES=(
   nlohmann-json3-dev                   # nlohmann-json: the JSON the programs write
   libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark
   python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
+  python3-pytest                       # tests of the Python scripts' module (tests/test_pumasim_io.py)
 )
 
 missing=()
