@@ -22,10 +22,11 @@ void expect_near(const Eigen::MatrixXd& got, const Eigen::MatrixXd& want, double
       EXPECT_NEAR(got(i, j), want(i, j), tol) << who << " (" << i << "," << j << ")";
 }
 
-// Source: ../shared/reference/puma560.md, section 6, "gravload(q)" for the
-// Robotics Toolbox PUMA 560 (mdl_puma560.m, Corke & Armstrong-Helouvry 1994
-// parameters, g = 9.81), computed by a Newton-Euler code that reproduces the
-// toolbox's own unit-test values to < 5e-5.
+// Source: tests/reference/puma560.md (copied from the project's PUMA 560
+// reference sheet, section 6), "gravload(q)" for the Robotics Toolbox PUMA 560
+// (mdl_puma560.m, Corke & Armstrong-Helouvry 1994 parameters, g = 9.81),
+// computed by a Newton-Euler code that reproduces the toolbox's own unit-test
+// values to < 5e-5.
 TEST(PublishedValues, Puma560GravityTorqueAtNamedPoses) {
   const RobotModel puma = load_robot("puma560");
   struct Case { const char* pose; Eigen::Matrix<double, 6, 1> g; };
@@ -44,8 +45,9 @@ TEST(PublishedValues, Puma560GravityTorqueAtNamedPoses) {
   }
 }
 
-// Source: ../shared/reference/puma560.md, section 6, "inertia(qz)" and
-// "inertia(qr)" (with Jm G^2 on the diagonal), and the rigid-body diagonal at qz.
+// Source: tests/reference/puma560.md (the reference sheet's section 6),
+// "inertia(qz)" and "inertia(qr)" (with Jm G^2 on the diagonal), and the
+// rigid-body diagonal at qz.
 TEST(PublishedValues, Puma560MassMatrixAtQzAndQr) {
   const RobotModel puma = load_robot("puma560");
   Eigen::Matrix<double, 6, 6> Hqz, Hqr;

@@ -176,7 +176,8 @@ TEST(ProtheroRobinson, ClosedFormSatisfiesTheOde) {
 // exact Jacobian) reproduces each reference value. The references: the
 // closed form (Prothero-Robinson) and the Test Set for IVP Solvers (Mazzia &
 // Magherini, Univ. of Bari): vdpol.f, hires.f, orego.f, rober.f (their
-// reference-solution routines, RADAU/RADAU5 at rtol = 1.1e-18) and plei.pdf.
+// reference-solution routines, RADAU/RADAU5 at rtol = 1.1e-18) and plei.pdf;
+// the values, each with its source, are copied in integrators/testset/problems.cpp.
 // Stated tolerance on the mixed error: 1e-7 (7 correct digits; the runs
 // measured 6e-10 .. 1.5e-8); on the non-stiff PLEI, where BDF (order <= 5) at
 // rtol 1e-10 keeps only about 5 digits through the close encounters, 3e-5
