@@ -10,19 +10,17 @@ were written after reading the tables). --minutes: how long the whole
 regeneration took, for the header (scripts/results.sh passes it).
 """
 import argparse
-import csv
 import glob
-import json
 import math
 import os
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import pumasim_io
+from pumasim_io import ROOT
 
 
 def read_csv(path):
-    with open(path) as f:
-        lines = [line for line in f if not line.startswith("#")]
-    return list(csv.DictReader(lines))
+    """The rows of a sweep table (dicts of strings)."""
+    return pumasim_io.read_table(path).rows
 
 
 def fmt_int(x):
@@ -246,8 +244,7 @@ def planning_section(folder, rel):
     if not os.path.exists(path):
         return []
     rows = read_csv(path)
-    with open(os.path.join(folder, "summary.json")) as f:
-        summary = json.load(f)
+    summary = pumasim_io.read_json(os.path.join(folder, "summary.json"))
     joints = sorted({k.rsplit("_j", 1)[1] for k in rows[0] if k.startswith("peak_voltage_V_j")})
     out = ["## Trajectory planning methods", "",
            f"`experiments/planning.py` on `experiments/scenes/planning.toml` (the paper's path, arm, drives and "
@@ -295,8 +292,7 @@ def main():
              "back-ends' cost).", ""]
     summaries = []
     for path in sorted(glob.glob(os.path.join(res, "*", "*_summary.json"))):
-        with open(path) as f:
-            summaries.append((json.load(f), os.path.dirname(path)))
+        summaries.append((pumasim_io.read_json(path), os.path.dirname(path)))
     groups = [("Work-precision on the paper's scenes", True),
               ("Stiff and extreme scenes: stiffness, events, sampling, saturation, long-time energy", False)]
     for title, paper in groups:
@@ -311,16 +307,11 @@ def main():
     stiff_dir = os.path.join(res, "stiffness")
     lines += stiffness_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
     lines += conditioning_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
-    tmp = out_path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(tmp, out_path)
+    pumasim_io.write_text_atomic(out_path, "\n".join(lines) + "\n")
     if args.minutes:  # the figure the header quotes, kept beside the tables it describes
-        run = os.path.join(res, "report_run.json")
-        with open(run + ".tmp", "w") as f:
-            json.dump({"minutes_of_last_full_run": round(args.minutes), "cores": os.cpu_count()}, f)
-            f.write("\n")
-        os.replace(run + ".tmp", run)
+        pumasim_io.write_json_atomic(os.path.join(res, "report_run.json"),
+                                     {"minutes_of_last_full_run": round(args.minutes), "cores": os.cpu_count()},
+                                     newline=True)
     print(f"report: {os.path.relpath(out_path, ROOT)}")
 
 

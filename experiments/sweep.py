@@ -45,8 +45,6 @@ writes nothing under results/.
 """
 import argparse
 import concurrent.futures
-import csv
-import json
 import math
 import os
 import re
@@ -57,8 +55,8 @@ import sys
 import threading
 import tomllib
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+import pumasim_io
+from pumasim_io import ROOT, PUMASIM
 
 
 class SweepError(Exception):
@@ -245,8 +243,7 @@ def execute(s, work, run, pinning=None):
     rid, variant, tag, name, opts, repeats = run
     summary_path = os.path.join(work, rid + ".json")
     if os.path.exists(summary_path):
-        with open(summary_path) as f:
-            return json.load(f)
+        return pumasim_io.read_json(summary_path)
     out = os.path.join(work, rid)
     cmd = [PUMASIM, "run", scene_file(s), "--integrator", name, "--out", out, "--force"] + opts
     for o in s["set"] + variant["set"]:
@@ -265,11 +262,12 @@ def execute(s, work, run, pinning=None):
         p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT, preexec_fn=preexec)
         if p.returncode == 2:  # bad input: the sweep file is wrong, not the method
             raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
-        stats = os.path.join(out, "stats.json")
-        if not os.path.exists(stats):  # pumasim itself failed (a crash, not a reported failure)
+        if not pumasim_io.has_stats(out):  # pumasim itself failed (a crash, not a reported failure)
             raise SweepError(f"{' '.join(full)}: exit status {p.returncode}, no stats.json: {p.stderr.strip()}")
-        with open(stats) as f:
-            st = json.load(f)
+        try:
+            st = pumasim_io.read_stats(out)
+        except pumasim_io.RunFolderError as e:
+            raise SweepError(f"{' '.join(full)}: exit status {p.returncode}: {e}")
         walls.append(st["wall_time_s"])
         if not st["ok"]:
             break
@@ -277,19 +275,17 @@ def execute(s, work, run, pinning=None):
                "integrator": name, "options": opts, "stats": st, "wall_times_s": walls,
                "wall_time_median_s": statistics.median(walls), "command": cmd,
                "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None}
-    tmp = summary_path + ".tmp"
     os.makedirs(os.path.dirname(summary_path), exist_ok=True)
-    with open(tmp, "w") as f:
-        json.dump(summary, f, indent=1)
-    os.replace(tmp, summary_path)
+    pumasim_io.write_json_atomic(summary_path, summary, indent=1)
     return summary
 
 
 def trajectory(run_dir):
-    with open(os.path.join(run_dir, "trajectory.csv")) as f:
-        rows = list(csv.reader(f))
-    head = [h.split(" [")[0] for h in rows[0]]
-    return {h: [float(r[i]) for r in rows[1:]] for i, h in enumerate(head)}
+    """{column name without its unit: list of floats} of a run folder's trajectory.csv."""
+    try:
+        return pumasim_io.read_trajectory(run_dir).lists()
+    except pumasim_io.RunFolderError as e:
+        raise SweepError(f"merge: {e}")
 
 
 QUATERNION = ("tool_qw", "tool_qx", "tool_qy", "tool_qz")
@@ -444,8 +440,7 @@ def merge(s, work, out_dir):
         p = os.path.join(work, run[0] + ".json")
         if not os.path.exists(p):
             raise SweepError(f"merge: run {run[0]} has no result yet ({p}); run the sweep (or its shards) first")
-        with open(p) as f:
-            summaries[run[0]] = json.load(f)
+        summaries[run[0]] = pumasim_io.read_json(p)
     for v in s["variants"]:
         vdir = slug(v["label"])
         ref_sum, chk_sum = summaries[f"{vdir}/reference"], summaries[f"{vdir}/check"]
@@ -513,35 +508,28 @@ def merge(s, work, out_dir):
     name = s["name"]
     targets_text = ", ".join(f"{t:g} {next(m[1] for m in MEASURES.values() if m[0] == col)} ({col})"
                              for col, t in s["targets"].items())
-    with open(os.path.join(out_dir, name + ".csv"), "w", newline="") as f:
-        f.write(f"# sweep {s['file']}: scene {s['scene']}, reference {' '.join([s['reference'][0]] + s['reference'][1])}, "
-                f"cross-check {' '.join([s['check'][0]] + s['check'][1])}\n")
-        f.write(f"# ranked by {rlabel} [{runit}] ({rcol}, sweep.rank_by = \"{s['rank_by']}\"), target {rtarget:g} "
-                f"{runit}; targets: {targets_text}\n")
-        f.write(f"# below_reference_accuracy: the run's {rcol} is within {BELOW_REFERENCE_FACTOR}x its variant's "
-                f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
-                f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}\n")
-        f.write(f"# wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
-                f"(nan below 4 repeats); {len(pinned)} of {len(rows)} runs pinned to one CPU "
-                f"({', '.join(pinning['methods']) or 'none'}; pinned_cpu, empty: not pinned)\n")
-        for v in s["variants"]:
-            lab, a = v["label"], agreement[v["label"]]
-            f.write(f"# {lab}: reference {' '.join([v['reference'][0]] + v['reference'][1])} vs cross-check "
-                    f"{' '.join([v['check'][0]] + v['check'][1])}: {measures_text(a)}"
-                    + "".join(f"; REFERENCE TOO WEAK for {col}: {w['difference']:.3g} > target/"
-                              f"{WEAK_REFERENCE_FACTOR} = {w['limit']:.3g}" for col, w in weak.get(lab, {}).items())
-                    + (f"; its reference vs {s['limit_variant']}'s: "
-                       f"{limit[lab]['max_tool_position_error_mm']:.3g} mm" if limit else "")
-                    + (f"; creep where {s['stuck_variant']} holds a joint stuck: {held_creep[lab]['rad']:.3g} rad"
-                       if held_creep else "")
-                    + "\n")
-        keys = []
-        for r in rows:
-            keys += [k for k in r if k not in keys]
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{x:.6g}" if isinstance(x, float) else x) for k, x in r.items()})
+    comments = [
+        f"sweep {s['file']}: scene {s['scene']}, reference {' '.join([s['reference'][0]] + s['reference'][1])}, "
+        f"cross-check {' '.join([s['check'][0]] + s['check'][1])}",
+        f"ranked by {rlabel} [{runit}] ({rcol}, sweep.rank_by = \"{s['rank_by']}\"), target {rtarget:g} "
+        f"{runit}; targets: {targets_text}",
+        f"below_reference_accuracy: the run's {rcol} is within {BELOW_REFERENCE_FACTOR}x its variant's "
+        f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
+        f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}",
+        f"wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
+        f"(nan below 4 repeats); {len(pinned)} of {len(rows)} runs pinned to one CPU "
+        f"({', '.join(pinning['methods']) or 'none'}; pinned_cpu, empty: not pinned)"]
+    for v in s["variants"]:
+        lab, a = v["label"], agreement[v["label"]]
+        comments.append(f"{lab}: reference {' '.join([v['reference'][0]] + v['reference'][1])} vs cross-check "
+                        f"{' '.join([v['check'][0]] + v['check'][1])}: {measures_text(a)}"
+                        + "".join(f"; REFERENCE TOO WEAK for {col}: {w['difference']:.3g} > target/"
+                                  f"{WEAK_REFERENCE_FACTOR} = {w['limit']:.3g}" for col, w in weak.get(lab, {}).items())
+                        + (f"; its reference vs {s['limit_variant']}'s: "
+                           f"{limit[lab]['max_tool_position_error_mm']:.3g} mm" if limit else "")
+                        + (f"; creep where {s['stuck_variant']} holds a joint stuck: {held_creep[lab]['rad']:.3g} rad"
+                           if held_creep else ""))
+    pumasim_io.write_table(os.path.join(out_dir, name + ".csv"), rows, comments=comments, fmt=pumasim_io.fmt_6g)
 
     def usable(x):
         return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
@@ -632,8 +620,7 @@ def merge(s, work, out_dir):
                "below_reference_accuracy": sum(1 for r in rows if r["below_reference_accuracy"] is True),
                "pinning": pinning,
                "cost_to_target": cost, "has_cost_plot": has_cost_plot}
-    with open(os.path.join(out_dir, name + "_summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    pumasim_io.write_json_atomic(os.path.join(out_dir, name + "_summary.json"), summary, indent=1)
     return summary
 
 
