@@ -45,8 +45,6 @@ build/observed_order-reduced/.
 """
 import argparse
 import concurrent.futures
-import csv
-import json
 import math
 import os
 import re
@@ -57,8 +55,8 @@ import time
 
 import numpy as np
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+import pumasim_io
+from pumasim_io import ROOT, PUMASIM
 
 FIXED = ["euler", "rk4", "ab2", "ab3", "ab4"]
 # Theoretical orders (the registry's summaries state most of them; the
@@ -76,22 +74,10 @@ STATE = re.compile(r"(q|qd|i_motor|z_piv)\d+")
 
 
 def private_copy(work):
-    """Copies the pumasim binary to work/ (retrying while it is missing or
-    being relinked), so that every run of this experiment uses one program."""
+    """Copies the pumasim binary to work/ (pumasim_io.private_copy), so that
+    every run of this experiment uses one program."""
     global PUMASIM
-    os.makedirs(work, exist_ok=True)
-    dest = os.path.join(work, "pumasim")
-    for attempt in range(60):
-        try:
-            shutil.copy2(PUMASIM, dest + ".tmp")
-            subprocess.run([dest + ".tmp", "integrators"], capture_output=True, check=True)
-            break
-        except (OSError, subprocess.CalledProcessError):
-            if attempt == 59:
-                raise
-            time.sleep(2)
-    os.replace(dest + ".tmp", dest)
-    PUMASIM = dest
+    PUMASIM = pumasim_io.private_copy(PUMASIM, work)
 
 
 def integrators():
@@ -100,12 +86,11 @@ def integrators():
 
 
 def trajectory(run_dir):
-    """Columns of trajectory.csv by name without the unit (as sweep.py)."""
-    with open(os.path.join(run_dir, "trajectory.csv")) as f:
-        rows = list(csv.reader(f))
-    head = [h.split(" [")[0] for h in rows[0]]
-    data = np.array([[float(v) for v in r] for r in rows[1:]]).reshape(-1, len(head))
-    return {h: data[:, i] for i, h in enumerate(head)}
+    """Columns of trajectory.csv by name without the unit, as float arrays."""
+    try:
+        return pumasim_io.read_trajectory(run_dir).arrays()
+    except pumasim_io.RunFolderError as e:
+        sys.exit(f"observed_order: {e}")
 
 
 def errors(ref, run):
@@ -133,11 +118,12 @@ def execute(work, label, t_end, name, opts):
     if "--dt" in opts:  # the step count is t_end / dt: no budget
         cmd += ["--max-steps", "0"]
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    stats = os.path.join(out, "stats.json")
-    if p.returncode == 2 or not os.path.exists(stats):
+    if p.returncode == 2 or not pumasim_io.has_stats(out):
         sys.exit(f"{' '.join(cmd)}: exit status {p.returncode}: {p.stderr.strip()}")
-    with open(stats) as f:
-        return out, json.load(f)
+    try:
+        return out, pumasim_io.read_stats(out)
+    except pumasim_io.RunFolderError as e:
+        sys.exit(f"{' '.join(cmd)}: exit status {p.returncode}: {e}")
 
 
 # The scenes (rows of the table): a label, the scene file and its overrides.
@@ -164,8 +150,7 @@ def fmt(x, spec=".3g"):
 
 
 def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+    return pumasim_io.read_table(path).rows
 
 
 def main():
@@ -269,11 +254,8 @@ def main():
                          "joint_runs_used": len(use_q), "dropped": "; ".join(dropped)})
 
     def write(name, table, cols):
-        with open(os.path.join(out, name), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=cols)
-            w.writeheader()
-            for r in table:
-                w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items() if k in cols})
+        pumasim_io.write_table(os.path.join(out, name), table, columns=cols,
+                               fmt=lambda v: repr(v) if isinstance(v, float) else v)
 
     write("observed_order.csv", rows, ["scene", "integrator", "kind", "theoretical_order", "observed_slope",
                                        "runs_used", "runs", "error_min", "error_max", "slope_finest_pair",
@@ -399,8 +381,7 @@ def readme(out, run_time, a):
         if dropped:
             parts.append("dropped: " + ", ".join(dropped))
         L.append(f"- {scene}: " + "; ".join(parts) + ".")
-    with open(os.path.join(out, "README.md"), "w") as f:
-        f.write("\n".join(L) + "\n")
+    pumasim_io.write_text_atomic(os.path.join(out, "README.md"), "\n".join(L) + "\n")
 
 
 if __name__ == "__main__":

@@ -28,15 +28,12 @@ build/output_grid/), with a private copy of the pumasim binary. --reduced (CI):
 cvode-adams and cvode-bdf, rtol 1e-4 only, 2.5 s, into build/output_grid-reduced/.
 """
 import argparse
-import csv
-import json
 import os
-import shutil
 import subprocess
 import sys
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+import pumasim_io
+from pumasim_io import ROOT, PUMASIM
 SCENE = "paper_slow_viscous"
 INTERVALS = [0.001, 0.01, 1.0]
 TOLS = [(1e-4, 1e-7), (1e-6, 1e-9)]
@@ -58,14 +55,14 @@ def run(work, integ, rtol, atol, interval, mode_flags, t_end):
     if t_end:
         cmd += ["--t-end", repr(t_end)]
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode not in (0, 1) or not os.path.exists(os.path.join(out, "stats.json")):
+    if p.returncode not in (0, 1) or not pumasim_io.has_stats(out):
         sys.exit(f"output_grid: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
-    with open(os.path.join(out, "stats.json")) as f:
-        stats = json.load(f)
-    with open(os.path.join(out, "trajectory.csv")) as f:
-        rows = [r for r in csv.reader(line for line in f if not line.startswith("#"))]
-    head, last = rows[0], rows[-1]
-    return stats, head, last
+    try:
+        run = pumasim_io.load_run(out)
+    except pumasim_io.RunFolderError as e:
+        sys.exit(f"output_grid: {' '.join(cmd)}: {e}")
+    tr = run.trajectory
+    return run.stats, tr.header, (tr.text or [tr.header])[-1]  # the header cells with units, the last row as written
 
 
 def main():
@@ -80,9 +77,7 @@ def main():
     os.makedirs(out, exist_ok=True)
     os.makedirs(work, exist_ok=True)
     global PUMASIM
-    shutil.copy2(PUMASIM, os.path.join(work, "pumasim.tmp"))
-    os.replace(os.path.join(work, "pumasim.tmp"), os.path.join(work, "pumasim"))
-    PUMASIM = os.path.join(work, "pumasim")
+    PUMASIM = pumasim_io.private_copy(PUMASIM, work)
     integs = ["cvode-adams", "cvode-bdf"] if args.reduced else adaptive_integrators()
     tols = TOLS[:1] if args.reduced else TOLS
     t_end = 2.5 if args.reduced else None
@@ -113,15 +108,10 @@ def main():
                 row["final_state_diff_1ms_vs_1s"] = f"{diff:.3g}"
                 rows.append(row)
                 print(f"{integ} rtol {rtol:g} {mode}: RHS {rhs} (spread {row['rhs_spread_percent']} %)", flush=True)
-    path = os.path.join(out, "output_grid.csv")
-    with open(path + ".tmp", "w", newline="") as f:
-        f.write(f"# experiments/output_grid.py{' --reduced' if args.reduced else ''}: pumasim run "
-                f"experiments/scenes/{SCENE}.toml --integrator I --rtol R --atol A "
-                "--set scene.output_interval=X [--stop-at-outputs]\n")
-        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-        w.writeheader()
-        w.writerows(rows)
-    os.replace(path + ".tmp", path)
+    pumasim_io.write_table(os.path.join(out, "output_grid.csv"), rows, columns=list(rows[0].keys()),
+                           comments=[f"experiments/output_grid.py{' --reduced' if args.reduced else ''}: pumasim run "
+                                     f"experiments/scenes/{SCENE}.toml --integrator I --rtol R --atol A "
+                                     "--set scene.output_interval=X [--stop-at-outputs]"])
     write_readme(out, rows, args.reduced)
     print(f"output grid: {os.path.relpath(out, ROOT)}/")
 
@@ -151,9 +141,7 @@ def write_readme(out, rows, reduced):
         diff = r["final_state_diff_1ms_vs_1s"] if r["mode"] == "dense" else "–"
         lines.append(f"| {r['integrator']} | {r['rtol']} | {r['mode']} | " + " | ".join(cells) +
                      f" | {r['rhs_spread_percent']} | {diff} |")
-    with open(os.path.join(out, "README.md.tmp"), "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(os.path.join(out, "README.md.tmp"), os.path.join(out, "README.md"))
+    pumasim_io.write_text_atomic(os.path.join(out, "README.md"), "\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

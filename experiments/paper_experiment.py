@@ -11,15 +11,14 @@ and a trajectory decimated to 0.1 s, and writes results/paper/README.md from
 those files only.
 """
 import csv
-import json
 import os
 import shutil
 import statistics
 import subprocess
 import sys
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+import pumasim_io
+from pumasim_io import ROOT, PUMASIM
 OUT = os.path.join(ROOT, "results", "paper")
 WORK = os.path.join(ROOT, "build", "paper_runs")
 PAPER_MAX_ERROR_MM = 0.65   # Sokolov & Toth 1999, sec. 6, slow run
@@ -31,17 +30,17 @@ def run(scene, out_dir):
     cmd = [PUMASIM, "run", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
            "--integrator", "ab2", "--dt", "0.0005", "--out", out_dir, "--force"]
     subprocess.run(cmd, check=True, capture_output=True, text=True, cwd=ROOT)
-    with open(os.path.join(out_dir, "stats.json")) as f:
-        return json.load(f)
+    return pumasim_io.read_stats(out_dir)
 
 
-def decimate(src, dst, every):
-    with open(src) as f, open(dst, "w", newline="") as g:
-        rows = list(csv.reader(f))
+def decimate(run_dir, dst, every):
+    """The run's trajectory.csv, every `every`-th row and the last, as written, into dst."""
+    tr = pumasim_io.read_trajectory(run_dir)
+    with open(dst, "w", newline="") as g:
         w = csv.writer(g)
-        w.writerow(rows[0])
-        for k, r in enumerate(rows[1:]):
-            if k % every == 0 or k == len(rows) - 2:
+        w.writerow(tr.header)
+        for k, r in enumerate(tr.text):
+            if k % every == 0 or k == len(tr.text) - 1:
                 w.writerow(r)
 
 
@@ -59,14 +58,12 @@ def main():
         os.makedirs(dst, exist_ok=True)
         for name in ("scene.resolved.toml", "meta.json"):
             shutil.copy(os.path.join(last, name), dst)
-        with open(os.path.join(dst, "stats.json"), "w") as f:
-            json.dump(st, f, indent=2)
-        decimate(os.path.join(last, "trajectory.csv"), os.path.join(dst, "trajectory_0.1s.csv"), 10)
+        pumasim_io.write_json_atomic(os.path.join(dst, "stats.json"), st, indent=2)
+        decimate(last, os.path.join(dst, "trajectory_0.1s.csv"), 10)
         subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "plot_run.py"), last, OUT,
                         "--prefix", scene + "_"], check=True)
     slow, fast = results["paper_slow"], results["paper_fast"]
-    with open(os.path.join(slow and os.path.join(OUT, "paper_slow", "meta.json"))) as f:
-        meta = json.load(f)
+    meta = pumasim_io.read_json(os.path.join(OUT, "paper_slow", "meta.json"))  # the copy kept in results/paper/
     lines = [
         "# The paper's experiment, reproduced",
         "",
@@ -112,8 +109,7 @@ def main():
         "  reference wrist-centre positions at the same time, sampled every 10 ms.",
         "",
     ]
-    with open(os.path.join(OUT, "README.md"), "w") as f:
-        f.write("\n".join(lines))
+    pumasim_io.write_text_atomic(os.path.join(OUT, "README.md"), "\n".join(lines))
     print(f"results: {os.path.relpath(OUT, ROOT)}/")
 
 

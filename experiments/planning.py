@@ -21,15 +21,13 @@ method, at two traversal times) and summary.json for experiments/report.py.
 --reduced (CI): T = 24 s cut to 1 s and T_opt only, into build/planning-reduced/.
 """
 import argparse
-import csv
-import json
 import math
 import os
 import subprocess
 import sys
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+import pumasim_io
+from pumasim_io import ROOT, PUMASIM
 SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
 PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
 VIA = 16
@@ -47,16 +45,15 @@ def run(runs_dir, label, sets, t_end=None):
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode not in (0, 1):
         sys.exit(f"planning: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
-    with open(os.path.join(path, "stats.json")) as f:
-        return json.load(f), path
+    try:
+        return pumasim_io.read_stats(path), path
+    except pumasim_io.RunFolderError as e:
+        sys.exit(f"planning: {' '.join(cmd)}: {e}")
 
 
 def along_path(run_dir):
-    with open(os.path.join(run_dir, "trajectory.csv")) as f:
-        rows = list(csv.reader(f))
-    head = [h.split(" [")[0] for h in rows[0]]
-    t, dev = head.index("t"), head.index("path_deviation")
-    return [float(r[t]) for r in rows[1:]], [float(r[dev]) for r in rows[1:]]
+    tr = pumasim_io.read_trajectory(run_dir)
+    return tr["t"].tolist(), tr["path_deviation"].tolist()
 
 
 def main():
@@ -112,13 +109,9 @@ def main():
             record(m, T, stats, path)
         print(f"planning: {m} done", flush=True)
 
-    keys = list(rows[0].keys())
-    with open(os.path.join(out, "planning.csv"), "w", newline="") as f:
-        f.write(f"# experiments/planning.py on experiments/scenes/planning.toml; time-optimal T_opt = {t_opt:.6g} s\n")
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{x:.6g}" if isinstance(x, float) else x) for k, x in r.items()})
+    pumasim_io.write_table(os.path.join(out, "planning.csv"), rows, columns=list(rows[0].keys()),
+                           comments=[f"experiments/planning.py on experiments/scenes/planning.toml; "
+                                     f"time-optimal T_opt = {t_opt:.6g} s"], fmt=pumasim_io.fmt_6g)
 
     names = list(methods) + ["time-optimal"]
     colors = {m: plt.cm.tab10(k) for k, m in enumerate(names)}
@@ -152,8 +145,9 @@ def main():
     fig.tight_layout()
     fig.savefig(os.path.join(out, "planning_along_path.png"), dpi=80)
     plt.close(fig)
-    with open(os.path.join(out, "summary.json"), "w") as f:
-        json.dump({"t_opt_s": t_opt, "findings": FINDINGS, "via_segments": VIA, "times_s": times}, f, indent=1)
+    pumasim_io.write_json_atomic(os.path.join(out, "summary.json"),
+                                 {"t_opt_s": t_opt, "findings": FINDINGS, "via_segments": VIA, "times_s": times},
+                                 indent=1)
     print(f"planning: {len(rows)} runs -> {out} (T_opt = {t_opt:.4g} s)")
 
 

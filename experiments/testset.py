@@ -33,7 +33,8 @@ import sys
 import time
 from collections import OrderedDict, defaultdict
 
-ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+import pumasim_io
+from pumasim_io import ROOT
 
 # An error that rises by more than this factor when the setting tightens is a
 # break in monotonicity (smaller changes are noise of the step-size controller).
@@ -55,7 +56,7 @@ def succeeded(r):
 
 
 def read_csv_text(text):
-    return list(csv.DictReader(io.StringIO(text)))
+    return pumasim_io.parse_table(text).rows
 
 
 def fnum(x):
@@ -81,11 +82,7 @@ def short(msg, n=110):
     return msg if len(msg) <= n else msg[: n - 1] + "…"
 
 
-def write_atomic(path, text):
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write(text)
-    os.replace(tmp, path)
+write_atomic = pumasim_io.write_text_atomic
 
 
 def run_binary(args, extra):
