@@ -10,25 +10,26 @@ Reads only <run dir>/trajectory.csv and stats.json, and writes:
   <prefix>path_error.png     path error along the path (Figs. 9, 11)
 """
 import argparse
-import csv
-import json
 import math
 import os
+import sys
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
+import pumasim_io  # noqa: E402
+
 
 def load(run_dir):
-    with open(os.path.join(run_dir, "trajectory.csv")) as f:
-        rows = list(csv.reader(f))
-    header = [h.split(" [")[0] for h in rows[0]]
-    cols = {h: [float(r[i]) for r in rows[1:]] for i, h in enumerate(header)}
-    with open(os.path.join(run_dir, "stats.json")) as f:
-        stats = json.load(f)
-    return cols, stats
+    """({column name without its unit: list of floats}, stats dict) of a run folder."""
+    try:
+        run = pumasim_io.load_run(run_dir)
+    except pumasim_io.RunFolderError as e:
+        sys.exit(f"plot_run: {e}")
+    return run.trajectory.lists(), run.stats
 
 
 def speed(t, x, y):
@@ -100,14 +101,8 @@ def main():
         plt.close(fig)
     # Plots written into a pumasim run folder are listed in its marker, so that
     # `pumasim run --force` may replace the folder with them (and nothing else).
-    marker = os.path.join(out, ".pumasim-run")
-    if os.path.exists(marker):
-        with open(marker) as f:
-            listed = set(f.read().split())
-        names = [a.prefix + n for n in ("path_xy.png", "speed.png", "joints.png", "path_error.png")
-                 if os.path.exists(os.path.join(out, a.prefix + n))]
-        with open(marker, "a") as f:
-            f.writelines(n + "\n" for n in names if n not in listed)
+    pumasim_io.list_in_marker(out, [a.prefix + n for n in ("path_xy.png", "speed.png", "joints.png", "path_error.png")
+                                    if os.path.exists(os.path.join(out, a.prefix + n))])
 
 
 if __name__ == "__main__":

@@ -13,7 +13,6 @@ row). The reliability issue found 2 of 60 kills leaving a half-deleted folder
 beside a complete DIR.partial when the old folder was removed file by file.
 """
 import argparse
-import json
 import os
 import random
 import shutil
@@ -24,6 +23,8 @@ import tempfile
 import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+sys.path.insert(0, os.path.join(ROOT, "experiments"))
+import pumasim_io  # noqa: E402
 SCENE = os.path.join(ROOT, "experiments", "scenes", "paper_slow_viscous.toml")
 ARGS = ["--integrator", "ab2", "--dt", "0.0005", "--set", "scene.output_interval=0.001"]
 ROWS = 24001  # t = 0, 0.001, ..., 24 s
@@ -31,18 +32,16 @@ ROWS = 24001  # t = 0, 0.001, ..., 24 s
 
 def complete(folder):
     """'' if folder is a complete run folder, else what is wrong."""
-    marker = os.path.join(folder, ".pumasim-run")
-    if not os.path.exists(marker):
-        return "no .pumasim-run marker"
-    with open(marker) as f:
-        listed = {line.strip() for line in f if line.strip() and not line.startswith("#")}
-    present = set(os.listdir(folder)) - {".pumasim-run"}
+    try:
+        listed = set(pumasim_io.marker_entries(folder))
+    except pumasim_io.RunFolderError as e:
+        return str(e)
+    present = set(os.listdir(folder)) - {pumasim_io.RUN_MARKER}
     if listed != present:
         return f"files {sorted(present)} but the marker lists {sorted(listed)}"
     try:
-        with open(os.path.join(folder, "stats.json")) as f:
-            json.load(f)
-    except (OSError, ValueError) as e:
+        pumasim_io.read_stats(folder, check=False)
+    except (OSError, pumasim_io.RunFolderError) as e:
         return f"stats.json: {e}"
     with open(os.path.join(folder, "trajectory.csv")) as f:
         rows = sum(1 for _ in f) - 1
