@@ -446,12 +446,13 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
 // ---------------------------------------------------------------- [planning]
 
 const Bounds kVoltageShare{0.0, 1.0, true};
+const Bounds kLimit = Bounds::positive_or_infinity();  // inf: no limit
 
 const std::vector<Entry<ReferenceSettings>> kPlanningEntries = {
     {"voltage_fraction", scene_io::number(kVoltageShare, PUMASIM_AT(s.voltage_fraction)),
      "of min(K_A output_limit, voltage_limit); the rest is left to feedback"},
-    {"current_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.current_limit[j])), "[A] per joint (inf: none)"},
-    {"joint_speed_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.joint_speed_limit[j])),
+    {"current_limit", scene_io::per_joint(kLimit, PUMASIM_AT(s.current_limit[j])), "[A] per joint (inf: none)"},
+    {"joint_speed_limit", scene_io::per_joint(kLimit, PUMASIM_AT(s.joint_speed_limit[j])),
      "[rad/s] per joint (inf: none)"},
     {"grid", scene_io::whole({10.0, 1e6}, "a whole number >= 10", PUMASIM_AT(s.grid)),
      "arc-length grid intervals of the phase-plane passes"},
