@@ -21,6 +21,7 @@ std::string line_of(const toml::source_region& src) {
 }  // namespace
 
 bool Bounds::contains(double x) const {
+  if (or_infinity && x == std::numeric_limits<double>::infinity()) return true;
   if (!std::isfinite(x)) return false;
   const bool lo_ok = lo_open ? x > lo : x >= lo;
   const bool hi_ok = hi_open ? x < hi : x <= hi;
@@ -28,6 +29,11 @@ bool Bounds::contains(double x) const {
 }
 
 std::string Bounds::describe() const {
+  if (or_infinity) {
+    Bounds finite = *this;
+    finite.or_infinity = false;
+    return finite.describe() + " or inf";
+  }
   const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
   if (has_lo && has_hi) {
     return std::string("a number in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " +

@@ -9,21 +9,283 @@
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/reference/time_optimal.hpp"
+#include "models/scene/entries.hpp"
+
+// Each section of a scene file is one table of entries (entries.hpp), read by
+// read_<section> and written by write_<section> over that table. The order of
+// a table is the order of reading: an entry's `applies` and `then` look only
+// at the entries above it.
 
 namespace pumasim {
 namespace {
 
+using scene_io::Codec;
+using scene_io::Entry;
+using scene_io::Need;
+using scene_io::read_entries;
+using scene_io::write_entries;
+
+const Bounds kAny = Bounds::any();
 const Bounds kPositive = Bounds::positive();
 const Bounds kNonNegative = Bounds::non_negative();
+const Bounds kJointAngle{-4 * M_PI, 4 * M_PI};  // [rad] held joints, initial pose
+const Bounds kRampShare{0.0, 0.5, true};        // (0, 0.5]: blend, jerk_fraction
+// [rad/s] Karnopp's default band, wider than the paper rule's "zero"
+// (FrictionParams' zero_speed), since the band is the model.
+constexpr double kKarnoppBand = 1e-3;
 
-int read_int(StrictTable& t, std::string_view key, int lo, int hi) {
-  const double x = t.number(key, {static_cast<double>(lo), static_cast<double>(hi)});
-  if (x != std::floor(x)) {
-    t.fail(key, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
-           std::to_string(x));
+// ---------------------------------------------------------------- [scene]
+
+// The name becomes a folder name (runs/<name>/): a plain one only.
+void check_name(StrictTable& t, Scene& sc) {
+  const std::string& s = sc.name;
+  const bool plain = !s.empty() && s.size() <= 100 && s != "." && s != ".." &&
+                     std::all_of(s.begin(), s.end(), [](char c) {
+                       return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
+                     });
+  if (!plain) {
+    t.fail("name", "a plain name of at most 100 letters, digits, '_', '-' and '.' (not '.' or '..')",
+           "\"" + s + "\"");
   }
-  return static_cast<int>(x);
 }
+
+// Loads the robot file; the plant and the reference hold a pose in a 6-vector,
+// and lock held joints only on a 6-joint arm: its size is checked here, before
+// any size derived from it is used.
+void load_robot_of(StrictTable& t, Scene& sc) {
+  std::string robot_path = sc.robot_spec;
+  if (robot_path.find('/') != std::string::npos && !std::filesystem::path(robot_path).is_absolute()) {
+    robot_path = (std::filesystem::path(sc.file).parent_path() / robot_path).string();
+  }
+  try {
+    sc.plant.robot = load_robot(robot_path);
+  } catch (const ConfigError& e) {
+    throw ConfigError(t.where("robot") + e.what());
+  }
+  const int dof = sc.plant.robot.dof();
+  if (dof > 6) t.fail("robot", "a robot with at most 6 joints", "one with " + std::to_string(dof));
+}
+
+void apply_rotor_inertia(StrictTable&, Scene& sc) {
+  if (!sc.rotor_inertia) sc.plant.robot = without_rotor_inertia(sc.plant.robot);
+}
+
+// joints: a whole number in [1, the robot's joint count]; fewer than all only
+// on a 6-joint robot (the held joints are locked on its wrist).
+Codec<Scene> joints_codec() {
+  return {[](StrictTable& t, std::string_view key, Scene& sc, int) {
+            const int dof = sc.plant.robot.dof();
+            const double x = t.number(key, {1.0, static_cast<double>(dof)});
+            if (x != std::floor(x)) t.fail(key, "an integer in [1, " + std::to_string(dof) + "]", std::to_string(x));
+            const int n = static_cast<int>(x);
+            if (n < dof && dof != 6) {
+              t.fail(key, "all " + std::to_string(dof) + " joints of this robot (held joints need a 6-joint robot)",
+                     std::to_string(n));
+            }
+            sc.plant.n = n;
+          },
+          [](toml::table& out, std::string_view key, const Scene& sc, int) { out.insert(key, sc.plant.n); },
+          nullptr};
+}
+
+// held: the angles of joints n+1..dof, the tail of the 6-vector q_held
+// (dof <= 6 is checked at the robot, n <= dof at joints).
+int held_count(const Scene& sc, int) { return sc.plant.robot.dof() - sc.plant.n; }
+std::vector<double> get_held(const Scene& sc, int) {
+  const int n = sc.plant.n;
+  return {sc.plant.q_held.data() + n, sc.plant.q_held.data() + sc.plant.robot.dof()};
+}
+void set_held(Scene& sc, const std::vector<double>& v) {
+  const int n = sc.plant.n;
+  if (n + static_cast<int>(v.size()) > sc.plant.q_held.size()) throw std::logic_error("held: beyond the 6-vector");
+  for (std::size_t k = 0; k < v.size(); ++k) sc.plant.q_held[n + static_cast<int>(k)] = v[k];
+}
+
+void check_backend(StrictTable& t, Scene& sc) {
+  const PlantConfig& pc = sc.plant;
+  try {
+    const BackendInfo& b = find_backend(pc.backend);
+    const RobotModel sim = simulated_robot(pc.robot, pc.n, pc.q_held);
+    if (const std::string why = b.why_unsupported(sim); !why.empty()) {
+      t.fail("backend", "a back-end that supports this robot", why);
+    }
+  } catch (const std::invalid_argument&) {
+    t.fail("backend", "one of: " + backend_names(), "\"" + pc.backend + "\"");
+  }
+}
+
+const std::vector<Entry<Scene>> kSceneEntries = {
+    {"name", scene_io::text(PUMASIM_AT(s.name)), "the run's name, also its folder runs/<name>/", Need::kRequired,
+     nullptr, check_name},
+    {"robot", scene_io::text(PUMASIM_AT(s.robot_spec)), "a shipped robot name, or a file relative to the scene",
+     Need::kRequired, nullptr, load_robot_of},
+    {"rotor_inertia", scene_io::flag(PUMASIM_AT(s.rotor_inertia)), "false: the robot's rotor inertias removed",
+     Need::kOptional, nullptr, apply_rotor_inertia},
+    {"energy_ledger", scene_io::flag(PUMASIM_AT(s.plant.energy_ledger)),
+     "true: states e_in, e_copper, e_friction [J] and the energy balance"},
+    {"joints", joints_codec(), "the first n joints move, the others are held", Need::kRequired},
+    {"held", scene_io::numbers(held_count, kJointAngle, get_held, set_held), "[rad] angles of the held joints"},
+    {"backend", scene_io::text(PUMASIM_AT(s.plant.backend)), "dynamics back-end (pumasim backends)",
+     Need::kOptional, nullptr, check_backend},
+    {"duration", scene_io::number(kPositive, PUMASIM_AT(s.duration)), "[s]; absent: the reference's duration"},
+    {"output_interval", scene_io::number(kPositive, PUMASIM_AT(s.output_interval)), "[s] between output rows"},
+};
+
+void read_scene(StrictTable& root, Scene& sc) {
+  StrictTable t = root.table("scene");
+  read_entries(t, kSceneEntries, sc, 0);
+}
+toml::table write_scene(const Scene& sc) { return write_entries(kSceneEntries, sc, sc.plant.n); }
+
+// ---------------------------------------------------------------- [integrator]
+
+void note_name_where(StrictTable& t, IntegratorSettings& it) {
+  if (t.has("name")) it.name_where = t.where("name");
+}
+
+const std::vector<Entry<IntegratorSettings>> kIntegratorEntries = {
+    {"name", scene_io::text(PUMASIM_AT(s.name)), "integrator (pumasim integrators; checked by the command line)",
+     Need::kOptional, nullptr, note_name_where},
+    {"dt", scene_io::number(kPositive, PUMASIM_AT(s.dt)), "[s] step of the fixed-step methods"},
+    {"rtol", scene_io::number(kPositive, PUMASIM_AT(s.rtol)), "relative tolerance of the adaptive methods"},
+    {"atol", scene_io::number(kPositive, PUMASIM_AT(s.atol)), "absolute tolerance (times each state's scale)"},
+};
+
+void read_integrator(StrictTable& root, IntegratorSettings& it) {
+  if (auto t = root.optional_table("integrator")) read_entries(*t, kIntegratorEntries, it, 0);
+}
+toml::table write_integrator(const IntegratorSettings& it) { return write_entries(kIntegratorEntries, it, 0); }
+
+// ---------------------------------------------------------------- [amplifier], [motor]
+
+const std::vector<Entry<PlantConfig>> kAmplifierEntries = {
+    {"gain", scene_io::per_joint(kPositive, PUMASIM_AT(s.amplifier[j].gain)), "K_A [V/V]", Need::kRequired},
+    {"output_resistance", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.amplifier[j].output_resistance)),
+     "R0 [ohm]"},
+    {"voltage_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.amplifier[j].voltage_limit)), "V_max [V]"},
+};
+
+const std::vector<Entry<PlantConfig>> kMotorEntries = {
+    {"inductance", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.motor[j].inductance)),
+     "La [H]; all 0: the reduced model (no current states)", Need::kRequired},
+    {"resistance", scene_io::per_joint(kPositive, PUMASIM_AT(s.motor[j].resistance)), "R [ohm]", Need::kRequired},
+    {"torque_constant", scene_io::per_joint(kPositive, PUMASIM_AT(s.motor[j].torque_constant)),
+     "K [N m/A] = back-EMF constant [V s/rad]", Need::kRequired},
+};
+
+// The drive: [amplifier] and [motor] together, or neither.
+void read_drive(StrictTable& root, PlantConfig& pc) {
+  auto amp = root.optional_table("amplifier");
+  auto mot = root.optional_table("motor");
+  if (amp.has_value() != mot.has_value()) {
+    root.fail(amp ? "motor" : "amplifier", "both [amplifier] and [motor] (the drive) or neither",
+              "only one of them");
+  }
+  pc.drive = amp.has_value();
+  if (!pc.drive) return;
+  pc.amplifier.assign(pc.n, AmplifierParams{});
+  pc.motor.assign(pc.n, MotorParams{});
+  read_entries(*amp, kAmplifierEntries, pc, pc.n);
+  read_entries(*mot, kMotorEntries, pc, pc.n);
+  const auto positive = [](const MotorParams& m) { return m.inductance > 0; };
+  const bool any = std::any_of(pc.motor.begin(), pc.motor.end(), positive);
+  const bool all = std::all_of(pc.motor.begin(), pc.motor.end(), positive);
+  if (any && !all) mot->fail("inductance", "all > 0 (current states) or all 0 (the reduced model)", "a mix");
+}
+
+void write_drive(toml::table& doc, const PlantConfig& pc) {
+  if (!pc.drive) return;
+  doc.insert("amplifier", write_entries(kAmplifierEntries, pc, pc.n));
+  doc.insert("motor", write_entries(kMotorEntries, pc, pc.n));
+}
+
+// ---------------------------------------------------------------- [friction]
+
+std::vector<std::pair<std::string, FrictionModel>> friction_models() {
+  std::vector<std::pair<std::string, FrictionModel>> out;
+  for (FrictionModel m : {FrictionModel::kNone, FrictionModel::kViscous, FrictionModel::kPaper,
+                          FrictionModel::kHybrid, FrictionModel::kKarnopp, FrictionModel::kTanh}) {
+    out.emplace_back(to_string(m), m);
+  }
+  return out;
+}
+
+FrictionModel model_of(const PlantConfig& pc) { return pc.friction[0].model; }
+bool dissipative(const PlantConfig& pc) { return model_of(pc) != FrictionModel::kNone; }
+bool coulomb(const PlantConfig& pc) { return dissipative(pc) && model_of(pc) != FrictionModel::kViscous; }
+bool banded(const PlantConfig& pc) {
+  return model_of(pc) == FrictionModel::kPaper || model_of(pc) == FrictionModel::kKarnopp;
+}
+bool smooth(const PlantConfig& pc) { return model_of(pc) == FrictionModel::kTanh; }
+
+void karnopp_band(StrictTable&, PlantConfig& pc) {
+  if (model_of(pc) != FrictionModel::kKarnopp) return;
+  for (FrictionParams& f : pc.friction) f.zero_speed = kKarnoppBand;
+}
+
+// Keys that mean nothing for the model are unknown keys.
+const std::vector<Entry<PlantConfig>> kFrictionEntries = {
+    {"model", scene_io::shared_choice(friction_models(), PUMASIM_AT(s.friction[j].model)),
+     "none | viscous | paper | hybrid | karnopp | tanh", Need::kRequired, nullptr, karnopp_band},
+    {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
+     "B [N m s/rad] (every model but none)", Need::kOptional, dissipative},
+    {"static_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
+     "Fs [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, coulomb},
+    {"kinetic_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
+     "Fk [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, coulomb},
+    {"zero_speed", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].zero_speed)),
+     "[rad/s] \"zero\" speed (paper), band (karnopp)", Need::kOptional, banded},
+    {"speed_scale", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
+     "[rad/s] tanh(w / speed_scale) (tanh)", Need::kOptional, smooth},
+};
+
+// Without [friction]: the model "none" on every joint.
+void read_friction(StrictTable& root, PlantConfig& pc) {
+  pc.friction.assign(pc.n, FrictionParams{});
+  if (auto t = root.optional_table("friction")) read_entries(*t, kFrictionEntries, pc, pc.n);
+}
+toml::table write_friction(const PlantConfig& pc) { return write_entries(kFrictionEntries, pc, pc.n); }
+
+// ---------------------------------------------------------------- [controller]
+
+bool sampled(const PlantConfig& pc) { return pc.controller == ControllerMode::kSampled; }
+
+const std::vector<Entry<PlantConfig>> kControllerEntries = {
+    {"mode",
+     scene_io::choice<ControllerMode>({{"continuous", ControllerMode::kContinuous}, {"sampled", ControllerMode::kSampled}},
+                                      PUMASIM_AT(s.controller)),
+     "continuous (integral is a state) | sampled (zero-order hold)", Need::kRequired},
+    {"servo_period", scene_io::number(kPositive, PUMASIM_AT(s.servo_period)), "[s] (sampled)", Need::kRequired,
+     sampled},
+    {"setpoint_interval", scene_io::number(kNonNegative, PUMASIM_AT(s.setpoint_interval)),
+     "[s] reference held between updates; 0: continuous"},
+    {"kp", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kp)), "[V/rad] motor side", Need::kRequired},
+    {"ki", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].ki)), "[V/(rad s)]"},
+    {"kv", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kv)), "[V s/rad] on the measured speed"},
+    {"kvff", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kvff)), "[V s/rad] speed feed-forward"},
+    {"kaff", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kaff)), "[V s^2/rad] acceleration feed-forward"},
+    {"integral_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.piv[j].integral_limit)), "[V] limit of |Ki z|"},
+    {"output_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.piv[j].output_limit)), "[V] DAC range"},
+    {"offset", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].offset)), "[V] SOFFS"},
+};
+
+// A controller drives the drive: both or neither.
+void read_controller(StrictTable& root, PlantConfig& pc) {
+  pc.controller = ControllerMode::kNone;
+  if (auto t = root.optional_table("controller")) {
+    pc.piv.assign(pc.n, PivParams{});
+    read_entries(*t, kControllerEntries, pc, pc.n);
+    if (!pc.drive) root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
+  } else if (pc.drive) {
+    root.fail("amplifier", "a [controller] to drive the amplifier", "no controller");
+  }
+}
+
+void write_controller(toml::table& doc, const PlantConfig& pc) {
+  if (pc.controller != ControllerMode::kNone) doc.insert("controller", write_entries(kControllerEntries, pc, pc.n));
+}
+
+// ---------------------------------------------------------------- [reference]
 
 // [[a, b], [c, d], ...]: rows of `cols` numbers.
 std::vector<std::vector<double>> read_rows(StrictTable& t, std::string_view key, int cols) {
@@ -48,26 +310,259 @@ std::vector<std::vector<double>> read_rows(StrictTable& t, std::string_view key,
   return rows;
 }
 
-FrictionModel friction_model(const std::string& s) {
-  if (s == "none") return FrictionModel::kNone;
-  if (s == "viscous") return FrictionModel::kViscous;
-  if (s == "paper") return FrictionModel::kPaper;
-  if (s == "hybrid") return FrictionModel::kHybrid;
-  if (s == "karnopp") return FrictionModel::kKarnopp;
-  return FrictionModel::kTanh;
+// The degrees the reader turns back into exactly `angle` [rad] (d * pi / 180),
+// so that a resolved scene loads to the same path.
+double degrees_of(double angle) {
+  double d = angle * 180 / M_PI;
+  for (int k = 0; k < 8 && d * M_PI / 180 != angle; ++k) {
+    d = std::nextafter(d, d * M_PI / 180 < angle ? HUGE_VAL : -HUGE_VAL);
+  }
+  return d;
 }
 
-toml::array to_array(const std::vector<double>& v) {
-  toml::array a;
-  for (double x : v) a.push_back(x);
-  return a;
+// segments: an array of tables, each { line = L } or { arc_radius = r, turn_degrees = a }.
+Codec<ReferenceSettings> segments_codec() {
+  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int) {
+            for (StrictTable& seg : t.array_of_tables(key)) {
+              PathSegment p;
+              if (seg.has("line")) {
+                p.length = seg.number("line", kPositive);
+              } else {
+                p.radius = seg.number("arc_radius", kPositive);
+                p.angle = seg.number("turn_degrees", {-360, 360}) * M_PI / 180;
+                if (p.angle == 0) seg.fail("turn_degrees", "a non-zero angle", "0");
+              }
+              seg.finish();
+              r.segments.push_back(p);
+            }
+          },
+          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
+            toml::array segs;
+            for (const PathSegment& p : r.segments) {
+              if (p.radius > 0) {
+                segs.push_back(toml::table{{"arc_radius", p.radius}, {"turn_degrees", degrees_of(p.angle)}});
+              } else {
+                segs.push_back(toml::table{{"line", p.length}});
+              }
+            }
+            out.insert(key, segs);
+          },
+          nullptr};
 }
 
-template <class F>
-toml::array per_joint_array(int n, F f) {
-  toml::array a;
-  for (int j = 0; j < n; ++j) a.push_back(f(j));
-  return a;
+// profile: [[t/T, v/v_max], ...] (the table timing).
+Codec<ReferenceSettings> profile_codec() {
+  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int) {
+            for (const auto& row : read_rows(t, key, 2)) r.profile.emplace_back(row[0], row[1]);
+          },
+          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
+            toml::array prof;
+            for (const auto& pt : r.profile) prof.push_back(toml::array{pt.x(), pt.y()});
+            out.insert(key, prof);
+          },
+          nullptr};
+}
+
+// orientation: a 3 x 3 rotation matrix, by rows.
+Codec<ReferenceSettings> orientation_codec() {
+  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int) {
+            const auto rows = read_rows(t, key, 3);
+            if (rows.size() != 3) t.fail(key, "a 3 x 3 rotation matrix (rows)", "another shape");
+            for (int i = 0; i < 3; ++i)
+              for (int k = 0; k < 3; ++k) r.orientation(i, k) = rows[i][k];
+            if ((r.orientation * r.orientation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
+                r.orientation.determinant() < 0) {
+              t.fail(key, "a rotation matrix (orthonormal, determinant +1)", "another matrix");
+            }
+          },
+          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
+            toml::array orient;
+            for (int i = 0; i < 3; ++i) {
+              orient.push_back(toml::array{r.orientation(i, 0), r.orientation(i, 1), r.orientation(i, 2)});
+            }
+            out.insert(key, orient);
+          },
+          nullptr};
+}
+
+std::vector<std::pair<std::string, Interpolation>> interpolations() {
+  std::vector<std::pair<std::string, Interpolation>> out;
+  for (Interpolation i : {Interpolation::kCartesian, Interpolation::kJointCubic, Interpolation::kJointQuintic}) {
+    out.emplace_back(to_string(i), i);
+  }
+  return out;
+}
+
+bool table_timing(const ReferenceSettings& r) { return r.timing == "table"; }
+bool shaped_timing(const ReferenceSettings& r) {
+  return r.timing == "trapezoid" || r.timing == "scurve" || r.timing == "quintic";
+}
+bool ramped_timing(const ReferenceSettings& r) { return r.timing == "trapezoid" || r.timing == "scurve"; }
+bool scurve_timing(const ReferenceSettings& r) { return r.timing == "scurve"; }
+bool joint_space(const ReferenceSettings& r) { return r.interpolation != Interpolation::kCartesian; }
+
+// The table's duration: from max_speed or from traversal_time, exactly one.
+void one_table_duration(StrictTable& t, ReferenceSettings&) {
+  if (t.has("max_speed") == t.has("traversal_time")) {
+    t.fail(t.has("max_speed") ? "traversal_time" : "max_speed",
+           "exactly one of max_speed and traversal_time (the table's duration)", "both or neither");
+  }
+}
+
+const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
+    {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired},
+    {"start", scene_io::numbers([](const ReferenceSettings&, int) { return 2; }, kAny,
+                                [](const ReferenceSettings& r, int) { return std::vector<double>{r.start.x(), r.start.y()}; },
+                                [](ReferenceSettings& r, const std::vector<double>& v) { r.start = {v[0], v[1]}; }),
+     "[m] (x, y) in the plane", Need::kRequired},
+    {"heading", scene_io::number({-2 * M_PI, 2 * M_PI}, PUMASIM_AT(s.heading)), "[rad] of the first segment"},
+    {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired},
+    {"timing", scene_io::text(PUMASIM_AT(s.timing), {"table", "trapezoid", "scurve", "quintic", "time-optimal"}),
+     "the timing law s(t)"},
+    {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, table_timing},
+    {"max_speed", scene_io::number(kPositive, PUMASIM_AT(s.max_speed)), "table: [m/s] peak path speed",
+     Need::kIfSet, table_timing},
+    {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)),
+     "table: [s] the duration instead of max_speed", Need::kIfSet, table_timing, one_table_duration},
+    {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)), "[s] the duration",
+     Need::kRequired, shaped_timing},
+    {"blend", scene_io::number(kRampShare, PUMASIM_AT(s.blend)), "each acceleration phase's share of T",
+     Need::kOptional, ramped_timing},
+    {"jerk_fraction", scene_io::number(kRampShare, PUMASIM_AT(s.jerk_fraction)),
+     "share of an acceleration phase spent ramping it", Need::kOptional, scurve_timing},
+    {"interpolation", scene_io::choice(interpolations(), PUMASIM_AT(s.interpolation)),
+     "cartesian | joint-cubic | joint-quintic"},
+    {"via_segments", scene_io::whole({1.0, 1e5}, "a whole number >= 1", PUMASIM_AT(s.via_segments)),
+     "joint space: the via-points cut the path into this many pieces", Need::kOptional, joint_space},
+    {"arm", scene_io::choice<bool>({{"right", true}, {"left", false}}, PUMASIM_AT(s.config.right_arm)),
+     "inverse kinematics branch: shoulder"},
+    {"elbow", scene_io::choice<bool>({{"up", true}, {"down", false}}, PUMASIM_AT(s.config.elbow_up)),
+     "inverse kinematics branch: elbow"},
+    {"wrist", scene_io::choice<bool>({{"noflip", false}, {"flip", true}}, PUMASIM_AT(s.config.wrist_flip)),
+     "inverse kinematics branch: wrist"},
+    {"orientation", orientation_codec(), "6 joints: the flange's fixed orientation (rows)"},
+};
+
+// ---------------------------------------------------------------- [planning]
+
+const Bounds kVoltageShare{0.0, 1.0, true};
+const Bounds kLimit = Bounds::positive_or_infinity();  // inf: no limit
+
+const std::vector<Entry<ReferenceSettings>> kPlanningEntries = {
+    {"voltage_fraction", scene_io::number(kVoltageShare, PUMASIM_AT(s.voltage_fraction)),
+     "of min(K_A output_limit, voltage_limit); the rest is left to feedback"},
+    {"current_limit", scene_io::per_joint(kLimit, PUMASIM_AT(s.current_limit[j])), "[A] per joint (inf: none)"},
+    {"joint_speed_limit", scene_io::per_joint(kLimit, PUMASIM_AT(s.joint_speed_limit[j])),
+     "[rad/s] per joint (inf: none)"},
+    {"grid", scene_io::whole({10.0, 1e6}, "a whole number >= 10", PUMASIM_AT(s.grid)),
+     "arc-length grid intervals of the phase-plane passes"},
+};
+
+// [planning]: the limits the time-optimal timing plans within (absent: every
+// default, no current or speed limit).
+void read_planning(std::optional<StrictTable>& plan, const std::string& file, ReferenceSettings& r, int n) {
+  const toml::table none;
+  StrictTable empty(none, file, "planning");
+  r.current_limit.assign(n, std::numeric_limits<double>::infinity());
+  r.joint_speed_limit.assign(n, std::numeric_limits<double>::infinity());
+  read_entries(plan ? *plan : empty, kPlanningEntries, r, n);
+}
+
+// The reference the controller follows, from the settings (the constructor
+// checks the whole path: reach, joint limits, branch).
+std::shared_ptr<const Reference> build_reference(const StrictTable& rt, const PlantConfig& pc,
+                                                 const ReferenceSettings& r) {
+  try {
+    Path path(r.start, r.heading, r.height, r.segments);
+    const double L = path.length();
+    std::optional<Timing> timing;
+    if (r.timing == "table") {
+      timing = r.max_speed > 0 ? Timing::table(r.profile, L, r.max_speed)
+                               : Timing::table_with_duration(r.profile, L, r.traversal_time);
+    } else if (r.timing == "trapezoid") {
+      timing = Timing::trapezoid(L, r.traversal_time, r.blend);
+    } else if (r.timing == "scurve") {
+      timing = Timing::scurve(L, r.traversal_time, r.blend, r.jerk_fraction);
+    } else if (r.timing == "quintic") {
+      timing = Timing::quintic(L, r.traversal_time);
+    } else {
+      const PlanningSetup setup = time_optimal_setup(pc, pc.n, r);
+      timing = setup.planner->plan(*setup.unit, r.grid);
+    }
+    return std::make_shared<Reference>(pc.robot, pc.n, pc.q_held, r.config, r.orientation, path, *timing,
+                                       r.interpolation, r.via_segments);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw ConfigError(rt.where() + e.what());
+  }
+}
+
+// [reference], and [planning] only with the time-optimal timing.
+void read_reference(StrictTable& root, Scene& sc) {
+  std::optional<StrictTable> rt = root.optional_table("reference");
+  if (!rt) return;
+  sc.has_reference = true;
+  ReferenceSettings& r = sc.reference;
+  read_entries(*rt, kReferenceEntries, r, sc.plant.n);
+  std::optional<StrictTable> plan = root.optional_table("planning");
+  if (plan && r.timing != "time-optimal") {
+    root.fail("planning", "[planning] only with reference.timing = \"time-optimal\"", "timing \"" + r.timing + "\"");
+  }
+  if (r.timing == "time-optimal") {
+    if (!sc.plant.drive) {
+      rt->fail("timing", "a drive ([amplifier], [motor]) whose limits the time-optimal timing uses", "no drive");
+    }
+    read_planning(plan, sc.file, r, sc.plant.n);
+  }
+  sc.plant.reference = build_reference(*rt, sc.plant, r);
+}
+
+void write_reference(toml::table& doc, const Scene& sc) {
+  if (!sc.has_reference) return;
+  doc.insert("reference", write_entries(kReferenceEntries, sc.reference, sc.plant.n));
+  if (sc.reference.timing == "time-optimal") {
+    doc.insert("planning", write_entries(kPlanningEntries, sc.reference, sc.plant.n));
+  }
+}
+
+// ---------------------------------------------------------------- [initial]
+
+// The pose held without a reference: a named pose of the robot file, or the
+// angles (resolved as the angles).
+struct InitialPose {
+  std::string pose;
+  std::vector<double> q;  // [rad], the simulated joints
+};
+
+bool no_pose(const InitialPose& p) { return p.pose.empty(); }
+
+const std::vector<Entry<InitialPose>> kInitialEntries = {
+    {"pose", scene_io::text(PUMASIM_AT(s.pose)), "a pose named in the robot file", Need::kIfSet},
+    {"q", scene_io::numbers([](const InitialPose&, int n) { return n; }, kJointAngle,
+                            [](const InitialPose& p, int) { return p.q; },
+                            [](InitialPose& p, const std::vector<double>& v) { p.q = v; }),
+     "[rad] the simulated joints' angles", Need::kRequired, no_pose},
+};
+
+void read_initial(StrictTable& root, PlantConfig& pc) {
+  auto t = root.optional_table("initial");
+  if (!t) root.fail("initial", "a [reference] to follow or an [initial] pose (held by a controller)", "neither");
+  InitialPose init;
+  read_entries(*t, kInitialEntries, init, pc.n);
+  if (init.pose.empty()) {
+    pc.q0 = Eigen::Map<const Eigen::VectorXd>(init.q.data(), pc.n);
+    return;
+  }
+  const NamedPose* p = pc.robot.pose(init.pose);
+  if (!p) t->fail("pose", "a pose of the robot file", "\"" + init.pose + "\"");
+  pc.q0 = p->q.head(pc.n);
+}
+
+void write_initial(toml::table& doc, const PlantConfig& pc) {
+  if (pc.reference) return;
+  const InitialPose init{"", std::vector<double>(pc.q0.data(), pc.q0.data() + pc.n)};
+  doc.insert("initial", write_entries(kInitialEntries, init, pc.n));
 }
 
 }  // namespace
@@ -79,259 +574,14 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   Scene sc;
   sc.file = path;
   PlantConfig& pc = sc.plant;
-
-  StrictTable s = root.table("scene");
-  sc.name = s.string("name");
-  // The name becomes a folder name (runs/<name>/): a plain one only.
-  const bool plain = !sc.name.empty() && sc.name.size() <= 100 && sc.name != "." && sc.name != ".." &&
-                     std::all_of(sc.name.begin(), sc.name.end(), [](char c) {
-                       return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.';
-                     });
-  if (!plain) {
-    s.fail("name", "a plain name of at most 100 letters, digits, '_', '-' and '.' (not '.' or '..')",
-           "\"" + sc.name + "\"");
-  }
-  sc.robot_spec = s.string("robot");
-  std::string robot_path = sc.robot_spec;
-  if (robot_path.find('/') != std::string::npos && !std::filesystem::path(robot_path).is_absolute()) {
-    robot_path = (std::filesystem::path(path).parent_path() / robot_path).string();
-  }
-  try {
-    pc.robot = load_robot(robot_path);
-  } catch (const ConfigError& e) {
-    throw ConfigError(s.where("robot") + e.what());
-  }
-  sc.rotor_inertia = s.boolean_or("rotor_inertia", true);
-  pc.energy_ledger = s.boolean_or("energy_ledger", false);
-  if (!sc.rotor_inertia) pc.robot = without_rotor_inertia(pc.robot);
-  const int dof = pc.robot.dof();
-  // The plant and the reference hold a pose in a 6-vector, and lock held
-  // joints only on a 6-joint arm: checked here, before any size is used.
-  if (dof > 6) s.fail("robot", "a robot with at most 6 joints", "one with " + std::to_string(dof));
-  const int n = read_int(s, "joints", 1, dof);
-  if (n < dof && dof != 6) {
-    s.fail("joints", "all " + std::to_string(dof) + " joints of this robot (held joints need a 6-joint robot)",
-           std::to_string(n));
-  }
-  pc.n = n;
-  const auto held = s.optional_numbers("held", dof - n, {-4 * M_PI, 4 * M_PI});
-  pc.q_held.setZero();
-  if (held) {
-    for (int k = 0; k < dof - n; ++k) pc.q_held[n + k] = (*held)[k];
-  }
-  pc.backend = s.string_or("backend", "crba");
-  try {
-    const BackendInfo& b = find_backend(pc.backend);
-    const RobotModel sim = simulated_robot(pc.robot, n, pc.q_held);
-    if (const std::string why = b.why_unsupported(sim); !why.empty()) s.fail("backend", "a back-end that supports this robot", why);
-  } catch (const std::invalid_argument& e) {
-    s.fail("backend", "one of: " + backend_names(), "\"" + pc.backend + "\"");
-  }
-  const bool has_duration = s.has("duration");
-  sc.duration = s.number_or("duration", 0.0, kPositive);
-  sc.output_interval = s.number_or("output_interval", 0.01, kPositive);
-  s.finish();
-
-  if (auto it = root.optional_table("integrator")) {
-    if (it->has("name")) sc.integrator.name_where = it->where("name");
-    sc.integrator.name = it->string_or("name", sc.integrator.name);
-    sc.integrator.dt = it->number_or("dt", sc.integrator.dt, kPositive);
-    sc.integrator.rtol = it->number_or("rtol", sc.integrator.rtol, kPositive);
-    sc.integrator.atol = it->number_or("atol", sc.integrator.atol, kPositive);
-    it->finish();
-  }
-
-  // Drive: amplifier and motor come together.
-  auto amp = root.optional_table("amplifier");
-  auto mot = root.optional_table("motor");
-  if (amp.has_value() != mot.has_value()) {
-    root.fail(amp ? "motor" : "amplifier", "both [amplifier] and [motor] (the drive) or neither",
-              "only one of them");
-  }
-  pc.drive = amp.has_value();
-  if (pc.drive) {
-    const auto gain = amp->per_joint("gain", n, kPositive);
-    const auto r0 = amp->per_joint_or("output_resistance", n, 0.0, kNonNegative);
-    const auto vmax = amp->per_joint_or("voltage_limit", n, 1e9, kPositive);
-    amp->finish();
-    const auto La = mot->per_joint("inductance", n, kNonNegative);
-    const auto R = mot->per_joint("resistance", n, kPositive);
-    const auto K = mot->per_joint("torque_constant", n, kPositive);
-    mot->finish();
-    const bool any = std::any_of(La.begin(), La.end(), [](double x) { return x > 0; });
-    const bool all = std::all_of(La.begin(), La.end(), [](double x) { return x > 0; });
-    if (any && !all) {
-      mot->fail("inductance", "all > 0 (current states) or all 0 (the reduced model)", "a mix");
-    }
-    for (int j = 0; j < n; ++j) {
-      pc.amplifier.push_back({gain[j], r0[j], vmax[j]});
-      pc.motor.push_back({La[j], R[j], K[j]});
-    }
-  }
-
-  pc.friction.assign(n, FrictionParams{});
-  if (auto fr = root.optional_table("friction")) {
-    const std::string model =
-        fr->string("model", {"none", "viscous", "paper", "hybrid", "karnopp", "tanh"});
-    const FrictionModel m = friction_model(model);
-    const bool coulomb = m != FrictionModel::kNone && m != FrictionModel::kViscous;
-    const auto B = m == FrictionModel::kNone ? std::vector<double>(n, 0.0)
-                                             : fr->per_joint_or("viscous", n, 0.0, kNonNegative);
-    const auto Fs = coulomb ? fr->per_joint("static_torque", n, kNonNegative)
-                            : std::vector<double>(n, 0.0);
-    const auto Fk = coulomb ? fr->per_joint("kinetic_torque", n, kNonNegative)
-                            : std::vector<double>(n, 0.0);
-    // Keys that mean nothing for the model are unknown keys (finish() says so).
-    const bool banded = m == FrictionModel::kPaper || m == FrictionModel::kKarnopp;
-    const double zero_default = m == FrictionModel::kKarnopp ? 1e-3 : 1e-6;
-    const double zero = banded ? fr->number_or("zero_speed", zero_default, kPositive) : zero_default;
-    const double scale =
-        m == FrictionModel::kTanh ? fr->number_or("speed_scale", 1e-2, kPositive) : 1e-2;
-    fr->finish();
-    for (int j = 0; j < n; ++j) pc.friction[j] = {m, B[j], Fs[j], Fk[j], zero, scale};
-  }
-
-  pc.controller = ControllerMode::kNone;
-  if (auto ct = root.optional_table("controller")) {
-    const std::string mode = ct->string("mode", {"continuous", "sampled"});
-    pc.controller = mode == "sampled" ? ControllerMode::kSampled : ControllerMode::kContinuous;
-    if (pc.controller == ControllerMode::kSampled) {
-      pc.servo_period = ct->number("servo_period", kPositive);
-    }
-    pc.setpoint_interval = ct->number_or("setpoint_interval", 0.0, kNonNegative);
-    const auto kp = ct->per_joint("kp", n), ki = ct->per_joint_or("ki", n, 0.0),
-               kv = ct->per_joint_or("kv", n, 0.0), kvff = ct->per_joint_or("kvff", n, 0.0),
-               kaff = ct->per_joint_or("kaff", n, 0.0),
-               ilim = ct->per_joint_or("integral_limit", n, 10.0, kPositive),
-               ulim = ct->per_joint_or("output_limit", n, 10.0, kPositive),
-               off = ct->per_joint_or("offset", n, 0.0);
-    ct->finish();
-    for (int j = 0; j < n; ++j) pc.piv.push_back({kp[j], ki[j], kv[j], kvff[j], kaff[j], ilim[j], ulim[j], off[j]});
-    if (!pc.drive) root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
-  } else if (pc.drive) {
-    root.fail("amplifier", "a [controller] to drive the amplifier", "no controller");
-  }
-
-  if (auto rt = root.optional_table("reference")) {
-    ReferenceSettings& r = sc.reference;
-    sc.has_reference = true;
-    r.height = rt->number("height");
-    const auto st = rt->numbers("start", 2);
-    r.start = Eigen::Vector2d(st[0], st[1]);
-    r.heading = rt->number_or("heading", 0.0, {-2 * M_PI, 2 * M_PI});
-    for (StrictTable& seg : rt->array_of_tables("segments")) {
-      PathSegment p;
-      if (seg.has("line")) {
-        p.length = seg.number("line", kPositive);
-      } else {
-        p.radius = seg.number("arc_radius", kPositive);
-        p.angle = seg.number("turn_degrees", {-360, 360}) * M_PI / 180;
-        if (p.angle == 0) seg.fail("turn_degrees", "a non-zero angle", "0");
-      }
-      seg.finish();
-      r.segments.push_back(p);
-    }
-    r.timing = rt->string_or("timing", "table", {"table", "trapezoid", "scurve", "quintic", "time-optimal"});
-    if (r.timing == "table") {
-      for (const auto& row : read_rows(*rt, "profile", 2)) r.profile.emplace_back(row[0], row[1]);
-      if (rt->has("max_speed") == rt->has("traversal_time")) {
-        rt->fail(rt->has("max_speed") ? "traversal_time" : "max_speed",
-                 "exactly one of max_speed and traversal_time (the table's duration)", "both or neither");
-      }
-      r.max_speed = rt->number_or("max_speed", 0.0, kPositive);
-      r.traversal_time = rt->number_or("traversal_time", 0.0, kPositive);
-    } else if (r.timing != "time-optimal") {
-      r.traversal_time = rt->number("traversal_time", kPositive);
-      if (r.timing != "quintic") r.blend = rt->number_or("blend", r.blend, {0.0, 0.5, true});
-      if (r.timing == "scurve") r.jerk_fraction = rt->number_or("jerk_fraction", r.jerk_fraction, {0.0, 0.5, true});
-    }
-    const std::vector<Interpolation> interps{Interpolation::kCartesian, Interpolation::kJointCubic,
-                                             Interpolation::kJointQuintic};
-    std::vector<std::string> interp_names;
-    for (Interpolation i : interps) interp_names.emplace_back(to_string(i));
-    const std::string interp = rt->string_or("interpolation", interp_names[0], interp_names);
-    r.interpolation = interps[std::find(interp_names.begin(), interp_names.end(), interp) - interp_names.begin()];
-    if (r.interpolation != Interpolation::kCartesian) {
-      const double v = rt->number_or("via_segments", r.via_segments, {1.0, 1e5});
-      if (v != std::floor(v)) rt->fail("via_segments", "a whole number >= 1", std::to_string(v));
-      r.via_segments = static_cast<int>(v);
-    }
-    r.config.right_arm = rt->string_or("arm", "right", {"right", "left"}) == "right";
-    r.config.elbow_up = rt->string_or("elbow", "up", {"up", "down"}) == "up";
-    r.config.wrist_flip = rt->string_or("wrist", "noflip", {"noflip", "flip"}) == "flip";
-    r.orientation << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // flange z pointing down
-    if (rt->has("orientation")) {
-      const auto rows = read_rows(*rt, "orientation", 3);
-      if (rows.size() != 3) rt->fail("orientation", "a 3 x 3 rotation matrix (rows)", "another shape");
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) r.orientation(i, k) = rows[i][k];
-      if ((r.orientation * r.orientation.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
-          r.orientation.determinant() < 0) {
-        rt->fail("orientation", "a rotation matrix (orthonormal, determinant +1)", "another matrix");
-      }
-    }
-    std::optional<StrictTable> plan = root.optional_table("planning");
-    if (plan && r.timing != "time-optimal") {
-      root.fail("planning", "[planning] only with reference.timing = \"time-optimal\"", "timing \"" + r.timing + "\"");
-    }
-    if (r.timing == "time-optimal") {
-      if (!pc.drive) rt->fail("timing", "a drive ([amplifier], [motor]) whose limits the time-optimal timing uses", "no drive");
-      const toml::table none;
-      StrictTable empty(none, sc.file, "planning");
-      StrictTable& pt = plan ? *plan : empty;
-      r.voltage_fraction = pt.number_or("voltage_fraction", r.voltage_fraction, {0.0, 1.0, true});
-      r.current_limit = pt.per_joint_or("current_limit", n, std::numeric_limits<double>::infinity(), kPositive);
-      r.joint_speed_limit = pt.per_joint_or("joint_speed_limit", n, std::numeric_limits<double>::infinity(), kPositive);
-      const double g = pt.number_or("grid", r.grid, {10.0, 1e6});
-      if (g != std::floor(g)) pt.fail("grid", "a whole number >= 10", std::to_string(g));
-      r.grid = static_cast<int>(g);
-      pt.finish();
-    }
-    try {
-      Path path(r.start, r.heading, r.height, r.segments);
-      const double L = path.length();
-      std::optional<Timing> timing;
-      if (r.timing == "table") {
-        timing = r.max_speed > 0 ? Timing::table(r.profile, L, r.max_speed)
-                                 : Timing::table_with_duration(r.profile, L, r.traversal_time);
-      } else if (r.timing == "trapezoid") {
-        timing = Timing::trapezoid(L, r.traversal_time, r.blend);
-      } else if (r.timing == "scurve") {
-        timing = Timing::scurve(L, r.traversal_time, r.blend, r.jerk_fraction);
-      } else if (r.timing == "quintic") {
-        timing = Timing::quintic(L, r.traversal_time);
-      } else {
-        const PlanningSetup setup = time_optimal_setup(pc, n, r);
-        timing = setup.planner->plan(*setup.unit, r.grid);
-      }
-      auto ref = std::make_shared<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation, path, *timing,
-                                             r.interpolation, r.via_segments);
-      // (The constructor checks the whole path: reach, joint limits, branch.)
-      pc.reference = ref;
-    } catch (const ConfigError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw ConfigError(rt->where() + e.what());
-    }
-    rt->finish();
-  }
-  if (!pc.reference) {
-    auto init = root.optional_table("initial");
-    if (!init) {
-      root.fail("initial", "a [reference] to follow or an [initial] pose (held by a controller)", "neither");
-    }
-    if (init->has("pose")) {
-      const std::string pose = init->string("pose");
-      const NamedPose* p = pc.robot.pose(pose);
-      if (!p) init->fail("pose", "a pose of the robot file", "\"" + pose + "\"");
-      pc.q0 = p->q.head(n);
-    } else {
-      const auto q = init->numbers("q", n, {-4 * M_PI, 4 * M_PI});
-      pc.q0 = Eigen::Map<const Eigen::VectorXd>(q.data(), n);
-    }
-    init->finish();
-  }
-  if (!has_duration) {
+  read_scene(root, sc);
+  read_integrator(root, sc.integrator);
+  read_drive(root, pc);
+  read_friction(root, pc);
+  read_controller(root, pc);
+  read_reference(root, sc);
+  if (!pc.reference) read_initial(root, pc);
+  if (sc.duration == 0) {  // scene.duration absent (a given one is > 0)
     if (!pc.reference) root.fail("scene", "a duration (no reference to take it from)", "none");
     sc.duration = pc.reference->timing().duration();
   }
@@ -364,111 +614,14 @@ PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSe
 
 std::string resolved_toml(const Scene& sc) {
   const PlantConfig& pc = sc.plant;
-  const int n = pc.n;
   toml::table doc;
-  toml::table scene{{"name", sc.name},
-                    {"robot", sc.robot_spec},
-                    {"joints", n},
-                    {"rotor_inertia", sc.rotor_inertia},
-                    {"energy_ledger", pc.energy_ledger},
-                    {"backend", pc.backend},
-                    {"duration", sc.duration},
-                    {"output_interval", sc.output_interval}};
-  toml::array held;
-  for (int k = n; k < pc.robot.dof(); ++k) held.push_back(pc.q_held[k]);
-  scene.insert("held", held);
-  doc.insert("scene", scene);
-  doc.insert("integrator", toml::table{{"name", sc.integrator.name},
-                                       {"dt", sc.integrator.dt},
-                                       {"rtol", sc.integrator.rtol},
-                                       {"atol", sc.integrator.atol}});
-  if (pc.drive) {
-    doc.insert("amplifier",
-               toml::table{{"gain", per_joint_array(n, [&](int j) { return pc.amplifier[j].gain; })},
-                           {"output_resistance", per_joint_array(n, [&](int j) { return pc.amplifier[j].output_resistance; })},
-                           {"voltage_limit", per_joint_array(n, [&](int j) { return pc.amplifier[j].voltage_limit; })}});
-    doc.insert("motor",
-               toml::table{{"inductance", per_joint_array(n, [&](int j) { return pc.motor[j].inductance; })},
-                           {"resistance", per_joint_array(n, [&](int j) { return pc.motor[j].resistance; })},
-                           {"torque_constant", per_joint_array(n, [&](int j) { return pc.motor[j].torque_constant; })}});
-  }
-  const FrictionParams& f0 = pc.friction[0];
-  toml::table fr{{"model", to_string(f0.model)}};
-  if (f0.model != FrictionModel::kNone) {
-    fr.insert("viscous", per_joint_array(n, [&](int j) { return pc.friction[j].viscous; }));
-  }
-  if (f0.model != FrictionModel::kNone && f0.model != FrictionModel::kViscous) {
-    fr.insert("static_torque", per_joint_array(n, [&](int j) { return pc.friction[j].static_torque; }));
-    fr.insert("kinetic_torque", per_joint_array(n, [&](int j) { return pc.friction[j].kinetic_torque; }));
-  }
-  if (f0.model == FrictionModel::kPaper || f0.model == FrictionModel::kKarnopp) {
-    fr.insert("zero_speed", f0.zero_speed);
-  }
-  if (f0.model == FrictionModel::kTanh) fr.insert("speed_scale", f0.speed_scale);
-  doc.insert("friction", fr);
-  if (pc.controller != ControllerMode::kNone) {
-    toml::table c{{"mode", pc.controller == ControllerMode::kSampled ? "sampled" : "continuous"},
-                  {"setpoint_interval", pc.setpoint_interval}};
-    if (pc.controller == ControllerMode::kSampled) c.insert("servo_period", pc.servo_period);
-    c.insert("kp", per_joint_array(n, [&](int j) { return pc.piv[j].kp; }));
-    c.insert("ki", per_joint_array(n, [&](int j) { return pc.piv[j].ki; }));
-    c.insert("kv", per_joint_array(n, [&](int j) { return pc.piv[j].kv; }));
-    c.insert("kvff", per_joint_array(n, [&](int j) { return pc.piv[j].kvff; }));
-    c.insert("kaff", per_joint_array(n, [&](int j) { return pc.piv[j].kaff; }));
-    c.insert("integral_limit", per_joint_array(n, [&](int j) { return pc.piv[j].integral_limit; }));
-    c.insert("output_limit", per_joint_array(n, [&](int j) { return pc.piv[j].output_limit; }));
-    c.insert("offset", per_joint_array(n, [&](int j) { return pc.piv[j].offset; }));
-    doc.insert("controller", c);
-  }
-  if (sc.has_reference) {
-    const ReferenceSettings& r = sc.reference;
-    toml::array segs;
-    for (const PathSegment& p : r.segments) {
-      if (p.radius > 0) {
-        segs.push_back(toml::table{{"arc_radius", p.radius}, {"turn_degrees", p.angle * 180 / M_PI}});
-      } else {
-        segs.push_back(toml::table{{"line", p.length}});
-      }
-    }
-    toml::array prof, orient;
-    for (const auto& pt : r.profile) prof.push_back(toml::array{pt.x(), pt.y()});
-    for (int i = 0; i < 3; ++i) {
-      orient.push_back(toml::array{r.orientation(i, 0), r.orientation(i, 1), r.orientation(i, 2)});
-    }
-    toml::table rt{{"height", r.height},
-                   {"start", toml::array{r.start.x(), r.start.y()}},
-                   {"heading", r.heading},
-                   {"segments", segs},
-                   {"timing", r.timing},
-                   {"arm", r.config.right_arm ? "right" : "left"},
-                   {"elbow", r.config.elbow_up ? "up" : "down"},
-                   {"wrist", r.config.wrist_flip ? "flip" : "noflip"},
-                   {"orientation", orient}};
-    if (r.timing == "table") {
-      rt.insert("profile", prof);
-      if (r.max_speed > 0) rt.insert("max_speed", r.max_speed);
-    }
-    if (r.traversal_time > 0) rt.insert("traversal_time", r.traversal_time);
-    if (r.timing == "trapezoid" || r.timing == "scurve") rt.insert("blend", r.blend);
-    if (r.timing == "scurve") rt.insert("jerk_fraction", r.jerk_fraction);
-    rt.insert("interpolation", to_string(r.interpolation));
-    if (r.interpolation != Interpolation::kCartesian) rt.insert("via_segments", r.via_segments);
-    doc.insert("reference", rt);
-    if (r.timing == "time-optimal") {
-      auto limits = [&](const std::vector<double>& v) {
-        toml::array a;
-        for (double x : v) a.push_back(x);  // inf: no limit (TOML has inf)
-        return a;
-      };
-      doc.insert("planning", toml::table{{"voltage_fraction", r.voltage_fraction},
-                                         {"current_limit", limits(r.current_limit)},
-                                         {"joint_speed_limit", limits(r.joint_speed_limit)},
-                                         {"grid", r.grid}});
-    }
-  }
-  if (!pc.reference) {
-    doc.insert("initial", toml::table{{"q", to_array(std::vector<double>(pc.q0.data(), pc.q0.data() + n))}});
-  }
+  doc.insert("scene", write_scene(sc));
+  doc.insert("integrator", write_integrator(sc.integrator));
+  write_drive(doc, pc);
+  doc.insert("friction", write_friction(pc));
+  write_controller(doc, pc);
+  write_reference(doc, sc);
+  write_initial(doc, pc);
   std::ostringstream out;
   out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << doc << "\n";
   return out.str();

@@ -43,7 +43,8 @@ struct ReferenceSettings {
   std::vector<double> joint_speed_limit; // [rad/s] per joint (inf: none)
   int grid = 1000;                       // arc-length grid intervals
   PumaConfig config;
-  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();  // 6 joints: flange orientation
+  // 6 joints: the flange's fixed orientation (default: its z axis pointing down).
+  Eigen::Matrix3d orientation = (Eigen::Matrix3d() << 1, 0, 0, 0, -1, 0, 0, 0, -1).finished();
 };
 
 struct Scene {

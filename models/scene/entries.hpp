@@ -1,0 +1,246 @@
+// Scene sections as tables of entries (internal to models/scene/).
+//
+// A section of a scene file is one table: each entry names its key, what the
+// value is (number, whole number, flag, text, choice, one number per joint,
+// array of numbers, or a custom reader and writer), its bounds or allowed
+// values, where it lives in the section's struct, whether it is required, and
+// a one-line meaning. read_entries() and write_entries() walk the same table,
+// so what is read is what is written, and the resolved scene loads back to the
+// same scene by construction. Defaults are the structs' initialisers: an
+// optional key that is absent leaves its member untouched.
+//
+// Accessors are generic lambdas (obj, j) -> member&, with j the joint for
+// per-joint and shared entries (0 otherwise); PUMASIM_AT(expr) writes one.
+#pragma once
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "models/robot/strict_toml.hpp"
+
+#define PUMASIM_AT(expr) [](auto& s, [[maybe_unused]] int j) -> auto& { return expr; }
+
+namespace pumasim::scene_io {
+
+enum class Need {
+  kRequired,  // absent: "missing required key"
+  kOptional,  // absent: the struct's initialiser; always written
+  kIfSet,     // absent: the initialiser (0 or empty: "not given"), written only when set
+};
+
+// How one key is read from a StrictTable into T, and written back as TOML;
+// n is the number of simulated joints.
+template <class T>
+struct Codec {
+  std::function<void(StrictTable&, std::string_view key, T&, int n)> read;
+  std::function<void(toml::table&, std::string_view key, const T&, int n)> write;
+  std::function<bool(const T&)> unset;  // the value is 0 or empty (for kIfSet); null: never
+};
+
+template <class T>
+struct Entry {
+  std::string_view key;
+  Codec<T> codec;             // type, bounds or allowed values, member
+  std::string_view meaning;   // one line: unit and role
+  Need need = Need::kOptional;
+  // Whether the key means something, from the entries above it (null: always);
+  // a key that does not is not read (finish() calls it unknown) nor written.
+  bool (*applies)(const T&) = nullptr;
+  // After the entry is read (its value or its default): checks and derived values.
+  void (*then)(StrictTable&, T&) = nullptr;
+};
+
+// Reads every entry that applies, in table order, then rejects unknown keys.
+template <class T>
+void read_entries(StrictTable& t, const std::vector<Entry<T>>& entries, T& obj, int n) {
+  for (const Entry<T>& e : entries) {
+    if (e.applies && !e.applies(obj)) continue;
+    if (e.need == Need::kRequired || t.node(e.key)) e.codec.read(t, e.key, obj, n);
+    if (e.then) e.then(t, obj);
+  }
+  t.finish();
+}
+
+// Writes every entry that applies (and is set, for kIfSet) into a TOML table.
+template <class T>
+toml::table write_entries(const std::vector<Entry<T>>& entries, const T& obj, int n) {
+  toml::table out;
+  for (const Entry<T>& e : entries) {
+    if (e.applies && !e.applies(obj)) continue;
+    if (e.need == Need::kIfSet && e.codec.unset && e.codec.unset(obj)) continue;
+    e.codec.write(out, e.key, obj, n);
+  }
+  return out;
+}
+
+// Sets the member for joint 0, or for every joint when `shared` (one value
+// kept in each joint's parameters).
+template <class T, class At, class V>
+void assign(At at, T& obj, int n, bool shared, const V& v) {
+  for (int j = 0; j < (shared ? n : 1); ++j) at(obj, j) = v;
+}
+
+// A number within bounds (shared: the same for every joint).
+template <class At>
+struct NumberCodec {
+  Bounds bounds;
+  At at;
+  bool shared;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor): the tables convert
+    const NumberCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int n) {
+              assign(c.at, obj, n, c.shared, t.number(key, c.bounds));
+            },
+            [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
+            [c](const T& obj) { return c.at(obj, 0) == 0; }};
+  }
+};
+template <class At>
+NumberCodec<At> number(Bounds b, At at) { return {b, at, false}; }
+template <class At>
+NumberCodec<At> shared_number(Bounds b, At at) { return {b, at, true}; }
+
+// A whole number within bounds into an int; `fractional` is what a message
+// says was expected of a number that is not whole.
+template <class At>
+struct WholeCodec {
+  Bounds bounds;
+  std::string fractional;
+  At at;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const WholeCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int) {
+              const double x = t.number(key, c.bounds);
+              if (x != std::floor(x)) t.fail(key, c.fractional, std::to_string(x));
+              c.at(obj, 0) = static_cast<int>(x);
+            },
+            [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
+            [c](const T& obj) { return c.at(obj, 0) == 0; }};
+  }
+};
+template <class At>
+WholeCodec<At> whole(Bounds b, std::string fractional, At at) { return {b, std::move(fractional), at}; }
+
+// true or false.
+template <class At>
+struct FlagCodec {
+  At at;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const At a = at;
+    return {[a](StrictTable& t, std::string_view key, T& obj, int) { a(obj, 0) = t.boolean_or(key, a(obj, 0)); },
+            [a](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, a(obj, 0)); },
+            nullptr};
+  }
+};
+template <class At>
+FlagCodec<At> flag(At at) { return {at}; }
+
+// A string, one of `allowed` unless that is empty.
+template <class At>
+struct TextCodec {
+  std::vector<std::string> allowed;
+  At at;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const TextCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int) { c.at(obj, 0) = t.string(key, c.allowed); },
+            [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
+            [c](const T& obj) { return c.at(obj, 0).empty(); }};
+  }
+};
+template <class At>
+TextCodec<At> text(At at, std::vector<std::string> allowed = {}) { return {std::move(allowed), at}; }
+
+// One of a few names, each standing for a value of the member (an enum, a
+// flag); shared: the same for every joint.
+template <class V, class At>
+struct ChoiceCodec {
+  std::vector<std::pair<std::string, V>> options;
+  At at;
+  bool shared;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const ChoiceCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int n) {
+              std::vector<std::string> names;
+              for (const auto& o : c.options) names.push_back(o.first);
+              const std::string s = t.string(key, names);
+              for (const auto& o : c.options) {
+                if (o.first == s) assign(c.at, obj, n, c.shared, o.second);
+              }
+            },
+            [c](toml::table& out, std::string_view key, const T& obj, int) {
+              for (const auto& o : c.options) {
+                if (o.second == c.at(obj, 0)) out.insert(key, o.first);
+              }
+            },
+            nullptr};
+  }
+};
+template <class V, class At>
+ChoiceCodec<V, At> choice(std::vector<std::pair<std::string, V>> options, At at) {
+  return {std::move(options), at, false};
+}
+template <class V, class At>
+ChoiceCodec<V, At> shared_choice(std::vector<std::pair<std::string, V>> options, At at) {
+  return {std::move(options), at, true};
+}
+
+// One number per simulated joint (an array of exactly n, checked before any
+// member is written), or one number for all of them; written as the array.
+template <class At>
+struct PerJointCodec {
+  Bounds bounds;
+  At at;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const PerJointCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int n) {
+              const std::vector<double> v = t.per_joint(key, n, c.bounds);
+              for (int j = 0; j < n; ++j) c.at(obj, j) = v[static_cast<std::size_t>(j)];
+            },
+            [c](toml::table& out, std::string_view key, const T& obj, int n) {
+              toml::array a;
+              for (int j = 0; j < n; ++j) a.push_back(c.at(obj, j));
+              out.insert(key, a);
+            },
+            nullptr};
+  }
+};
+template <class At>
+PerJointCodec<At> per_joint(Bounds b, At at) { return {b, at}; }
+
+// An array of size(obj, n) numbers, each within bounds, got and set as a vector.
+template <class Size, class Get, class Set>
+struct NumbersCodec {
+  Size size;
+  Bounds bounds;
+  Get get;
+  Set set;
+  template <class T>
+  operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
+    const NumbersCodec c = *this;
+    return {[c](StrictTable& t, std::string_view key, T& obj, int n) {
+              c.set(obj, t.numbers(key, c.size(obj, n), c.bounds));
+            },
+            [c](toml::table& out, std::string_view key, const T& obj, int n) {
+              toml::array a;
+              for (double x : c.get(obj, n)) a.push_back(x);
+              out.insert(key, a);
+            },
+            [c](const T& obj) { return c.get(obj, 0).empty(); }};
+  }
+};
+template <class Size, class Get, class Set>
+NumbersCodec<Size, Get, Set> numbers(Size size, Bounds b, Get get, Set set) {
+  return {size, b, get, set};
+}
+
+}  // namespace pumasim::scene_io

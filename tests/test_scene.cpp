@@ -1,0 +1,222 @@
+// The resolved scene round trip: resolved_toml(load_scene(f)), written to a
+// file and loaded again, gives the same Scene and the same resolved text, for
+// every shipped scene and for a few --set overrides (models/scene/: each
+// section is read and written over one table of entries).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "models/scene/scene.hpp"
+
+namespace pumasim {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string scene_path(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
+
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(PUMASIM_SCENES_DIR)) {
+    if (e.path().extension() == ".toml") out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The text after the header line (which names the source file).
+std::string body(const std::string& resolved) { return resolved.substr(resolved.find('\n')); }
+
+void expect_same_drive(const PlantConfig& a, const PlantConfig& b, const std::string& what) {
+  ASSERT_EQ(a.amplifier.size(), b.amplifier.size()) << what;
+  for (std::size_t j = 0; j < a.amplifier.size(); ++j) {
+    EXPECT_EQ(a.amplifier[j].gain, b.amplifier[j].gain) << what;
+    EXPECT_EQ(a.amplifier[j].output_resistance, b.amplifier[j].output_resistance) << what;
+    EXPECT_EQ(a.amplifier[j].voltage_limit, b.amplifier[j].voltage_limit) << what;
+  }
+  ASSERT_EQ(a.motor.size(), b.motor.size()) << what;
+  for (std::size_t j = 0; j < a.motor.size(); ++j) {
+    EXPECT_EQ(a.motor[j].inductance, b.motor[j].inductance) << what;
+    EXPECT_EQ(a.motor[j].resistance, b.motor[j].resistance) << what;
+    EXPECT_EQ(a.motor[j].torque_constant, b.motor[j].torque_constant) << what;
+  }
+  ASSERT_EQ(a.friction.size(), b.friction.size()) << what;
+  for (std::size_t j = 0; j < a.friction.size(); ++j) {
+    EXPECT_EQ(a.friction[j].model, b.friction[j].model) << what;
+    EXPECT_EQ(a.friction[j].viscous, b.friction[j].viscous) << what;
+    EXPECT_EQ(a.friction[j].static_torque, b.friction[j].static_torque) << what;
+    EXPECT_EQ(a.friction[j].kinetic_torque, b.friction[j].kinetic_torque) << what;
+    EXPECT_EQ(a.friction[j].zero_speed, b.friction[j].zero_speed) << what;
+    EXPECT_EQ(a.friction[j].speed_scale, b.friction[j].speed_scale) << what;
+  }
+}
+
+void expect_same_controller(const PlantConfig& a, const PlantConfig& b, const std::string& what) {
+  EXPECT_EQ(a.controller, b.controller) << what;
+  EXPECT_EQ(a.servo_period, b.servo_period) << what;
+  EXPECT_EQ(a.setpoint_interval, b.setpoint_interval) << what;
+  ASSERT_EQ(a.piv.size(), b.piv.size()) << what;
+  for (std::size_t j = 0; j < a.piv.size(); ++j) {
+    const PivParams &p = a.piv[j], &q = b.piv[j];
+    EXPECT_EQ(p.kp, q.kp) << what;
+    EXPECT_EQ(p.ki, q.ki) << what;
+    EXPECT_EQ(p.kv, q.kv) << what;
+    EXPECT_EQ(p.kvff, q.kvff) << what;
+    EXPECT_EQ(p.kaff, q.kaff) << what;
+    EXPECT_EQ(p.integral_limit, q.integral_limit) << what;
+    EXPECT_EQ(p.output_limit, q.output_limit) << what;
+    EXPECT_EQ(p.offset, q.offset) << what;
+  }
+}
+
+void expect_same_plant(const PlantConfig& a, const PlantConfig& b, const std::string& what) {
+  EXPECT_EQ(a.robot.dof(), b.robot.dof()) << what;
+  EXPECT_EQ(a.robot.name, b.robot.name) << what;
+  for (int j = 0; j < a.robot.dof() && j < b.robot.dof(); ++j) {
+    EXPECT_EQ(a.robot.joints[j].rotor_inertia, b.robot.joints[j].rotor_inertia) << what;
+  }
+  EXPECT_EQ(a.n, b.n) << what;
+  EXPECT_EQ(a.q_held, b.q_held) << what;
+  EXPECT_EQ(a.backend, b.backend) << what;
+  EXPECT_EQ(a.drive, b.drive) << what;
+  EXPECT_EQ(a.energy_ledger, b.energy_ledger) << what;
+  EXPECT_EQ(a.q0, b.q0) << what;
+  expect_same_drive(a, b, what);
+  expect_same_controller(a, b, what);
+  ASSERT_EQ(a.reference != nullptr, b.reference != nullptr) << what;
+  if (a.reference) {
+    EXPECT_EQ(a.reference->timing().duration(), b.reference->timing().duration()) << what;
+    const double T = a.reference->timing().duration();
+    ReferenceSample ra, rb;
+    for (double t : {0.0, 0.3 * T, 0.71 * T, T}) {
+      a.reference->eval(t, ra);
+      b.reference->eval(t, rb);
+      EXPECT_EQ(ra.q, rb.q) << what << " t = " << t;
+      EXPECT_EQ(ra.qd, rb.qd) << what << " t = " << t;
+    }
+  }
+}
+
+void expect_same_reference(const ReferenceSettings& a, const ReferenceSettings& b, const std::string& what) {
+  EXPECT_EQ(a.height, b.height) << what;
+  EXPECT_EQ(a.start, b.start) << what;
+  EXPECT_EQ(a.heading, b.heading) << what;
+  ASSERT_EQ(a.segments.size(), b.segments.size()) << what;
+  for (std::size_t i = 0; i < a.segments.size(); ++i) {
+    EXPECT_EQ(a.segments[i].length, b.segments[i].length) << what;
+    EXPECT_EQ(a.segments[i].radius, b.segments[i].radius) << what;
+    EXPECT_EQ(a.segments[i].angle, b.segments[i].angle) << what;
+  }
+  EXPECT_EQ(a.timing, b.timing) << what;
+  EXPECT_EQ(a.profile, b.profile) << what;
+  EXPECT_EQ(a.max_speed, b.max_speed) << what;
+  EXPECT_EQ(a.traversal_time, b.traversal_time) << what;
+  EXPECT_EQ(a.blend, b.blend) << what;
+  EXPECT_EQ(a.jerk_fraction, b.jerk_fraction) << what;
+  EXPECT_EQ(a.interpolation, b.interpolation) << what;
+  EXPECT_EQ(a.via_segments, b.via_segments) << what;
+  EXPECT_EQ(a.voltage_fraction, b.voltage_fraction) << what;
+  EXPECT_EQ(a.current_limit, b.current_limit) << what;
+  EXPECT_EQ(a.joint_speed_limit, b.joint_speed_limit) << what;
+  EXPECT_EQ(a.grid, b.grid) << what;
+  EXPECT_EQ(a.config.right_arm, b.config.right_arm) << what;
+  EXPECT_EQ(a.config.elbow_up, b.config.elbow_up) << what;
+  EXPECT_EQ(a.config.wrist_flip, b.config.wrist_flip) << what;
+  EXPECT_EQ(a.orientation, b.orientation) << what;
+}
+
+void expect_same_scene(const Scene& a, const Scene& b, const std::string& what) {
+  EXPECT_EQ(a.name, b.name) << what;
+  EXPECT_EQ(a.robot_spec, b.robot_spec) << what;
+  EXPECT_EQ(a.rotor_inertia, b.rotor_inertia) << what;
+  EXPECT_EQ(a.duration, b.duration) << what;
+  EXPECT_EQ(a.output_interval, b.output_interval) << what;
+  EXPECT_EQ(a.integrator.name, b.integrator.name) << what;
+  EXPECT_EQ(a.integrator.dt, b.integrator.dt) << what;
+  EXPECT_EQ(a.integrator.rtol, b.integrator.rtol) << what;
+  EXPECT_EQ(a.integrator.atol, b.integrator.atol) << what;
+  EXPECT_EQ(a.has_reference, b.has_reference) << what;
+  expect_same_reference(a.reference, b.reference, what);
+  expect_same_plant(a.plant, b.plant, what);
+}
+
+// Loads `scene` with `overrides`, writes its resolved text next to the other
+// temporary files, loads that, and compares the scenes and their texts.
+void expect_round_trip(const std::string& scene, const std::vector<std::string>& overrides) {
+  std::string what = fs::path(scene).stem().string();
+  for (const auto& o : overrides) what += " --set " + o;
+  const Scene a = load_scene(scene, overrides);
+  const std::string text = resolved_toml(a);
+  static int count = 0;
+  const fs::path path = fs::temp_directory_path() /
+                        ("pumasim_resolved_" + std::to_string(::getpid()) + "_" + std::to_string(++count) + ".toml");
+  std::ofstream(path) << text;
+  Scene b;
+  try {
+    b = load_scene(path.string());
+  } catch (const ConfigError& e) {
+    fs::remove(path);
+    FAIL() << what << ": the resolved scene does not load: " << e.what() << "\n" << text;
+  }
+  fs::remove(path);
+  EXPECT_EQ(body(text), body(resolved_toml(b))) << what;
+  expect_same_scene(a, b, what);
+}
+
+TEST(SceneRoundTrip, EveryShippedScene) {
+  const auto scenes = shipped_scenes();
+  ASSERT_GE(scenes.size(), 17u);
+  for (const std::string& s : scenes) expect_round_trip(s, {});
+}
+
+TEST(SceneRoundTrip, Overrides) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> sets = {
+      {"paper_slow", {"integrator.rtol=1e-7", "integrator.name=\"cvode-bdf\""}},
+      {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=0.05"}},
+      {"stick_slip", {"friction.model=\"karnopp\""}},
+      {"paper_slow", {"friction.model=\"karnopp\"", "friction.zero_speed=0.01"}},
+      {"paper_slow", {"controller.kp=[1, 2, 3]", "amplifier.voltage_limit=30"}},
+      {"paper_slow", {"controller.mode=\"sampled\"", "controller.servo_period=2.5e-4", "controller.setpoint_interval=1e-3"}},
+      {"paper_slow", {"motor.inductance=0"}},
+      {"paper_slow_6dof", {"scene.energy_ledger=true", "scene.rotor_inertia=false"}},
+      {"paper_slow", {"scene.held=[0.1, -0.2, 0.3]", "scene.backend=\"aba\""}},
+      {"smooth_line_quintic", {"reference.timing=\"scurve\"", "reference.blend=0.3"}},
+      {"paper_slow", {"reference.interpolation=\"joint-quintic\"", "reference.via_segments=4", "reference.arm=\"right\""}},
+      {"planning", {"planning.grid=100", "planning.current_limit=[4.0, 5.0, 6.0]", "planning.joint_speed_limit=2.0"}},
+      // Angles whose degrees do not all read back simply (deg -> rad -> deg).
+      {"paper_slow", {"reference.segments=[{line = 0.1}, {arc_radius = 0.08, turn_degrees = 13.7}, "
+                      "{arc_radius = 0.08, turn_degrees = -45.1}, {arc_radius = 0.08, turn_degrees = 91.3}]"}},
+  };
+  for (const auto& [scene, set] : sets) expect_round_trip(scene_path(scene), set);
+  expect_round_trip(scene_path("passive_arm"), {"initial.pose=\"qr\""});
+  expect_round_trip(scene_path("energy_long_time"), {"initial.pose=\"qs\""});
+}
+
+// The time-optimal scene plans without limits by default: its resolved
+// [planning] says inf, which must load back (the scene README's "inf: none").
+TEST(SceneRoundTrip, UnlimitedPlanningLoadsBack) {
+  const Scene a = load_scene(scene_path("planning"));
+  EXPECT_TRUE(std::isinf(a.reference.current_limit[0]));
+  expect_round_trip(scene_path("planning"), {});
+}
+
+// Per-joint arrays are checked against the simulated joints, and the robot's
+// size against the 6-vectors, before anything is written.
+TEST(SceneEntries, PerJointLengthsAreChecked) {
+  for (const std::string& set : {std::string("controller.kp=[1, 2]"), std::string("friction.viscous=[1, 2, 3, 4]"),
+                                 std::string("scene.held=[0.0]"), std::string("planning.grid=10")}) {
+    EXPECT_THROW(load_scene(scene_path("paper_slow"), {set}), ConfigError) << set;
+  }
+  const Scene one = load_scene(scene_path("paper_slow"), {"controller.kp=5"});
+  for (const PivParams& p : one.plant.piv) EXPECT_EQ(p.kp, 5.0);
+}
+
+}  // namespace
+}  // namespace pumasim
