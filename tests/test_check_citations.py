@@ -25,7 +25,7 @@ def test_cpp_comment_citing_outside_or_missing_files_fails(tmp_path, capsys):
 
 def test_existing_files_units_urls_and_literals_pass(tmp_path):
     assert bad(tmp_path, "e.cpp",
-               "// Source: tests/reference/puma560.md; odeint.cpp; 6.1 ms per ohm, 1/s, h/dt;\n"
+               "// Source: models/robots/puma560_sources.md; odeint.cpp; 6.1 ms per ohm, 1/s, h/dt;\n"
                "// github.com/petercorke/robotics-toolbox-matlab/models/mdl_puma560.m, https://x.org/a/b.md\n"
                "// build/release/bin/pumasim, runs/paper_slow/stats.json\n"
                "const char* p = \"../shared/reference/puma560.md\";  // a string, not a citation\n") == 0

@@ -22,7 +22,7 @@ void expect_near(const Eigen::MatrixXd& got, const Eigen::MatrixXd& want, double
       EXPECT_NEAR(got(i, j), want(i, j), tol) << who << " (" << i << "," << j << ")";
 }
 
-// Source: tests/reference/puma560.md (copied from the project's PUMA 560
+// Source: models/robots/puma560_sources.md (copied from the project's PUMA 560
 // reference sheet, section 6), "gravload(q)" for the Robotics Toolbox PUMA 560
 // (mdl_puma560.m, Corke & Armstrong-Helouvry 1994 parameters, g = 9.81),
 // computed by a Newton-Euler code that reproduces the toolbox's own unit-test
@@ -45,7 +45,7 @@ TEST(PublishedValues, Puma560GravityTorqueAtNamedPoses) {
   }
 }
 
-// Source: tests/reference/puma560.md (the reference sheet's section 6),
+// Source: models/robots/puma560_sources.md (the reference sheet's section 6),
 // "inertia(qz)" and "inertia(qr)" (with Jm G^2 on the diagonal), and the
 // rigid-body diagonal at qz.
 TEST(PublishedValues, Puma560MassMatrixAtQzAndQr) {
