@@ -1,29 +1,31 @@
+// The `pumasim` command line. CLI11 parses it: one subcommand per command,
+// typed options checked as they are read, the help generated. Each command's
+// function takes its parsed options and calls the libraries below (a scene's
+// run lives in experiments/simulation/scene_run). Errors end as one line on
+// `err` and exit status 2 (bad input) or 1 (internal); CLI11 never exits.
 #include "experiments/cli.hpp"
-#include "experiments/simulation/run_folder.hpp"
-#include "experiments/stiffness.hpp"
 
+#include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
+#include <filesystem>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <sstream>
-#include <thread>
 #include <stdexcept>
 
-#include <chrono>
-#include <filesystem>
-#include <fstream>
 #include <unistd.h>
-#include <sys/utsname.h>
 
-#include <Eigen/Geometry>
-#include <boost/version.hpp>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
-#include <sundials/sundials_config.h>
 
-#include "experiments/simulation/driver.hpp"
-#include "experiments/simulation/run_recorder.hpp"
+#include "experiments/simulation/run_documents.hpp"
+#include "experiments/simulation/run_folder.hpp"
+#include "experiments/simulation/scene_run.hpp"
+#include "experiments/stiffness.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
@@ -33,8 +35,7 @@
 namespace pumasim {
 namespace {
 
-constexpr long kDefaultStepBudget = 10'000'000;  // pumasim run --max-steps
-constexpr double kDefaultWallBudget = 600.0;      // [s], pumasim run --max-wall
+namespace fs = std::filesystem;
 
 // Bad command-line input; becomes one line on stderr and exit status 2.
 class UsageError : public std::runtime_error {
@@ -42,116 +43,11 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Each command's lines of `pumasim help`.
-constexpr const char* kUsage_dynamics =
-    "  dynamics --robot <name-or-file> --backend <name> --q=<csv|pose> [--qd=<csv>]\n"
-    "           [--qdd=<csv>] [--tau=<csv>] [--no-rotor-inertia]\n"
-    "      prints H, h, g (and tau from qdd, qdd from tau) as one JSON object\n";
-constexpr const char* kUsage_backends =
-    "  backends   lists the dynamics back-ends\n";
-constexpr const char* kUsage_check =
-    "  check <scene.toml> [--set section.key=value ...]\n"
-    "      checks a scene; prints it resolved (every default filled in), its state\n"
-    "      layout and initial state\n";
-constexpr const char* kUsage_run =
-    "  run <scene.toml> [--integrator NAME] [--backend NAME] [--rtol X --atol Y | --dt X]\n"
-    "      [--t-end X] [--out DIR [--force]] [--exact-jacobian] [--max-steps N] [--max-wall S]\n"
-    "      [--late-events | --stop-at-outputs]\n"
-    "      [--set section.key=value ...]\n"
-    "      runs a scene and writes DIR (default runs/<scene name>/): trajectory.csv,\n"
-    "      stats.json, scene.resolved.toml, meta.json, all at once at the end. DIR must be\n"
-    "      new, or a pumasim run folder holding only what pumasim wrote, replaced only with\n"
-    "      --force: pumasim never deletes what it did not write. More than N steps in all\n"
-    "      (default 10000000; 0: no limit), or more than S seconds of wall-clock time\n"
-    "      (--max-wall, default 600; 0: no limit), end the run as a reported failure; a\n"
-    "      scene whose controller samples or set-point updates alone exceed the step\n"
-    "      budget is refused before it runs.\n"
-    "      --atol is per unit of each state's typical magnitude: angles 1 rad, speeds\n"
-    "      1 rad/s, currents the stall current at full command, PIV integrals their\n"
-    "      full range, energies 1 J (stats.json lists the resulting atol per state).\n"
-    "      --set overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5.\n"
-    "      --late-events: do not stop at controller samples and set-point updates;\n"
-    "      apply them late, at the next output (shows what stepping over them does).\n"
-    "      The integrator stops only where the right-hand side changes (samples,\n"
-    "      set-point updates, the reference's breakpoints, roots); outputs come from\n"
-    "      its dense output. --stop-at-outputs also stops it at every output time\n"
-    "      (the output grid then caps the step: for comparison only).\n";
-constexpr const char* kUsage_stiffness =
-    "  stiffness <scene.toml> [--t-end X] [--samples N] [--bisect] [--set section.key=value ...]\n"
-    "      eigenvalues of the plant Jacobian along a run (default 20 samples over\n"
-    "      min(1 s, the scene)): stiffness ratio, fastest and slowest time constants\n"
-    "      by state; each explicit method's largest stable step from its stability\n"
-    "      region and, with --bisect, found on the scene\n";
-constexpr const char* kUsage_conditioning =
-    "  conditioning <scene.toml> [--samples N] [--set section.key=value ...]\n"
-    "      cond(H) along the scene's reference (default 200 samples) and every\n"
-    "      back-end's forward-dynamics error there (tau from the reference's qdd)\n";
-constexpr const char* kUsage_integrators =
-    "  integrators   lists the integrators\n";
-constexpr const char* kUsage_help =
-    "  help       prints this text\n";
+// ---------------------------------------------------------------- values
 
-// --key=value, --key value, or a bare --flag; values may start with '-'.
-struct Options {
-  std::map<std::string, std::string> values;
-  std::map<std::string, bool> flags;
-  std::vector<std::string> sets;  // --set section.key=value, repeatable
-
-  static Options parse(const std::vector<std::string>& args, std::size_t first,
-                       const std::vector<std::string>& valued,
-                       const std::vector<std::string>& flag_names) {
-    auto is_in = [](const std::vector<std::string>& v, const std::string& s) {
-      for (const auto& x : v) if (x == s) return true;
-      return false;
-    };
-    Options o;
-    for (std::size_t i = first; i < args.size(); ++i) {
-      const std::string& a = args[i];
-      if (a.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + a + "'; expected --option");
-      const auto eq = a.find('=');
-      const std::string key = a.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
-      if (is_in(flag_names, key)) {
-        if (eq != std::string::npos) throw UsageError("--" + key + " takes no value");
-        o.flags[key] = true;
-      } else if (key == "set" && is_in(valued, key)) {
-        if (eq != std::string::npos) {
-          o.sets.push_back(a.substr(eq + 1));
-        } else if (i + 1 < args.size()) {
-          o.sets.push_back(args[++i]);
-        } else {
-          throw UsageError("--set expects section.key=value");
-        }
-      } else if (is_in(valued, key)) {
-        if (eq != std::string::npos) {
-          o.values[key] = a.substr(eq + 1);
-        } else if (i + 1 < args.size()) {
-          o.values[key] = args[++i];
-        } else {
-          throw UsageError("--" + key + " expects a value");
-        }
-      } else {
-        std::string known;
-        for (const auto& k : valued) known += " --" + k;
-        for (const auto& k : flag_names) known += " --" + k;
-        throw UsageError("unknown option '--" + key + "'; expected one of:" + known);
-      }
-    }
-    return o;
-  }
-
-  std::optional<std::string> get(const std::string& key) const {
-    const auto it = values.find(key);
-    if (it == values.end()) return std::nullopt;
-    return it->second;
-  }
-  std::string require(const std::string& key, const std::string& what) const {
-    auto v = get(key);
-    if (!v) throw UsageError("missing --" + key + "; expected " + what);
-    return *v;
-  }
-};
-
-double parse_double(const std::string& s, const std::string& what) {
+// A finite number, the whole text (spaces around and a leading '+' allowed),
+// converted exactly (std::from_chars: the nearest double).
+std::optional<double> to_number(const std::string& s) {
   double x = 0;
   const char* b = s.data();
   const char* e = s.data() + s.size();
@@ -159,10 +55,13 @@ double parse_double(const std::string& s, const std::string& what) {
   while (e > b && e[-1] == ' ') --e;
   if (b < e && *b == '+') ++b;
   const auto r = std::from_chars(b, e, x);
-  if (b == e || r.ec != std::errc() || r.ptr != e || !std::isfinite(x)) {
-    throw UsageError(what + ": expected a finite number, got '" + s + "'");
-  }
+  if (b == e || r.ec != std::errc() || r.ptr != e || !std::isfinite(x)) return std::nullopt;
   return x;
+}
+
+double parse_double(const std::string& s, const std::string& what) {
+  if (const auto x = to_number(s)) return *x;
+  throw UsageError(what + ": expected a finite number, got '" + s + "'");
 }
 
 // "0.1,-0.2,..." with exactly n entries, or the name of one of the robot's poses.
@@ -191,45 +90,131 @@ Eigen::VectorXd parse_vector(const std::string& text, int n, const std::string& 
   return Eigen::Map<Eigen::VectorXd>(v.data(), n);
 }
 
+// ---------------------------------------------------------------- options
+
+// What a number option accepts: said in its help and in its error message.
+struct NumberRule {
+  const char* expected;  // "a number > 0"
+  bool (*ok)(double);
+};
+constexpr NumberRule kPositive{"a number > 0", [](double x) { return x > 0; }};
+constexpr NumberRule kSecondsBudget{"seconds >= 0 (0: no limit)", [](double x) { return x >= 0; }};
+constexpr NumberRule kStepBudget{"a whole number >= 0 (0: no limit)",
+                                 [](double x) { return x >= 0 && x <= 1e18 && x == std::floor(x); }};
+constexpr NumberRule kSamples{"a whole number in [1, 10000]",
+                              [](double x) { return x >= 1 && x <= 10000 && x == std::floor(x); }};
+constexpr NumberRule kManySamples{"a whole number in [1, 100000]",
+                                  [](double x) { return x >= 1 && x <= 100000 && x == std::floor(x); }};
+
+// A number option: checked by CLI11 as it is read ("--t-end: expected a
+// number > 0, got 'x'"), then converted exactly; unset when not given.
+CLI::Option* add_number(CLI::App* app, const std::string& name, std::optional<double>& target, const NumberRule& rule,
+                        const std::string& help, const std::string& type = "X") {
+  const CLI::Validator check(
+      [rule](std::string& s) -> std::string {
+        const auto x = to_number(s);
+        return x && rule.ok(*x) ? std::string() : "expected " + std::string(rule.expected) + ", got '" + s + "'";
+      },
+      "", "number");
+  return app->add_option_function<std::string>(name, [&target](const std::string& s) { target = to_number(s); },
+                                               help + " (" + rule.expected + ")")
+      ->check(check)
+      ->type_name(type);
+}
+
+CLI::Option* add_text(CLI::App* app, const std::string& name, std::optional<std::string>& target,
+                      const std::string& help, const std::string& type) {
+  return app->add_option_function<std::string>(name, [&target](const std::string& s) { target = s; }, help)
+      ->type_name(type);
+}
+
+// A name in a registry: the registry's own message ("unknown integrator 'x';
+// expected one of: ...") when it is not there.
+template <class Find>
+CLI::Validator registry_name(Find find) {
+  return CLI::Validator(
+      [find](std::string& s) -> std::string {
+        try {
+          find(s);
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "", "registry");
+}
+
+// A file to write: its folder exists, and it is not a folder itself.
+const CLI::Validator kWritableFile(
+    [](std::string& s) -> std::string {
+      const fs::path p(s);
+      const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+      if (!fs::is_directory(dir)) return "expected a file in an existing folder, got '" + s + "'";
+      if (fs::is_directory(p)) return "expected a file name, got the folder '" + s + "'";
+      return {};
+    },
+    "", "file");
+
+// A scene file and its overrides: what check, run, stiffness and conditioning share.
+struct SceneArgs {
+  std::string file;
+  std::vector<std::string> sets;  // --set section.key=value, repeatable
+};
+
+void add_scene(CLI::App* app, SceneArgs& a) {
+  app->add_option("scene", a.file, "a scene file, e.g. experiments/scenes/paper_slow.toml")
+      ->required()
+      ->type_name("SCENE.toml");
+  app->add_option("--set", a.sets,
+                  "overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5; repeatable")
+      ->type_name("SECTION.KEY=VALUE")
+      ->take_all()
+      ->allow_extra_args(false);  // one value per --set: the scene file may follow
+}
+
+// The scene, loaded and checked: its integrator exists (`check` says so with
+// the file, line and key, as `run` would otherwise fail without them).
+Scene load_checked_scene(const SceneArgs& a) {
+  Scene sc = load_scene(a.file, a.sets);
+  try {
+    find_integrator(sc.integrator.name);
+  } catch (const std::invalid_argument&) {
+    throw ConfigError(sc.integrator.name_where + "expected one of: " + integrator_names() + "; got \"" +
+                      sc.integrator.name + "\"");
+  }
+  return sc;
+}
+
+// ---------------------------------------------------------------- dynamics
+
+struct DynamicsArgs {
+  std::string robot, backend, q;
+  std::optional<std::string> qd, qdd, tau;
+  bool no_rotor_inertia = false;
+};
+
 // JSON documents are built with nlohmann-json (ordered: keys in the order
 // written); a number that is not finite is written as null.
 using Json = nlohmann::ordered_json;
 
-Json json_number(double x) { return std::isfinite(x) ? Json(x) : Json(nullptr); }
-
 Json json_vector(const Eigen::VectorXd& v) {
   Json a = Json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(json_number(v[i]));
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(std::isfinite(v[i]) ? Json(v[i]) : Json(nullptr));
   return a;
 }
 
-int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) {
-  const Options opt = Options::parse(args, 1, {"robot", "backend", "q", "qd", "qdd", "tau"},
-                                     {"no-rotor-inertia"});
-  RobotModel model = load_robot(opt.require("robot", "a robot name (puma560) or a robot file path"));
-  const bool rotor = !opt.flags.count("no-rotor-inertia");
-  if (!rotor) model = without_rotor_inertia(model);
-  const std::string backend_name = opt.require("backend", "one of: " + backend_names());
-  auto backend = make_backend(backend_name, model);  // unknown name: invalid_argument
+// H, h, g at (q, qd); tau from qdd and qdd from tau when given.
+Json dynamics_json(DynamicsBackend& backend, const RobotModel& model, bool rotor, const Eigen::VectorXd& q,
+                   const Eigen::VectorXd& qd, const std::optional<Eigen::VectorXd>& qdd_in,
+                   const std::optional<Eigen::VectorXd>& tau_in) {
   const int n = model.dof();
-  const Eigen::VectorXd q =
-      parse_vector(opt.require("q", std::to_string(n) + " joint angles [rad] or a pose name"), n,
-                   "--q", &model);
-  const Eigen::VectorXd qd =
-      opt.get("qd") ? parse_vector(*opt.get("qd"), n, "--qd") : Eigen::VectorXd::Zero(n);
-  std::optional<Eigen::VectorXd> qdd_in, tau_in;
-  if (auto s = opt.get("qdd")) qdd_in = parse_vector(*s, n, "--qdd");
-  if (auto s = opt.get("tau")) tau_in = parse_vector(*s, n, "--tau");
-  // Everything is checked before anything is printed: nothing half-written.
-
   Eigen::MatrixXd H(n, n);
-  Eigen::VectorXd h(n), g(n);
-  backend->mass_matrix(q, H);
-  backend->bias(q, qd, h);
-  backend->gravity(q, g);
-
+  Eigen::VectorXd h(n), g(n), result(n);
+  backend.mass_matrix(q, H);
+  backend.bias(q, qd, h);
+  backend.gravity(q, g);
   Json doc;
-  doc["backend"] = backend->name();
+  doc["backend"] = backend.name();
   doc["robot"] = model.name;
   doc["n"] = n;
   doc["rotor_inertia_included"] = rotor;
@@ -240,42 +225,53 @@ int cmd_dynamics(const std::vector<std::string>& args, std::ostream& final_out) 
   doc["bias"] = json_vector(h);
   doc["gravity"] = json_vector(g);
   if (qdd_in) {
-    const Eigen::VectorXd& qdd = *qdd_in;
-    Eigen::VectorXd tau(n);
-    backend->inverse_dynamics(q, qd, qdd, tau);
-    doc["qdd_in"] = json_vector(qdd);
-    doc["tau"] = json_vector(tau);
+    backend.inverse_dynamics(q, qd, *qdd_in, result);
+    doc["qdd_in"] = json_vector(*qdd_in);
+    doc["tau"] = json_vector(result);
   }
   if (tau_in) {
-    const Eigen::VectorXd& tau = *tau_in;
-    Eigen::VectorXd qdd(n);
-    backend->forward_dynamics(q, qd, tau, qdd);
-    doc["tau_in"] = json_vector(tau);
-    doc["qdd"] = json_vector(qdd);
+    backend.forward_dynamics(q, qd, *tau_in, result);
+    doc["tau_in"] = json_vector(*tau_in);
+    doc["qdd"] = json_vector(result);
   }
-  final_out << doc.dump(2) << "\n";
+  return doc;
+}
+
+int cmd_dynamics(const DynamicsArgs& a, std::ostream& out) {
+  RobotModel model = load_robot(a.robot);
+  const bool rotor = !a.no_rotor_inertia;
+  if (!rotor) model = without_rotor_inertia(model);
+  auto backend = make_backend(a.backend, model);  // cannot describe this robot: invalid_argument
+  const int n = model.dof();
+  const Eigen::VectorXd q = parse_vector(a.q, n, "--q", &model);
+  const Eigen::VectorXd qd = a.qd ? parse_vector(*a.qd, n, "--qd") : Eigen::VectorXd::Zero(n);
+  std::optional<Eigen::VectorXd> qdd, tau;
+  if (a.qdd) qdd = parse_vector(*a.qdd, n, "--qdd");
+  if (a.tau) tau = parse_vector(*a.tau, n, "--tau");
+  // Everything is checked before anything is printed: nothing half-written.
+  out << dynamics_json(*backend, model, rotor, q, qd, qdd, tau).dump(2) << "\n";
   return kExitOk;
 }
 
-Scene scene_argument(const std::vector<std::string>& args, const Options& opt) {
-  if (args.size() < 2 || args[1].rfind("--", 0) == 0) {
-    throw UsageError(args[0] + ": expected a scene file, e.g. experiments/scenes/paper_slow.toml");
-  }
-  Scene sc = load_scene(args[1], opt.sets);
-  // The integrator named by the scene exists: `check` says so with the file,
-  // line and key, as `run` would otherwise fail without them.
-  try {
-    find_integrator(sc.integrator.name);
-  } catch (const std::invalid_argument&) {
-    throw ConfigError(sc.integrator.name_where + "expected one of: " + integrator_names() + "; got \"" +
-                      sc.integrator.name + "\"");
-  }
-  return sc;
+void add_dynamics(CLI::App* app, DynamicsArgs& a) {
+  app->add_option("--robot", a.robot, "a robot name (puma560) or a robot file path")->required()->type_name("NAME|FILE");
+  app->add_option("--backend", a.backend, "a dynamics back-end (pumasim backends)")
+      ->required()
+      ->type_name("NAME")
+      ->check(registry_name([](const std::string& s) { find_backend(s); }));
+  app->add_option("--q", a.q, "joint angles [rad], one per joint, comma-separated, or a pose name of the robot file")
+      ->required()
+      ->type_name("CSV|POSE");
+  add_text(app, "--qd", a.qd, "joint speeds [rad/s], comma-separated (default 0)", "CSV");
+  add_text(app, "--qdd", a.qdd, "joint accelerations [rad/s^2]: prints tau = ID(q, qd, qdd)", "CSV");
+  add_text(app, "--tau", a.tau, "joint torques [N m]: prints qdd = FD(q, qd, tau)", "CSV");
+  app->add_flag("--no-rotor-inertia", a.no_rotor_inertia, "the robot without its rotor inertias");
 }
 
-int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
-  const Options opt = Options::parse(args, 2, {"set"}, {});
-  const Scene sc = scene_argument(args, opt);
+// ---------------------------------------------------------------- check
+
+int cmd_check(const SceneArgs& a, std::ostream& out) {
+  const Scene sc = load_checked_scene(a);
   Plant plant(sc.plant);
   std::vector<double> x(plant.size());
   plant.initial_state(x.data());
@@ -291,272 +287,243 @@ int cmd_check(const std::vector<std::string>& args, std::ostream& out) {
   return kExitOk;
 }
 
+// ---------------------------------------------------------------- run
 
-std::string shell_line(const char* cmd) {
-  std::string outp;
-  if (FILE* f = popen(cmd, "r")) {
-    char buf[256];
-    while (fgets(buf, sizeof buf, f)) outp += buf;
-    pclose(f);
-  }
-  while (!outp.empty() && (outp.back() == '\n' || outp.back() == ' ')) outp.pop_back();
-  return outp;
+struct RunArgs {
+  SceneArgs scene;
+  std::optional<std::string> integrator, backend, out;
+  std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
+  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false;
+};
+
+// --backend: the scene's robot as simulated must be one the back-end can describe.
+void override_backend(Scene& sc, const std::string& name) {
+  const BackendInfo& info = find_backend(name);
+  const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
+  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw UsageError("--backend: " + why);
+  sc.plant.backend = name;
 }
 
-int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
-  const Options opt = Options::parse(args, 2, {"set", "integrator", "backend", "rtol", "atol", "dt", "t-end", "out",
-                                               "max-steps", "max-wall"},
-                                     {"exact-jacobian", "late-events", "stop-at-outputs", "force"});
-  Scene sc = scene_argument(args, opt);
-  if (auto b = opt.get("backend")) {
-    const BackendInfo& info = find_backend(*b);  // unknown: invalid_argument listing the names
-    const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
-    if (const std::string why = info.why_unsupported(sim); !why.empty()) throw UsageError("--backend: " + why);
-    sc.plant.backend = *b;
-  }
-  if (auto i = opt.get("integrator")) sc.integrator.name = *i;
-  const IntegratorInfo& iinfo = find_integrator(sc.integrator.name);
+// The integrator's settings: the scene's, overridden by --dt (fixed-step
+// methods) or --rtol and --atol (adaptive ones); an option the method cannot
+// honour is refused. The scene records what was used.
+IntegratorOptions integrator_options(Scene& sc, const RunArgs& a, bool& adaptive) {
+  const IntegratorInfo& info = find_integrator(sc.integrator.name);
   IntegratorOptions io;
   io.dt = sc.integrator.dt;
   io.rtol = sc.integrator.rtol;
   io.atol = sc.integrator.atol;
-  io.exact_jacobian = opt.flags.count("exact-jacobian") > 0;
-  const bool adaptive = iinfo.make(io)->capabilities().adaptive;
-  if (opt.get("dt")) {
+  io.exact_jacobian = a.exact_jacobian;
+  adaptive = info.make(io)->capabilities().adaptive;
+  if (a.dt) {
     if (adaptive) throw UsageError("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
-    io.dt = sc.integrator.dt = parse_double(*opt.get("dt"), "--dt");
+    io.dt = sc.integrator.dt = *a.dt;
   }
-  if (opt.get("rtol") || opt.get("atol")) {
+  if (a.rtol || a.atol) {
     if (!adaptive) throw UsageError("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
-    if (opt.get("rtol")) io.rtol = sc.integrator.rtol = parse_double(*opt.get("rtol"), "--rtol");
-    if (opt.get("atol")) io.atol = sc.integrator.atol = parse_double(*opt.get("atol"), "--atol");
+    if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
+    if (a.atol) io.atol = sc.integrator.atol = *a.atol;
   }
-  if (io.exact_jacobian && !iinfo.make(IntegratorOptions{})->capabilities().uses_jacobian) {
+  if (io.exact_jacobian && !info.make(IntegratorOptions{})->capabilities().uses_jacobian) {
     throw UsageError("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
   }
   if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) throw UsageError("--dt, --rtol, --atol: expected numbers > 0");
+  return io;
+}
+
+// The command line's changes to the scene, and how the run is driven.
+RunControls run_controls(Scene& sc, const RunArgs& a) {
+  if (a.backend) override_backend(sc, *a.backend);
+  if (a.integrator) sc.integrator.name = *a.integrator;
+  RunControls rc;
+  rc.options = integrator_options(sc, a, rc.adaptive);
   // A step budget for the whole run, so that a method crawling through a
-  // chattering discontinuity (steps of nanoseconds) ends as a reported failure
-  // within about a minute instead of running for hours; 0: no limit.
-  long max_steps = kDefaultStepBudget;
-  if (auto m = opt.get("max-steps")) {
-    const double v = parse_double(*m, "--max-steps");
-    if (!(v >= 0) || v != std::floor(v)) throw UsageError("--max-steps: expected a whole number >= 0 (0: no limit)");
-    max_steps = static_cast<long>(v);
-  }
-  if (max_steps > 0) io.max_steps = max_steps;  // also each integrator's own per-call limit
-  // A wall-clock budget too: the step budget's time depends on the method
-  // (an implicit step on six joints costs a hundred explicit ones).
-  double max_wall = kDefaultWallBudget;
-  if (auto w = opt.get("max-wall")) {
-    max_wall = parse_double(*w, "--max-wall");
-    if (!(max_wall >= 0)) throw UsageError("--max-wall: expected seconds >= 0 (0: no limit)");
-  }
-  if (auto t = opt.get("t-end")) sc.duration = parse_double(*t, "--t-end");
-  if (!(sc.duration > 0)) throw UsageError("--t-end: expected a number > 0");
-  // The output rows are held in memory until the run ends (then written at
-  // once): their number is bounded before anything is allocated.
-  constexpr double kMaxOutputRows = 1e7;
-  if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
-    std::ostringstream m;
-    m << "scene.duration / scene.output_interval: expected at most " << kMaxOutputRows
-      << " output rows (a longer output_interval, or a shorter duration), got " << rows;
-    throw UsageError(m.str());
-  }
-  // Every controller sample and set-point update is a stop, so at least one
-  // step: a period so small that they alone exceed the step budget is refused
-  // up front (a 1e-12 s servo period ground through 10 million steps first).
-  if (max_steps > 0) {
-    auto too_many = [&](const char* key, double period) {
-      if (!(period > 0)) return;
-      const double stops = sc.duration / period;
-      if (stops > static_cast<double>(max_steps)) {
-        std::ostringstream m;
-        m << key << ": " << period << " s over " << sc.duration << " s is " << stops
-          << " stops, more than the step budget of " << max_steps
-          << " steps (--max-steps N raises it; a longer period or a shorter duration)";
-        throw UsageError(m.str());
-      }
-    };
-    if (sc.plant.controller == ControllerMode::kSampled) too_many("controller.servo_period", sc.plant.servo_period);
-    too_many("controller.setpoint_interval", sc.plant.setpoint_interval);
-  }
-  // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
-  const std::filesystem::path dir = opt.get("out") ? std::filesystem::path(*opt.get("out")) : "runs" / std::filesystem::path(sc.name);
-  const bool force = opt.flags.count("force") > 0;
-  check_run_folder_target(dir, force);  // before the run: a refusal costs nothing
+  // chattering discontinuity (steps of nanoseconds) ends as a reported
+  // failure instead of running for hours; and a wall-clock budget, as the
+  // step budget's time depends on the method.
+  if (a.max_steps) rc.max_steps = static_cast<long>(*a.max_steps);
+  if (rc.max_steps > 0) rc.options.max_steps = rc.max_steps;  // also each integrator's own per-call limit
+  if (a.max_wall) rc.max_wall = *a.max_wall;
+  if (a.t_end) sc.duration = *a.t_end;
+  rc.stops = a.late_events       ? Stops::kOutputsLateEvents
+             : a.stop_at_outputs ? Stops::kEventsAndOutputs
+                                 : Stops::kEvents;
+  return rc;
+}
 
-  Plant plant(sc.plant);
-  auto integ = iinfo.make(io);
-  const int n = plant.layout().n;
-  RunRecorder recorder(plant, sc.duration, sc.output_interval);
-  const bool tty = isatty(STDERR_FILENO);
-  auto last_progress = std::chrono::steady_clock::now();
-  if (opt.flags.count("late-events") && opt.flags.count("stop-at-outputs")) {
-    throw UsageError("--late-events and --stop-at-outputs: expected at most one (--late-events stops at outputs)");
-  }
-  const Stops stops = opt.flags.count("late-events")       ? Stops::kOutputsLateEvents
-                      : opt.flags.count("stop-at-outputs") ? Stops::kEventsAndOutputs
-                                                            : Stops::kEvents;
-  const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
-    recorder.observe(t, x);
-    if (tty && std::chrono::steady_clock::now() - last_progress > std::chrono::milliseconds(500)) {
-      err << "\rpumasim run " << sc.name << ": t = " << t << " / " << sc.duration << " s   " << std::flush;
-      last_progress = std::chrono::steady_clock::now();
+// On a terminal, the run's time on stderr at most twice a second.
+std::function<void(double)> progress_line(std::ostream& err, const Scene& sc) {
+  if (!isatty(STDERR_FILENO)) return {};
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  return [&err, last, name = sc.name, duration = sc.duration](double t) {
+    if (std::chrono::steady_clock::now() - *last > std::chrono::milliseconds(500)) {
+      err << "\rpumasim run " << name << ": t = " << t << " / " << duration << " s   " << std::flush;
+      *last = std::chrono::steady_clock::now();
     }
-  }, max_steps, stops, max_wall);
-  const std::string csv = recorder.finish();
-  const RunFigures& fig = recorder.figures();
-  if (tty) err << "\r" << std::string(60, ' ') << "\r";
-  Json js;
-  js["scene"] = sc.name;
-  js["integrator"] = sc.integrator.name;
-  js["backend"] = sc.plant.backend;
-  js["ok"] = r.ok;
-  js["failure"] = r.failure;
-  js["t_end"] = json_number(sc.duration);
-  js["t_reached"] = json_number(r.t_final);
-  js["dt"] = json_number(adaptive ? std::nan("") : io.dt);
-  js["rtol"] = json_number(adaptive ? io.rtol : std::nan(""));
-  js["atol"] = json_number(adaptive ? io.atol : std::nan(""));
-  Json& atol = js["atol_per_component"] = Json::object();  // atol * the plant's typical magnitude of each state
-  for (int k = 0; k < plant.size(); ++k) {
-    atol[plant.layout().names[static_cast<std::size_t>(k)]] =
-        json_number(adaptive ? io.atol * plant.tolerance_scale(k) : std::nan(""));
-  }
-  js["exact_jacobian"] = io.exact_jacobian;
-  js["late_events"] = opt.flags.count("late-events") > 0;
-  js["stops"] = stops == Stops::kEvents             ? "events (outputs from the dense output)"
-                : stops == Stops::kEventsAndOutputs ? "events and outputs"
-                                                    : "outputs (time events applied late)";
-  const IntegratorStats& st = integ->stats();
-  js["steps"] = st.steps;
-  js["rhs_evaluations"] = st.rhs_evaluations;
-  js["jacobian_evaluations"] = st.jacobian_evaluations;
-  js["linear_solves"] = st.linear_solves;
-  js["rejected_steps"] = st.rejected_steps;
-  js["nonlinear_iterations"] = st.nonlinear_iterations;
-  js["restarts"] = st.restarts;
-  js["time_events"] = r.time_events;
-  js["root_events"] = r.root_events;
-  js["integration_wall_time_s"] = json_number(st.wall_time);
-  js["wall_time_s"] = json_number(r.wall_time);
-  const double none = std::nan("");
-  js["max_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_error : none);
-  js["rms_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_error : none);
-  js["max_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_deviation : none);
-  js["rms_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_deviation : none);
-  js["reference_duration_s"] = json_number(sc.plant.reference ? sc.plant.reference->timing().duration() : none);
-  if (sc.plant.drive) {
-    auto list = [](const std::vector<double>& v) { return json_vector(Eigen::Map<const Eigen::VectorXd>(v.data(), std::ssize(v))); };
-    js["peak_controller_output_V"] = list(fig.peak_u);
-    js["peak_voltage_V"] = list(fig.peak_ea);
-    js["peak_current_A"] = list(fig.peak_i);
-    js["saturated_fraction"] = list(fig.saturated_fraction);
-  }
-  if (fig.ledger) {
-    js["max_ledger_residual_J"] = json_number(fig.max_ledger_residual);
-    js["ledger_energy_scale_J"] = json_number(fig.ledger_energy_scale);
-  }
-  const std::string stats = js.dump(2) + "\n";
+  };
+}
 
-  utsname u{};
-  uname(&u);
-  Json meta;
-  meta["git_revision"] = shell_line("git rev-parse --short HEAD 2>/dev/null");
-  meta["git_dirty"] = !shell_line("git status --porcelain 2>/dev/null | head -1").empty();
-  meta["compiler"] = std::string("g++ ") + __VERSION__;
-  meta["flags"] = PUMASIM_CXX_FLAGS;
-  meta["eigen"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
-                  std::to_string(EIGEN_MINOR_VERSION);
-  meta["sundials"] = SUNDIALS_VERSION;
-  meta["boost"] = std::to_string(BOOST_VERSION / 100000) + "." + std::to_string(BOOST_VERSION / 100 % 1000);
-  meta["tomlplusplus"] = std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) + "." +
-                         std::to_string(TOML_LIB_PATCH);
-  meta["machine"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
-  meta["cpus"] = std::thread::hardware_concurrency();
-
-  write_run_folder(dir, {{"trajectory.csv", csv}, {"stats.json", stats}, {"meta.json", meta.dump(2) + "\n"},
+int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
+  Scene sc = load_checked_scene(a.scene);
+  const RunControls rc = run_controls(sc, a);
+  check_run_size(sc, rc.max_steps);
+  // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
+  const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
+  check_run_folder_target(dir, a.force);  // before the run: a refusal costs nothing
+  const auto progress = progress_line(err, sc);
+  const SceneRun run = simulate_scene(sc, rc, progress);
+  if (progress) err << "\r" << std::string(60, ' ') << "\r";
+  const std::string stats = stats_json(sc, rc, run);
+  write_run_folder(dir, {{"trajectory.csv", run.trajectory_csv}, {"stats.json", stats}, {"meta.json", meta_json()},
                          {"scene.resolved.toml", resolved_toml(sc)}},
-                   force);
+                   a.force);
   out << stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
   err << "results: " << dir.string() << "/\n";
-  if (!r.ok) err << "pumasim run: " << r.failure << "\n";
-  return r.ok ? kExitOk : kExitInternal;
+  if (!run.result.ok) err << "pumasim run: " << run.result.failure << "\n";
+  return run.result.ok ? kExitOk : kExitInternal;
 }
 
-int cmd_stiffness(const std::vector<std::string>& args, std::ostream& out) {
-  const Options opt = Options::parse(args, 2, {"set", "t-end", "samples"}, {"bisect"});
-  const Scene sc = scene_argument(args, opt);
-  const double t_end = opt.get("t-end") ? parse_double(*opt.get("t-end"), "--t-end") : std::min(1.0, sc.duration);
-  if (!(t_end > 0)) throw UsageError("--t-end: expected a number > 0");
-  double samples = 20;
-  if (auto s = opt.get("samples")) {
-    samples = parse_double(*s, "--samples");
-    if (!(samples >= 1 && samples <= 10000) || samples != std::floor(samples)) {
-      throw UsageError("--samples: expected a whole number in [1, 10000]");
-    }
-  }
-  const StiffnessReport rep = analyse_stiffness(sc, t_end, static_cast<int>(samples), opt.flags.count("bisect") > 0);
+void add_run(CLI::App* app, RunArgs& a) {
+  add_scene(app, a.scene);
+  add_text(app, "--integrator", a.integrator, "the integrator (pumasim integrators; default: the scene's)", "NAME")
+      ->check(registry_name([](const std::string& s) { find_integrator(s); }));
+  add_text(app, "--backend", a.backend, "the dynamics back-end (pumasim backends; default: the scene's)", "NAME")
+      ->check(registry_name([](const std::string& s) { find_backend(s); }));
+  add_number(app, "--dt", a.dt, kPositive, "fixed-step methods: the step [s]", "SECONDS");
+  add_number(app, "--rtol", a.rtol, kPositive, "adaptive methods: the relative tolerance");
+  add_number(app, "--atol", a.atol, kPositive,
+             "adaptive methods: the absolute tolerance per unit of each state's typical magnitude");
+  add_number(app, "--t-end", a.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
+  add_text(app, "--out", a.out, "the run folder (default runs/<scene name>/)", "DIR");
+  app->add_flag("--force", a.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");
+  app->add_flag("--exact-jacobian", a.exact_jacobian, "implicit methods: the plant's exact Jacobian");
+  add_number(app, "--max-steps", a.max_steps, kStepBudget, "steps in all before the run ends as a failure "
+             "(default 10000000)", "N");
+  add_number(app, "--max-wall", a.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
+             "(default 600)", "SECONDS");
+  auto* late = app->add_flag("--late-events", a.late_events,
+                             "do not stop at controller samples and set-point updates; apply them late, at the "
+                             "next output (shows what stepping over them does)");
+  app->add_flag("--stop-at-outputs", a.stop_at_outputs,
+                "also stop the integrator at every output time (the output grid then caps the step: for "
+                "comparison only)")
+      ->excludes(late);
+}
+
+// ---------------------------------------------------------------- stiffness, conditioning
+
+struct StiffnessArgs {
+  SceneArgs scene;
+  std::optional<double> t_end, samples;
+  bool bisect = false;
+  std::optional<std::string> csv, steps_csv;
+};
+
+void print_stiffness(std::ostream& out, const Scene& sc, double t_end, const StiffnessReport& rep, bool bisect) {
+  out << "stiffness of " << sc.name << " over [0, " << t_end << "] s, " << rep.samples.size()
+      << " samples of the exact plant Jacobian along a run with " << sc.integrator.name << ":\n";
   char line[256];
-  out << "# stiffness of " << sc.name << " over [0, " << t_end << "] s: eigenvalues of the exact plant Jacobian\n"
-      << "# along a run with " << sc.integrator.name << "; tau = 1/|Re lambda|; state: largest participation\n";
-  out << "t [s]\tspectral radius [1/s]\tstiffness ratio\tfastest tau [s]\tfastest state\tslowest tau [s]\t"
-         "slowest state\tunstable modes\n";
-  for (const StiffnessSample& s : rep.samples) {
-    std::snprintf(line, sizeof line, "%.4g\t%.4g\t%.4g\t%.3g\t%s\t%.3g\t%s\t%d\n", s.t, s.spectral_radius,
-                  s.stiffness_ratio, s.fastest.re != 0 ? -1 / s.fastest.re : 0.0, s.fastest.state.c_str(),
-                  s.slowest.re != 0 ? -1 / s.slowest.re : 0.0, s.slowest.state.c_str(), s.unstable_modes);
+  if (!rep.samples.empty()) {
+    const auto worst = std::max_element(rep.samples.begin(), rep.samples.end(), [](const auto& x, const auto& y) {
+      return x.spectral_radius < y.spectral_radius;
+    });
+    double ratio = 0;
+    int unstable = 0;
+    for (const StiffnessSample& s : rep.samples) {
+      ratio = std::max(ratio, s.stiffness_ratio);
+      if (s.unstable_modes > 0) ++unstable;
+    }
+    std::snprintf(line, sizeof line,
+                  "  largest spectral radius %.4g 1/s (t = %.4g s), its fastest mode tau = %.3g s (%s)\n"
+                  "  largest stiffness ratio %.4g; samples with an unstable mode: %d\n",
+                  worst->spectral_radius, worst->t, worst->fastest.re != 0 ? -1 / worst->fastest.re : 0.0,
+                  worst->fastest.state.c_str(), ratio, unstable);
     out << line;
   }
-  out << "\n# largest stable fixed step: predicted from the stability region and every decaying\n"
-      << "# eigenvalue sampled" << (opt.flags.count("bisect") ? "; measured by bisection on the scene" : "") << "\n"
-      << "integrator\tpredicted [s]\tmeasured [s]\tnote\n";
+  out << "largest stable fixed step [s], predicted from the stability region"
+      << (bisect ? ", measured by bisection on the scene" : "") << ":\n";
   for (const StepBound& b : rep.steps) {
-    std::snprintf(line, sizeof line, "%s\t%.4g\t%.4g\t%s\n", b.integrator.c_str(), b.predicted, b.measured,
-                  b.note.c_str());
+    std::snprintf(line, sizeof line, "  %-6s predicted %.4g", b.integrator.c_str(), b.predicted);
     out << line;
+    if (bisect) {
+      std::snprintf(line, sizeof line, ", measured %.4g", b.measured);
+      out << line;
+    }
+    out << (b.note.empty() ? "" : "  (" + b.note + ")") << "\n";
   }
+}
+
+int cmd_stiffness(const StiffnessArgs& a, std::ostream& out, std::ostream& err) {
+  const Scene sc = load_checked_scene(a.scene);
+  const double t_end = a.t_end.value_or(std::min(1.0, sc.duration));
+  const int samples = static_cast<int>(a.samples.value_or(20));
+  const StiffnessReport rep = analyse_stiffness(sc, t_end, samples, a.bisect);
+  if (a.csv) write_file_atomically(*a.csv, stiffness_samples_csv(rep));
+  if (a.steps_csv) write_file_atomically(*a.steps_csv, step_bounds_csv(rep));
+  print_stiffness(out, sc, t_end, rep, a.bisect);
+  if (a.csv) err << "samples: " << *a.csv << "\n";
+  if (a.steps_csv) err << "step bounds: " << *a.steps_csv << "\n";
   return kExitOk;
 }
 
-int cmd_conditioning(const std::vector<std::string>& args, std::ostream& out) {
-  const Options opt = Options::parse(args, 2, {"set", "samples"}, {});
-  const Scene sc = scene_argument(args, opt);
-  double samples = 200;
-  if (auto s = opt.get("samples")) {
-    samples = parse_double(*s, "--samples");
-    if (!(samples >= 1 && samples <= 100000) || samples != std::floor(samples)) {
-      throw UsageError("--samples: expected a whole number in [1, 100000]");
-    }
+void add_stiffness(CLI::App* app, StiffnessArgs& a) {
+  add_scene(app, a.scene);
+  add_number(app, "--t-end", a.t_end, kPositive, "the run's end [s] (default min(1 s, the scene's duration))",
+             "SECONDS");
+  add_number(app, "--samples", a.samples, kSamples, "Jacobians along the run (default 20)", "N");
+  app->add_flag("--bisect", a.bisect, "also measure each explicit method's largest stable step on the scene");
+  add_text(app, "--csv", a.csv, "writes the samples as CSV: t, spectral radius, stiffness ratio, fastest and "
+           "slowest mode (time constant, eigenvalue, state), unstable modes", "FILE")
+      ->check(kWritableFile);
+  add_text(app, "--steps-csv", a.steps_csv, "writes the largest stable steps as CSV: integrator, predicted, "
+           "measured, note", "FILE")
+      ->check(kWritableFile);
+}
+
+struct ConditioningArgs {
+  SceneArgs scene;
+  std::optional<double> samples;
+  std::optional<std::string> csv;
+};
+
+void print_conditioning(std::ostream& out, const Scene& sc, const ConditioningReport& rep) {
+  out << "conditioning of H along the reference of " << sc.name << " (" << sc.plant.n << " joints"
+      << (sc.rotor_inertia ? "" : ", rotor inertia removed") << "), " << rep.samples.size() << " samples:\n";
+  if (rep.samples.empty()) return;
+  const auto worst = std::max_element(rep.samples.begin(), rep.samples.end(),
+                                      [](const auto& x, const auto& y) { return x.cond_H < y.cond_H; });
+  double min_eig = worst->min_eig_H;
+  for (const ConditioningSample& s : rep.samples) min_eig = std::min(min_eig, s.min_eig_H);
+  char line[160];
+  std::snprintf(line, sizeof line, "  largest cond(H) %.6g (t = %.6g s); smallest eigenvalue of H %.6g kg m^2\n",
+                worst->cond_H, worst->t, min_eig);
+  out << line << "  largest qdd error per back-end, max_j |qdd_b - qdd_ref| / max(max_j |qdd_ref|, 1 rad/s^2):\n";
+  for (std::size_t b = 0; b < rep.backends.size(); ++b) {
+    double e = 0;
+    for (const ConditioningSample& s : rep.samples) e = std::max(e, s.qdd_error[b]);
+    std::snprintf(line, sizeof line, "    %-28s %.3g\n", rep.backends[b].c_str(), e);
+    out << line;
   }
-  const ConditioningReport rep = analyse_conditioning(sc, static_cast<int>(samples));
-  out << "# conditioning of H along the reference of " << sc.name << " (" << sc.plant.n << " joints"
-      << (sc.rotor_inertia ? "" : ", rotor inertia removed") << "); back-ends' qdd error:\n"
-      << "# max_j |qdd_backend - qdd_ref| / max(max_j |qdd_ref|, 1 rad/s^2) for tau = ID(q, qd, qdd_ref)\n";
-  out << "t [s]";
-  for (int j = 0; j < sc.plant.n; ++j) out << "\tq" << j + 1 << " [rad]";
-  out << "\tcond(H)\tmin eig(H)";
-  for (const auto& b : rep.backends) out << "\t" << b;
-  out << "\n";
-  char buf[64];
-  for (const ConditioningSample& s : rep.samples) {
-    std::snprintf(buf, sizeof buf, "%.6g", s.t);
-    out << buf;
-    for (double v : s.q) {
-      std::snprintf(buf, sizeof buf, "\t%.6g", v);
-      out << buf;
-    }
-    std::snprintf(buf, sizeof buf, "\t%.6g\t%.6g", s.cond_H, s.min_eig_H);
-    out << buf;
-    for (double e : s.qdd_error) {
-      std::snprintf(buf, sizeof buf, "\t%.3g", e);
-      out << buf;
-    }
-    out << "\n";
-  }
+}
+
+int cmd_conditioning(const ConditioningArgs& a, std::ostream& out, std::ostream& err) {
+  const Scene sc = load_checked_scene(a.scene);
+  const ConditioningReport rep = analyse_conditioning(sc, static_cast<int>(a.samples.value_or(200)));
+  if (a.csv) write_file_atomically(*a.csv, conditioning_csv(rep));
+  print_conditioning(out, sc, rep);
+  if (a.csv) err << "samples: " << *a.csv << "\n";
   return kExitOk;
 }
+
+void add_conditioning(CLI::App* app, ConditioningArgs& a) {
+  add_scene(app, a.scene);
+  add_number(app, "--samples", a.samples, kManySamples, "samples along the reference (default 200)", "N");
+  add_text(app, "--csv", a.csv, "writes the samples as CSV: t, q, cond(H), smallest eigenvalue of H, each "
+           "back-end's qdd error", "FILE")
+      ->check(kWritableFile);
+}
+
+// ---------------------------------------------------------------- the command table
 
 int cmd_integrators(std::ostream& out) {
   for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
@@ -568,30 +535,73 @@ int cmd_backends(std::ostream& out) {
   return kExitOk;
 }
 
-// The commands: `pumasim help` and the messages that name the commands are
-// generated from this table.
-struct Command {
-  const char* name;
-  const char* usage;
-  int (*run)(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
-};
-int cmd_help(const std::vector<std::string>&, std::ostream& out, std::ostream&);
-constexpr Command kCommands[] = {
-    {"dynamics", kUsage_dynamics, [](const auto& a, auto& o, auto&) { return cmd_dynamics(a, o); }},
-    {"backends", kUsage_backends, [](const auto&, auto& o, auto&) { return cmd_backends(o); }},
-    {"check", kUsage_check, [](const auto& a, auto& o, auto&) { return cmd_check(a, o); }},
-    {"run", kUsage_run, &cmd_run},
-    {"stiffness", kUsage_stiffness, [](const auto& a, auto& o, auto&) { return cmd_stiffness(a, o); }},
-    {"conditioning", kUsage_conditioning, [](const auto& a, auto& o, auto&) { return cmd_conditioning(a, o); }},
-    {"integrators", kUsage_integrators, [](const auto&, auto& o, auto&) { return cmd_integrators(o); }},
-    {"help", kUsage_help, &cmd_help},
+// Every command's parsed options, filled by CLI11.
+struct Parsed {
+  DynamicsArgs dynamics;
+  SceneArgs check;
+  RunArgs run;
+  StiffnessArgs stiffness;
+  ConditioningArgs conditioning;
+  std::string help_topic;
 };
 
-int cmd_help(const std::vector<std::string>&, std::ostream& out, std::ostream&) {
-  out << "usage: pumasim <command> [options]\ncommands:\n";
-  for (const Command& c : kCommands) out << c.usage;
-  return kExitOk;
-}
+using Handler = std::function<int(std::ostream& out, std::ostream& err)>;
+
+// The commands: CLI11's subcommands (and so the help and the messages that
+// name the commands) come from this table.
+struct Command {
+  const char* name;
+  const char* summary;  // one line in `pumasim help`
+  const char* details;  // the end of `pumasim help <command>`
+  void (*add)(CLI::App* app, Parsed& p);
+  int (*run)(const Parsed& p, CLI::App& top, std::ostream& out, std::ostream& err);
+};
+
+int cmd_help(const Parsed& p, CLI::App& top, std::ostream& out, std::ostream&);
+
+const Command kCommands[] = {
+    {"dynamics", "prints H, h, g (and tau from qdd, qdd from tau) as one JSON object", "",
+     [](CLI::App* a, Parsed& p) { add_dynamics(a, p.dynamics); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_dynamics(p.dynamics, o); }},
+    {"backends", "lists the dynamics back-ends", "", [](CLI::App*, Parsed&) {},
+     [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(o); }},
+    {"check", "checks a scene; prints it resolved, its state layout and initial state",
+     "Prints the scene with every default filled in, its state layout and its initial state.",
+     [](CLI::App* a, Parsed& p) { add_scene(a, p.check); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_check(p.check, o); }},
+    {"run", "runs a scene and writes its run folder",
+     "Writes DIR: trajectory.csv, stats.json (also on stdout), scene.resolved.toml, meta.json, all at once at the "
+     "end. DIR must be new, or a pumasim run folder holding only what pumasim wrote, replaced only with --force: "
+     "pumasim never deletes what it did not write. More steps than --max-steps or more wall-clock time than "
+     "--max-wall end the run as a reported failure (exit status 1); a scene whose controller samples or "
+     "set-point updates alone exceed the step budget is refused before it runs. --atol is per unit of each "
+     "state's typical magnitude: angles 1 rad, speeds 1 rad/s, currents the stall current at full command, PIV "
+     "integrals their full range, energies 1 J (stats.json lists the resulting atol per state). The integrator "
+     "stops only where the right-hand side changes (samples, set-point updates, the reference's breakpoints, "
+     "roots); outputs come from its dense output.",
+     [](CLI::App* a, Parsed& p) { add_run(a, p.run); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) { return cmd_run(p.run, o, e); }},
+    {"stiffness", "eigenvalues of the plant Jacobian along a run; explicit methods' largest stable steps",
+     "Samples the exact plant Jacobian along a run with the scene's integrator: stiffness ratio, fastest and "
+     "slowest time constants by state; each explicit method's largest stable step from its stability region "
+     "and, with --bisect, found on the scene. stdout has a summary; --csv and --steps-csv write the tables.",
+     [](CLI::App* a, Parsed& p) { add_stiffness(a, p.stiffness); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) { return cmd_stiffness(p.stiffness, o, e); }},
+    {"conditioning", "cond(H) along the scene's reference and every back-end's forward-dynamics error there",
+     "At each sample of the reference: cond(H), and each back-end's forward dynamics of tau = ID(q, qd, qdd_ref) "
+     "against qdd_ref. stdout has a summary; --csv writes the table.",
+     [](CLI::App* a, Parsed& p) { add_conditioning(a, p.conditioning); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) {
+       return cmd_conditioning(p.conditioning, o, e);
+     }},
+    {"integrators", "lists the integrators", "", [](CLI::App*, Parsed&) {},
+     [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_integrators(o); }},
+    {"help", "prints this text, or a command's options", "",
+     [](CLI::App* a, Parsed& p) {
+       a->add_option("command", p.help_topic, "the command whose options to print")->type_name("COMMAND");
+     },
+     &cmd_help},
+};
 
 std::string command_names() {
   std::string s;
@@ -599,17 +609,117 @@ std::string command_names() {
   return s;
 }
 
+int cmd_help(const Parsed& p, CLI::App& top, std::ostream& out, std::ostream&) {
+  if (p.help_topic.empty()) {  // the top level's help (top.help() would print the selected `help` command's)
+    out << top.get_formatter()->make_help(&top, top.get_name(), CLI::AppFormatMode::Normal);
+    return kExitOk;
+  }
+  for (const Command& c : kCommands) {
+    if (p.help_topic == c.name) {
+      out << top.get_subcommand(c.name)->help(top.get_name());
+      return kExitOk;
+    }
+  }
+  throw UsageError("help: unknown command '" + p.help_topic + "'; expected one of: " + command_names());
+}
+
+// ---------------------------------------------------------------- parsing
+
+// text in lines of at most `width` characters, broken at spaces.
+std::string wrapped(const std::string& text, std::size_t width) {
+  std::istringstream words(text);
+  std::string out, line, word;
+  while (words >> word) {
+    if (!line.empty() && line.size() + 1 + word.size() > width) out += line + "\n", line.clear();
+    line += (line.empty() ? "" : " ") + word;
+  }
+  return out + line;
+}
+
+std::unique_ptr<CLI::App> make_app(Parsed& p) {
+  auto app = std::make_unique<CLI::App>("pumasim: the PUMA 560 as one stiff state-space ODE, a testbed", "pumasim");
+  app->footer("pumasim help <command> (or pumasim <command> --help) prints a command's options.\n"
+              "Exit status: 0 success, 1 internal error or a failed run, 2 bad input.");
+  app->require_subcommand(1);
+  app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // a repeated option: the last
+  for (const Command& c : kCommands) {
+    CLI::App* sub = app->add_subcommand(c.name, c.summary);
+    sub->allow_extras();  // unknown arguments are reported below, naming the valid options
+    if (*c.details) sub->footer(wrapped(c.details, 80));
+    c.add(sub, p);
+  }
+  return app;
+}
+
+// "--speed" for "--speed=3"; the options `app` knows.
+std::string unknown_argument_message(const CLI::App& app, const std::string& arg) {
+  std::string known;
+  for (const CLI::Option* o : app.get_options()) {
+    if (!o->get_lnames().empty() && o->get_lnames().front() != "help") known += " --" + o->get_lnames().front();
+  }
+  if (arg.rfind("-", 0) != 0) {
+    return app.get_name() + ": unexpected argument '" + arg + "'; expected an option:" + known;
+  }
+  return app.get_name() + ": unknown option '" + arg.substr(0, arg.find('=')) + "'; expected one of:" + known;
+}
+
+// CLI11's parse error as one line naming the option and what it expects.
+std::string parse_error_message(const CLI::App& sub, const CLI::ParseError& e) {
+  if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+    for (const CLI::Option* o : sub.get_options()) {
+      if (o->get_required() && o->count() == 0) {
+        return sub.get_name() + ": missing " + (o->get_lnames().empty() ? o->get_name() : "--" + o->get_lnames().front()) +
+               "; expected " + o->get_description();
+      }
+    }
+  }
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e)) {
+    const std::string what = e.what();
+    const std::string name = what.substr(0, what.find(':'));
+    if (const CLI::Option* o = sub.get_option_no_throw(name)) {
+      return name + ": expected a value (" + o->get_type_name() + "), got none";
+    }
+  }
+  return e.what();
+}
+
+// Parses args into p; returns the command to run, or nullptr when help was
+// asked for with --help (then printed to out).
+const Command* parse(CLI::App& app, const std::vector<std::string>& args, std::ostream& out) {
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    out << app.help();  // the command's, when one was named
+    return nullptr;
+  } catch (const CLI::ParseError& e) {
+    const auto chosen = app.get_subcommands();
+    throw UsageError(parse_error_message(chosen.empty() ? app : *chosen.front(), e));
+  }
+  const CLI::App* sub = app.get_subcommands().front();
+  if (const auto extra = sub->remaining(); !extra.empty()) throw UsageError(unknown_argument_message(*sub, extra.front()));
+  for (const Command& c : kCommands) {
+    if (sub->get_name() == c.name) return &c;
+  }
+  throw std::logic_error("a subcommand with no command");
+}
+
+bool is_command(const std::string& s) {
+  return std::any_of(std::begin(kCommands), std::end(kCommands), [&](const Command& c) { return s == c.name; });
+}
+
 }  // namespace
 
 int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   try {
     if (args.empty()) throw UsageError("missing command; expected one of: " + command_names());
-    std::string cmd = args[0];
-    if (cmd == "--help" || cmd == "-h") cmd = "help";
-    for (const Command& c : kCommands) {
-      if (cmd == c.name) return c.run(args, out, err);
+    if (!is_command(args[0]) && args[0] != "--help" && args[0] != "-h") {
+      throw UsageError("unknown command '" + args[0] + "'; expected one of: " + command_names());
     }
-    throw UsageError("unknown command '" + cmd + "'; expected one of: " + command_names());
+    Parsed parsed;
+    const auto app = make_app(parsed);
+    const Command* c = parse(*app, args, out);
+    return c ? c->run(parsed, *app, out, err) : kExitOk;
   } catch (const UsageError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const ConfigError& e) {

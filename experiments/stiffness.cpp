@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -34,6 +36,88 @@ Run run_scene(const Scene& sc, const std::string& integrator, const IntegratorOp
   return r;
 }
 
+// The mode k of J = V diag(lam) V^-1 (L = V^-1: rows are left eigenvectors):
+// its eigenvalue and the state with the largest participation factor.
+ModeInfo describe_mode(const Plant& p, int k, const Eigen::VectorXcd& lam, const Eigen::MatrixXcd& V,
+                       const Eigen::MatrixXcd& L) {
+  ModeInfo m;
+  m.re = lam[k].real(), m.im = lam[k].imag();
+  int best = 0;
+  double pmax = -1;
+  for (int i = 0; i < lam.size(); ++i) {
+    const double pf = std::abs(L(k, i) * V(i, k));
+    if (pf > pmax) pmax = pf, best = i;
+  }
+  m.state = p.layout().names[static_cast<std::size_t>(best)];
+  return m;
+}
+
+// The spectrum of the Jacobian J at t: its figures, and every eigenvalue
+// appended to `all`.
+StiffnessSample spectrum_sample(const Plant& p, double t, const Eigen::MatrixXd& J,
+                                std::vector<std::complex<double>>& all) {
+  Eigen::EigenSolver<Eigen::MatrixXd> es(J, true);
+  const Eigen::VectorXcd lam = es.eigenvalues();
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  const Eigen::MatrixXcd L = V.inverse();  // rows: left eigenvectors
+  StiffnessSample s;
+  s.t = t;
+  double fast = -1, slow = std::numeric_limits<double>::infinity();
+  int i_fast = -1, i_slow = -1;
+  for (int k = 0; k < lam.size(); ++k) {
+    all.push_back(lam[k]);
+    s.spectral_radius = std::max(s.spectral_radius, std::abs(lam[k]));
+    if (lam[k].real() > 0) ++s.unstable_modes;
+  }
+  // Decaying modes: Re lambda below -1e-9 of the spectral radius (the PIV
+  // integrators' near-zero modes and rounding excluded).
+  for (int k = 0; k < lam.size(); ++k) {
+    const double a = -lam[k].real();
+    if (a <= 1e-9 * s.spectral_radius) continue;
+    if (a > fast) fast = a, i_fast = k;
+    if (a < slow) slow = a, i_slow = k;
+  }
+  if (i_fast >= 0) {
+    s.fastest = describe_mode(p, i_fast, lam, V, L);
+    s.slowest = describe_mode(p, i_slow, lam, V, L);
+    s.stiffness_ratio = fast / slow;
+  }
+  return s;
+}
+
+// Stable at dt: the run over [0, t_end] succeeds and ends within 10 %
+// (relative, per state, floor 1) of the reference run's final state.
+bool stable_at(const Scene& sc, const char* name, double dt, double t_end, const Run& ref) {
+  IntegratorOptions o;
+  o.dt = dt;
+  const Run r = run_scene(sc, name, o, t_end, t_end, nullptr);
+  if (!r.ok || r.final_state.size() != ref.final_state.size()) return false;
+  for (std::size_t i = 0; i < r.final_state.size(); ++i) {
+    const double d = std::abs(r.final_state[i] - ref.final_state[i]);
+    if (!(d <= 0.1 * std::max(1.0, std::abs(ref.final_state[i])))) return false;
+  }
+  return true;
+}
+
+// The largest stable step of b.integrator on the scene: bracketed on a log
+// scale around the prediction, then bisected (geometric).
+void measure_step(const Scene& sc, double t_end, const Run& ref, StepBound& b) {
+  const char* name = b.integrator.c_str();
+  double lo = b.predicted / 8, hi = b.predicted * 8;
+  if (!stable_at(sc, name, lo, t_end, ref)) {
+    b.note = "unstable at predicted/8";
+  } else if (stable_at(sc, name, hi, t_end, ref)) {
+    b.measured = hi;
+    b.note = "stable at predicted*8 (a lower bound)";
+  } else {
+    for (int it = 0; it < 14; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      (stable_at(sc, name, mid, t_end, ref) ? lo : hi) = mid;
+    }
+    b.measured = lo;
+  }
+}
+
 }  // namespace
 
 StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bool bisect) {
@@ -43,49 +127,11 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
   IntegratorOptions ref_opt;
   ref_opt.dt = sc.integrator.dt, ref_opt.rtol = sc.integrator.rtol, ref_opt.atol = sc.integrator.atol;
   Eigen::MatrixXd J;
-  const Run ref = run_scene(sc, sc.integrator.name, ref_opt, t_end, t_end / samples, [&](Plant& p, double t,
-                                                                                         const double* x) {
-    p.jacobian_exact(t, x, J);
-    Eigen::EigenSolver<Eigen::MatrixXd> es(J, true);
-    const Eigen::VectorXcd lam = es.eigenvalues();
-    const Eigen::MatrixXcd V = es.eigenvectors();
-    const Eigen::MatrixXcd L = V.inverse();  // rows: left eigenvectors
-    StiffnessSample s;
-    s.t = t;
-    double fast = -1, slow = std::numeric_limits<double>::infinity();
-    int i_fast = -1, i_slow = -1;
-    for (int k = 0; k < lam.size(); ++k) {
-      all.push_back(lam[k]);
-      s.spectral_radius = std::max(s.spectral_radius, std::abs(lam[k]));
-      if (lam[k].real() > 0) ++s.unstable_modes;
-    }
-    // Decaying modes: Re lambda below -1e-9 of the spectral radius (the PIV
-    // integrators' near-zero modes and rounding excluded).
-    for (int k = 0; k < lam.size(); ++k) {
-      const double a = -lam[k].real();
-      if (a <= 1e-9 * s.spectral_radius) continue;
-      if (a > fast) fast = a, i_fast = k;
-      if (a < slow) slow = a, i_slow = k;
-    }
-    auto describe = [&](int k) {
-      ModeInfo m;
-      m.re = lam[k].real(), m.im = lam[k].imag();
-      int best = 0;
-      double pmax = -1;
-      for (int i = 0; i < lam.size(); ++i) {
-        const double pf = std::abs(L(k, i) * V(i, k));
-        if (pf > pmax) pmax = pf, best = i;
-      }
-      m.state = p.layout().names[static_cast<std::size_t>(best)];
-      return m;
-    };
-    if (i_fast >= 0) {
-      s.fastest = describe(i_fast);
-      s.slowest = describe(i_slow);
-      s.stiffness_ratio = fast / slow;
-    }
-    rep.samples.push_back(s);
-  });
+  const Run ref = run_scene(sc, sc.integrator.name, ref_opt, t_end, t_end / samples,
+                            [&](Plant& p, double t, const double* x) {
+                              p.jacobian_exact(t, x, J);
+                              rep.samples.push_back(spectrum_sample(p, t, J, all));
+                            });
   if (!ref.ok) throw std::runtime_error("stiffness: the scene's own run (" + sc.integrator.name + ") failed");
   std::vector<std::complex<double>> decaying;
   for (const auto& l : all) {
@@ -95,33 +141,7 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
     StepBound b;
     b.integrator = name;
     b.predicted = *max_stable_step(name, decaying);
-    if (bisect && std::isfinite(b.predicted)) {
-      auto stable = [&](double dt) {
-        IntegratorOptions o;
-        o.dt = dt;
-        const Run r = run_scene(sc, name, o, t_end, t_end, nullptr);
-        if (!r.ok || r.final_state.size() != ref.final_state.size()) return false;
-        for (std::size_t i = 0; i < r.final_state.size(); ++i) {
-          const double d = std::abs(r.final_state[i] - ref.final_state[i]);
-          if (!(d <= 0.1 * std::max(1.0, std::abs(ref.final_state[i])))) return false;
-        }
-        return true;
-      };
-      // Bracket on a log scale around the prediction, then bisect (geometric).
-      double lo = b.predicted / 8, hi = b.predicted * 8;
-      if (!stable(lo)) {
-        b.note = "unstable at predicted/8";
-      } else if (stable(hi)) {
-        b.measured = hi;
-        b.note = "stable at predicted*8 (a lower bound)";
-      } else {
-        for (int it = 0; it < 14; ++it) {
-          const double mid = std::sqrt(lo * hi);
-          (stable(mid) ? lo : hi) = mid;
-        }
-        b.measured = lo;
-      }
-    }
+    if (bisect && std::isfinite(b.predicted)) measure_step(sc, t_end, ref, b);
     rep.steps.push_back(b);
   }
   return rep;
@@ -164,6 +184,67 @@ ConditioningReport analyse_conditioning(const Scene& sc, int samples) {
     rep.samples.push_back(std::move(s));
   }
   return rep;
+}
+
+namespace {
+
+std::string full(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// A text field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
+std::string field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+double time_constant(const ModeInfo& m) { return m.re != 0 ? -1 / m.re : 0.0; }
+
+}  // namespace
+
+std::string stiffness_samples_csv(const StiffnessReport& rep) {
+  std::ostringstream o;
+  o << "t [s],spectral_radius [1/s],stiffness_ratio [-],fastest_tau [s],fastest_re [1/s],fastest_im [1/s],"
+       "fastest_state,slowest_tau [s],slowest_re [1/s],slowest_im [1/s],slowest_state,unstable_modes [-]\n";
+  for (const StiffnessSample& s : rep.samples) {
+    o << full(s.t) << ',' << full(s.spectral_radius) << ',' << full(s.stiffness_ratio);
+    for (const ModeInfo* m : {&s.fastest, &s.slowest}) {
+      o << ',' << full(time_constant(*m)) << ',' << full(m->re) << ',' << full(m->im) << ',' << field(m->state);
+    }
+    o << ',' << s.unstable_modes << '\n';
+  }
+  return o.str();
+}
+
+std::string step_bounds_csv(const StiffnessReport& rep) {
+  std::ostringstream o;
+  o << "integrator,predicted_step [s],measured_step [s],note\n";
+  for (const StepBound& b : rep.steps) {
+    o << field(b.integrator) << ',' << full(b.predicted) << ',' << full(b.measured) << ',' << field(b.note) << '\n';
+  }
+  return o.str();
+}
+
+std::string conditioning_csv(const ConditioningReport& rep) {
+  std::ostringstream o;
+  o << "t [s]";
+  const std::size_t n = rep.samples.empty() ? 0 : rep.samples.front().q.size();
+  for (std::size_t j = 0; j < n; ++j) o << ",q" << j + 1 << " [rad]";
+  o << ",cond_H [-],min_eig_H [kg m^2]";
+  for (const auto& b : rep.backends) o << ",qdd_error_" << field(b) << " [-]";
+  o << '\n';
+  for (const ConditioningSample& s : rep.samples) {
+    o << full(s.t);
+    for (double v : s.q) o << ',' << full(v);
+    o << ',' << full(s.cond_H) << ',' << full(s.min_eig_H);
+    for (double e : s.qdd_error) o << ',' << full(e);
+    o << '\n';
+  }
+  return o.str();
 }
 
 }  // namespace pumasim

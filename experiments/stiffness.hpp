@@ -64,4 +64,19 @@ struct ConditioningReport {
 
 ConditioningReport analyse_conditioning(const Scene& scene, int samples);
 
+// The reports as CSV text (what `pumasim stiffness --csv` and `--steps-csv`,
+// and `pumasim conditioning --csv`, write): a header row of column names with
+// units, then one row per sample (per method), numbers at full precision.
+// Stiffness samples: t [s], spectral_radius [1/s], stiffness_ratio [-], then
+// for the fastest and the slowest decaying mode its time constant
+// tau = -1/Re lambda [s] (0: no decaying mode), Re and Im lambda [1/s] and the
+// state that participates most, then unstable_modes [-].
+std::string stiffness_samples_csv(const StiffnessReport& report);
+// Step bounds: integrator, predicted_step [s], measured_step [s] (0: not
+// measured), note.
+std::string step_bounds_csv(const StiffnessReport& report);
+// Conditioning: t [s], q1 [rad]..., cond_H [-], min_eig_H [kg m^2], and
+// qdd_error_<back-end> [-] for each back-end.
+std::string conditioning_csv(const ConditioningReport& report);
+
 }  // namespace pumasim

@@ -22,6 +22,7 @@ import csv
 import os
 import subprocess
 import sys
+import tempfile
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
@@ -45,27 +46,47 @@ TABLES = {
 }
 
 
+def pumasim_csv(args, options):
+    """Runs `pumasim <args>` with each CSV option in `options` (e.g. --csv)
+    naming a temporary file; returns the rows of each file (dicts keyed by the
+    header's column names)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [PUMASIM] + args
+        for k, option in enumerate(options):
+            cmd += [option, os.path.join(tmp, f"{k}.csv")]
+        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+        if p.returncode != 0:
+            sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
+        tables = []
+        for k in range(len(options)):
+            with open(os.path.join(tmp, f"{k}.csv"), newline="") as f:
+                tables.append(list(csv.DictReader(f)))
+        return tables
+
+
+def printed(x, digits):
+    """x (full precision in pumasim's CSV) as pumasim's text tables printed it
+    (C's %.<digits>g), from which the committed tables were computed: the same
+    rounding keeps them identical."""
+    return f"{float(x):.{digits}g}"
+
+
 def analyse(scene, sets, t_end):
-    cmd = [PUMASIM, "stiffness", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
-           "--t-end", repr(t_end), "--samples", "20", "--bisect"]
+    args = ["stiffness", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
+            "--t-end", repr(t_end), "--samples", "20", "--bisect"]
     for s in sets:
-        cmd += ["--set", s]
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode != 0:
-        sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
-    blocks = [b for b in p.stdout.split("\n\n") if b.strip()]
-
-    def table(block):
-        lines = [line for line in block.splitlines() if not line.startswith("#")]
-        head = lines[0].split("\t")
-        return [dict(zip(head, line.split("\t"))) for line in lines[1:]]
-
-    samples, steps = table(blocks[0]), table(blocks[1])
-    worst = max(samples, key=lambda r: float(r["spectral radius [1/s]"]))
+        args += ["--set", s]
+    samples, steps = pumasim_csv(args, ["--csv", "--steps-csv"])
+    samples = [{"radius": printed(r["spectral_radius [1/s]"], 4), "ratio": printed(r["stiffness_ratio [-]"], 4),
+                "fastest_state": r["fastest_state"], "fastest_tau": printed(r["fastest_tau [s]"], 3)}
+               for r in samples]
+    steps = [{"integrator": r["integrator"], "predicted": printed(r["predicted_step [s]"], 4),
+              "measured": printed(r["measured_step [s]"], 4), "note": r["note"]} for r in steps]
+    worst = max(samples, key=lambda r: float(r["radius"]))
     return {
-        "spectral_radius": worst["spectral radius [1/s]"],
-        "stiffness_ratio": f"{max(float(r['stiffness ratio']) for r in samples):.6g}",
-        "fastest_state": worst["fastest state"], "fastest_tau_s": worst["fastest tau [s]"],
+        "spectral_radius": worst["radius"],
+        "stiffness_ratio": f"{max(float(r['ratio']) for r in samples):.6g}",
+        "fastest_state": worst["fastest_state"], "fastest_tau_s": worst["fastest_tau"],
     }, steps
 
 
@@ -82,22 +103,25 @@ CONDITIONING = [
 def conditioning(out, reduced, plt):
     rows, curves = [], []
     for case, scene, sets in (CONDITIONING[:1] if reduced else CONDITIONING):
-        cmd = [PUMASIM, "conditioning", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
-               "--samples", "20" if reduced else "600"]
+        args = ["conditioning", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"),
+                "--samples", "20" if reduced else "600"]
         for x in sets:
-            cmd += ["--set", x]
-        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-        if p.returncode != 0:
-            sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
-        lines = [line for line in p.stdout.splitlines() if not line.startswith("#")]
-        head = lines[0].split("\t")
-        data = [dict(zip(head, (float(v) for v in line.split("\t")))) for line in lines[1:]]
-        backends = head[head.index("min eig(H)") + 1:]
+            args += ["--set", x]
+        table, = pumasim_csv(args, ["--csv"])
+        head = list(table[0].keys())
+        backends = [h[len("qdd_error_"):-len(" [-]")] for h in head if h.startswith("qdd_error_")]
+        data = []
+        for r in table:
+            row = {"t [s]": float(printed(r["t [s]"], 6)), "cond(H)": float(printed(r["cond_H [-]"], 6)),
+                   "min eig(H)": float(printed(r["min_eig_H [kg m^2]"], 6))}
+            row.update({h: float(printed(r[h], 6)) for h in head if h.startswith("q") and h.endswith(" [rad]")})
+            row.update({b: float(printed(r[f"qdd_error_{b} [-]"], 3)) for b in backends})
+            data.append(row)
         worst = max(data, key=lambda r: r["cond(H)"])
         row = {"case": case, "command": " ".join(["pumasim conditioning", scene] + [f"--set {x}" for x in sets]),
                "max_cond_H": f"{worst['cond(H)']:.6g}", "t_at_max_s": f"{worst['t [s]']:.4g}",
                "min_eig_H": f"{min(r['min eig(H)'] for r in data):.6g}"}
-        if "q5 [rad]" in head:
+        if "q5 [rad]" in data[0]:
             row["min_abs_q5_rad"] = f"{min(abs(r['q5 [rad]']) for r in data):.3g}"
         else:
             row["min_abs_q5_rad"] = ""
@@ -145,16 +169,13 @@ def scene_stiffness(out, reduced):
             sys.exit(f"stiffness_table: pumasim check {path} failed: {check.stderr.strip()}")
         # The resolved scene ends at its state layout; its [scene] table holds the run's duration.
         duration = float(re.search(r"^duration = (\S+)$", check.stdout, re.M).group(1))
-        cmd = [PUMASIM, "stiffness", path, "--samples", "5" if reduced else "40",
-               "--t-end", "0.02" if reduced else repr(duration)]
-        p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-        if p.returncode != 0:
-            sys.exit(f"stiffness_table: {' '.join(cmd)} failed: {p.stderr.strip()}")
-        block = [b for b in p.stdout.split("\n\n") if b.strip()][0]
-        lines = [line for line in block.splitlines() if not line.startswith("#")]
-        head = lines[0].split("\t")
-        data = [dict(zip(head, line.split("\t"))) for line in lines[1:]]
-        t_end = float(re.search(r"over \[0, ([^\]]+)\] s", block).group(1))
+        t_end = 0.02 if reduced else duration
+        data, = pumasim_csv(["stiffness", path, "--samples", "5" if reduced else "40", "--t-end", repr(t_end)],
+                            ["--csv"])
+        data = [{"spectral radius [1/s]": printed(r["spectral_radius [1/s]"], 4),
+                 "slowest tau [s]": printed(r["slowest_tau [s]"], 3), "fastest state": r["fastest_state"]}
+                for r in data]
+        t_end = float(printed(t_end, 6))
         # Modes slower than the run (and the undamped ones of a conservative
         # arm, Re lambda ~ 0) barely move within it: their rate is floored at
         # 1 / t_end (Shampine's view: stiffness is rho times the interval).
@@ -198,9 +219,9 @@ def main():
         for case, sets in (cases[:1] if args.reduced else cases):
             info, steps = analyse(scene, sets, 0.02 if args.reduced else T_END)
             for s in steps:
-                p, m = float(s["predicted [s]"]), float(s["measured [s]"])
+                p, m = float(s["predicted"]), float(s["measured"])
                 rows.append({"case": case, **info, "integrator": s["integrator"],
-                             "predicted_s": s["predicted [s]"], "measured_s": s["measured [s]"],
+                             "predicted_s": s["predicted"], "measured_s": s["measured"],
                              "measured_over_predicted": f"{m / p:.4g}" if p > 0 and m > 0 else "",
                              "note": s["note"]})
             print(f"{scene} {case}: spectral radius {info['spectral_radius']} 1/s", flush=True)

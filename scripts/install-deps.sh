@@ -10,6 +10,7 @@ PACKAGES=(
   libboost-dev                         # Boost 1.74 headers: Odeint
   libtomlplusplus-dev                  # toml++: robot and scene files
   nlohmann-json3-dev                   # nlohmann-json: the JSON the programs write
+  libcli11-dev                         # CLI11: the pumasim command line
   libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark
   python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
   python3-pytest                       # tests of the Python scripts' module (tests/test_pumasim_io.py)

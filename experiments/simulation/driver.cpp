@@ -3,13 +3,60 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace pumasim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// After a step: the failure that ends the run when a budget is exhausted
+// (wall-clock time first, then steps), or "".
+std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, const double* xs, long max_steps,
+                           double max_wall, Clock::time_point start) {
+  if (max_wall > 0 && seconds_since(start) > max_wall) {
+    return std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) +
+           " s exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
+           fastest_component(sys, t, xs) + " (pumasim run --max-wall S raises the budget; 0: none)";
+  }
+  if (max_steps > 0 && integrator.stats().steps > max_steps) {
+    return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
+           " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
+           fastest_component(sys, t, xs) + " (pumasim run --max-steps N raises the budget; 0: none)";
+  }
+  return {};
+}
+
+// The discrete changes due at t, applied to the state x: the root found, or
+// the time events due (stopping at events, exactly the one stopped at;
+// otherwise every event passed since the last stop, each applied now, late).
+// True when the integrator must restart.
+bool apply_events(Plant& plant, const Outcome& o, double t, double eps, bool time_event_now, double& t_event,
+                  double* x, RunResult& res) {
+  if (o.status == Outcome::kRoot) {
+    plant.on_root(o.root, t, x);
+    ++res.root_events;
+    return true;
+  }
+  if (!time_event_now) return false;
+  for (; t_event <= t + eps; t_event = plant.next_time_event(t_event)) {
+    plant.on_time_event(t_event, x);
+    ++res.time_events;
+  }
+  return true;
+}
+
+}  // namespace
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps, Stops stops, double max_wall) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   PlantSystem sys(plant);
   std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
@@ -45,18 +92,9 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     // The state is copied only where the plant may change it (an event) or
     // an output at this instant reads it, not after every step.
     const double* xs = integrator.state();
-    if (max_wall > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > max_wall) {
+    if (std::string why = budget_failure(integrator, sys, t, xs, max_steps, max_wall, start); !why.empty()) {
       res.ok = false;
-      res.failure = std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) +
-                    " s exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-                    fastest_component(sys, t, xs) + " (pumasim run --max-wall S raises the budget; 0: none)";
-      break;
-    }
-    if (max_steps > 0 && integrator.stats().steps > max_steps) {
-      res.ok = false;
-      res.failure = std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
-                    " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-                    fastest_component(sys, t, xs) + " (pumasim run --max-steps N raises the budget; 0: none)";
+      res.failure = std::move(why);
       break;
     }
     const bool output_now = t >= output_time() - eps && k_out * output_interval <= t_end + output_interval - eps;
@@ -65,28 +103,14 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     const bool time_event_now = t >= t_event - eps && (stop_at_events || t >= output_time() - eps);
     if (!output_now && !time_event_now && o.status != Outcome::kRoot) continue;
     x.assign(xs, xs + plant.size());
-    bool restart = false;
-    if (o.status == Outcome::kRoot) {
-      plant.on_root(o.root, t, x.data());
-      ++res.root_events;
-      restart = true;
-    } else if (time_event_now) {
-      // Stopping at events, exactly one is due here; otherwise every event
-      // passed since the last stop, each applied now (late).
-      for (; t_event <= t + eps; t_event = plant.next_time_event(t_event)) {
-        plant.on_time_event(t_event, x.data());
-        ++res.time_events;
-      }
-      restart = true;
-    }
-    if (restart) integrator.reset(sys, t, x.data());
+    if (apply_events(plant, o, t, eps, time_event_now, t_event, x.data(), res)) integrator.reset(sys, t, x.data());
     if (output_now) {
       if (observe) observe(t, x.data());
       ++k_out;
     }
   }
   res.t_final = t;
-  res.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  res.wall_time = seconds_since(start);
   return res;
 }
 

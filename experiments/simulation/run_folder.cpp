@@ -92,4 +92,20 @@ void write_run_folder(const fs::path& dir, const std::vector<std::pair<std::stri
   }
 }
 
+void write_file_atomically(const fs::path& path, const std::string& content) {
+  const fs::path parent = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  std::string base(1, '.');  // built piecewise, as above (GCC bug 105329)
+  base.append(path.filename().string()).append(1, '.').append(std::to_string(::getpid())).append(".partial");
+  const fs::path tmp = parent / base;
+  std::ofstream f(tmp, std::ios::binary);
+  f << content;
+  f.close();
+  std::error_code ec;
+  if (f) fs::rename(tmp, path, ec);
+  if (!f || ec) {
+    fs::remove(tmp, ec);
+    throw RunFolderError(path.string() + ": could not write the file (missing folder, not writable, or disk full)");
+  }
+}
+
 }  // namespace pumasim

@@ -34,4 +34,9 @@ void check_run_folder_target(const std::filesystem::path& dir, bool force);
 void write_run_folder(const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& files,
                       bool force);
 
+// One file, written whole or not at all: into a hidden temporary file beside
+// `path`, then renamed over it (a file the user named is replaced). A write
+// that fails (a missing folder, a full disk) is a RunFolderError naming `path`.
+void write_file_atomically(const std::filesystem::path& path, const std::string& content);
+
 }  // namespace pumasim

@@ -56,88 +56,117 @@ std::string RunRecorder::header() const {
   return csv.str();
 }
 
-std::string RunRecorder::finish() {
-  std::ostringstream csv;
-  csv << header();
-  const int n = n_, m = m_, led = plant_.layout().e;
-  fig_ = RunFigures{};
-  fig_.ledger = led >= 0;
-  fig_.peak_u.assign(n, 0.0), fig_.peak_ea.assign(n, 0.0), fig_.peak_i.assign(n, 0.0);
-  std::vector<long> saturated(n, 0);
-  double sum_sq = 0, sum_sq_dev = 0, E0 = 0;
-  ReferenceSample ref;
+struct RunRecorder::Csv {
+  std::ostringstream text;
   char buf[40];
-  auto num = [&](double v) {
+  void first(double v) {
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    text << buf;
+  }
+  void num(double v) {
     std::snprintf(buf, sizeof buf, ",%.17g", v);
-    csv << buf;
-  };
-  for (std::size_t row = 0; row + m < saved_.size(); row += static_cast<std::size_t>(m + 1)) {
-    const double t = saved_[row];
-    const double* x = &saved_[row + 1];
+    text << buf;
+  }
+};
+
+struct RunRecorder::Sums {
+  double sum_sq = 0, sum_sq_dev = 0;  // [m^2] path error and deviation, squared
+  double E0 = 0;                      // [J] E_mech + E_mag at the first row
+  std::vector<long> saturated;        // per joint: rows at a limit
+  ReferenceSample ref;                // the reference at the row's time
+};
+
+std::string RunRecorder::finish() {
+  Csv csv;
+  csv.text << header();
+  fig_ = RunFigures{};
+  fig_.ledger = plant_.layout().e >= 0;
+  fig_.peak_u.assign(n_, 0.0), fig_.peak_ea.assign(n_, 0.0), fig_.peak_i.assign(n_, 0.0);
+  Sums sums;
+  sums.saturated.assign(n_, 0);
+  for (std::size_t row = 0; row + m_ < saved_.size(); row += static_cast<std::size_t>(m_ + 1)) {
     ++fig_.rows;
-    std::snprintf(buf, sizeof buf, "%.17g", t);
-    csv << buf;
-    for (int i = 0; i < m; ++i) num(x[i]);
-    Eigen::Matrix3d R_tool;
-    Eigen::Vector3d p;
-    plant_.tool_pose(x, R_tool, p);
-    if (cfg_.reference) {
-      cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), ref);
-      for (int j = 0; j < n; ++j) num(ref.q[j]);
-    }
-    num(p.x()), num(p.y()), num(p.z());
-    Eigen::Quaterniond quat(R_tool);
-    if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
-    num(quat.w()), num(quat.x()), num(quat.y()), num(quat.z());
-    if (cfg_.reference) {
-      const double e = (p - ref.p).norm();
-      // Deviation: the distance to the geometric path, whatever the timing
-      // (a joint-space interpolation leaves the path between via-points).
-      const double dev = cfg_.reference->path().distance(p);
-      num(ref.p.x()), num(ref.p.y()), num(ref.p.z()), num(1e3 * e), num(1e3 * dev);
-      fig_.max_path_error = std::max(fig_.max_path_error, e);
-      sum_sq += e * e;
-      fig_.max_path_deviation = std::max(fig_.max_path_deviation, dev);
-      sum_sq_dev += dev * dev;
-      ++fig_.samples;
-    }
-    if (cfg_.drive) {
-      if (!held_) plant_.drive_signals(t, x, now_.data());
-      for (int j = 0; j < n; ++j) {
-        const auto at = static_cast<std::size_t>(3 * ((fig_.rows - 1) * n + j));
-        const DriveSignals d = held_ ? DriveSignals{signals_[at], signals_[at + 1], signals_[at + 2]}
-                                     : now_[static_cast<std::size_t>(j)];
-        num(d.u), num(d.ea);
-        fig_.peak_u[j] = std::max(fig_.peak_u[j], std::abs(d.u));
-        fig_.peak_ea[j] = std::max(fig_.peak_ea[j], std::abs(d.ea));
-        fig_.peak_i[j] = std::max(fig_.peak_i[j], std::abs(d.i));
-        const double u_lim = cfg_.piv[j].output_limit, v_lim = cfg_.amplifier[j].voltage_limit;
-        if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(cfg_.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
-          ++saturated[j];
-        }
-      }
-    }
-    if (led >= 0) {  // (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction)
-      double kin = 0;
-      const double Em = plant_.mechanical_energy(x, &kin), Eg = plant_.magnetic_energy(x);
-      if (row == 0) E0 = Em + Eg;
-      const double res = (Em + Eg - E0) - (x[led] - x[led + 1] - x[led + 2]);
-      num(Em), num(Eg), num(res);
-      fig_.max_ledger_residual = std::max(fig_.max_ledger_residual, std::abs(res));
-      fig_.ledger_energy_scale = std::max({fig_.ledger_energy_scale, kin, Eg, std::abs(Em + Eg - E0),
-                                           std::abs(x[led]), std::abs(x[led + 1]), std::abs(x[led + 2])});
-    }
-    csv << "\n";
+    write_row(saved_[row], &saved_[row + 1], csv, sums);
+    csv.text << "\n";
   }
+  summarise(sums);
+  return csv.text.str();
+}
+
+// One row: time and state, the reference, the flange's pose, then the path,
+// drive and ledger columns where the plant has them.
+void RunRecorder::write_row(double t, const double* x, Csv& csv, Sums& sums) {
+  csv.first(t);
+  for (int i = 0; i < m_; ++i) csv.num(x[i]);
+  Eigen::Matrix3d R_tool;
+  Eigen::Vector3d p;
+  plant_.tool_pose(x, R_tool, p);
+  if (cfg_.reference) {
+    cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), sums.ref);
+    for (int j = 0; j < n_; ++j) csv.num(sums.ref.q[j]);
+  }
+  csv.num(p.x()), csv.num(p.y()), csv.num(p.z());
+  Eigen::Quaterniond quat(R_tool);
+  if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
+  csv.num(quat.w()), csv.num(quat.x()), csv.num(quat.y()), csv.num(quat.z());
+  if (cfg_.reference) path_columns(p, csv, sums);
+  if (cfg_.drive) drive_columns(t, x, csv, sums);
+  if (plant_.layout().e >= 0) ledger_columns(x, fig_.rows == 1, csv, sums);
+}
+
+void RunRecorder::path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums) {
+  const ReferenceSample& ref = sums.ref;
+  const double e = (p - ref.p).norm();
+  // Deviation: the distance to the geometric path, whatever the timing
+  // (a joint-space interpolation leaves the path between via-points).
+  const double dev = cfg_.reference->path().distance(p);
+  csv.num(ref.p.x()), csv.num(ref.p.y()), csv.num(ref.p.z()), csv.num(1e3 * e), csv.num(1e3 * dev);
+  fig_.max_path_error = std::max(fig_.max_path_error, e);
+  sums.sum_sq += e * e;
+  fig_.max_path_deviation = std::max(fig_.max_path_deviation, dev);
+  sums.sum_sq_dev += dev * dev;
+  ++fig_.samples;
+}
+
+void RunRecorder::drive_columns(double t, const double* x, Csv& csv, Sums& sums) {
+  if (!held_) plant_.drive_signals(t, x, now_.data());
+  for (int j = 0; j < n_; ++j) {
+    const auto at = static_cast<std::size_t>(3 * ((fig_.rows - 1) * n_ + j));
+    const DriveSignals d = held_ ? DriveSignals{signals_[at], signals_[at + 1], signals_[at + 2]}
+                                 : now_[static_cast<std::size_t>(j)];
+    csv.num(d.u), csv.num(d.ea);
+    fig_.peak_u[j] = std::max(fig_.peak_u[j], std::abs(d.u));
+    fig_.peak_ea[j] = std::max(fig_.peak_ea[j], std::abs(d.ea));
+    fig_.peak_i[j] = std::max(fig_.peak_i[j], std::abs(d.i));
+    const double u_lim = cfg_.piv[j].output_limit, v_lim = cfg_.amplifier[j].voltage_limit;
+    if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(cfg_.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
+      ++sums.saturated[j];
+    }
+  }
+}
+
+// (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction)
+void RunRecorder::ledger_columns(const double* x, bool first, Csv& csv, Sums& sums) {
+  const int led = plant_.layout().e;
+  double kin = 0;
+  const double Em = plant_.mechanical_energy(x, &kin), Eg = plant_.magnetic_energy(x);
+  if (first) sums.E0 = Em + Eg;
+  const double res = (Em + Eg - sums.E0) - (x[led] - x[led + 1] - x[led + 2]);
+  csv.num(Em), csv.num(Eg), csv.num(res);
+  fig_.max_ledger_residual = std::max(fig_.max_ledger_residual, std::abs(res));
+  fig_.ledger_energy_scale = std::max({fig_.ledger_energy_scale, kin, Eg, std::abs(Em + Eg - sums.E0),
+                                       std::abs(x[led]), std::abs(x[led + 1]), std::abs(x[led + 2])});
+}
+
+void RunRecorder::summarise(const Sums& sums) {
   if (fig_.samples) {
-    fig_.rms_path_error = std::sqrt(sum_sq / fig_.samples);
-    fig_.rms_path_deviation = std::sqrt(sum_sq_dev / fig_.samples);
+    fig_.rms_path_error = std::sqrt(sums.sum_sq / fig_.samples);
+    fig_.rms_path_deviation = std::sqrt(sums.sum_sq_dev / fig_.samples);
   }
-  fig_.saturated_fraction.assign(n, 0.0);
-  for (int j = 0; j < n; ++j) {
-    if (fig_.rows) fig_.saturated_fraction[j] = static_cast<double>(saturated[j]) / fig_.rows;
+  fig_.saturated_fraction.assign(n_, 0.0);
+  for (int j = 0; j < n_; ++j) {
+    if (fig_.rows) fig_.saturated_fraction[j] = static_cast<double>(sums.saturated[j]) / fig_.rows;
   }
-  return csv.str();
 }
 
 }  // namespace pumasim

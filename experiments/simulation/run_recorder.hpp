@@ -40,7 +40,14 @@ class RunRecorder {
   const RunFigures& figures() const { return fig_; }
 
  private:
+  struct Csv;   // the text of trajectory.csv, numbers at full precision
+  struct Sums;  // what finish() accumulates over the rows
   std::string header() const;
+  void write_row(double t, const double* x, Csv& csv, Sums& sums);
+  void path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums);
+  void drive_columns(double t, const double* x, Csv& csv, Sums& sums);
+  void ledger_columns(const double* x, bool first, Csv& csv, Sums& sums);
+  void summarise(const Sums& sums);
   Plant& plant_;
   const PlantConfig& cfg_;
   int m_, n_;

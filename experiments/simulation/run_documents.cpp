@@ -1,0 +1,118 @@
+#include "experiments/simulation/run_documents.hpp"
+
+#include <cmath>
+#include <thread>
+
+#include <sys/utsname.h>
+
+#include <Eigen/Core>
+#include <boost/version.hpp>
+#include <nlohmann/json.hpp>
+#include <sundials/sundials_config.h>
+#include <toml++/toml.h>
+
+#include "pumasim_build_info.hpp"  // generated at build time
+
+namespace pumasim {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json json_number(double x) { return std::isfinite(x) ? Json(x) : Json(nullptr); }
+
+Json json_list(const std::vector<double>& v) {
+  Json a = Json::array();
+  for (double x : v) a.push_back(json_number(x));
+  return a;
+}
+
+// What was run: scene, methods, tolerances (null where they mean nothing).
+void settings(Json& js, const Scene& sc, const RunControls& rc, const SceneRun& run) {
+  const IntegratorOptions& io = rc.options;
+  const bool adaptive = rc.adaptive;
+  js["scene"] = sc.name;
+  js["integrator"] = sc.integrator.name;
+  js["backend"] = sc.plant.backend;
+  js["ok"] = run.result.ok;
+  js["failure"] = run.result.failure;
+  js["t_end"] = json_number(sc.duration);
+  js["t_reached"] = json_number(run.result.t_final);
+  js["dt"] = json_number(adaptive ? std::nan("") : io.dt);
+  js["rtol"] = json_number(adaptive ? io.rtol : std::nan(""));
+  js["atol"] = json_number(adaptive ? io.atol : std::nan(""));
+  Json& atol = js["atol_per_component"] = Json::object();  // atol * the plant's typical magnitude of each state
+  for (std::size_t k = 0; k < run.state_names.size(); ++k) {
+    atol[run.state_names[k]] = json_number(adaptive ? io.atol * run.tolerance_scales[k] : std::nan(""));
+  }
+  js["exact_jacobian"] = io.exact_jacobian;
+  js["late_events"] = rc.stops == Stops::kOutputsLateEvents;
+  js["stops"] = rc.stops == Stops::kEvents             ? "events (outputs from the dense output)"
+                : rc.stops == Stops::kEventsAndOutputs ? "events and outputs"
+                                                       : "outputs (time events applied late)";
+}
+
+void statistics(Json& js, const SceneRun& run) {
+  const IntegratorStats& st = run.stats;
+  js["steps"] = st.steps;
+  js["rhs_evaluations"] = st.rhs_evaluations;
+  js["jacobian_evaluations"] = st.jacobian_evaluations;
+  js["linear_solves"] = st.linear_solves;
+  js["rejected_steps"] = st.rejected_steps;
+  js["nonlinear_iterations"] = st.nonlinear_iterations;
+  js["restarts"] = st.restarts;
+  js["time_events"] = run.result.time_events;
+  js["root_events"] = run.result.root_events;
+  js["integration_wall_time_s"] = json_number(st.wall_time);
+  js["wall_time_s"] = json_number(run.result.wall_time);
+}
+
+void figures(Json& js, const Scene& sc, const RunFigures& fig) {
+  const double none = std::nan("");
+  js["max_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_error : none);
+  js["rms_path_error_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_error : none);
+  js["max_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.max_path_deviation : none);
+  js["rms_path_deviation_mm"] = json_number(fig.samples ? 1e3 * fig.rms_path_deviation : none);
+  js["reference_duration_s"] = json_number(sc.plant.reference ? sc.plant.reference->timing().duration() : none);
+  if (sc.plant.drive) {
+    js["peak_controller_output_V"] = json_list(fig.peak_u);
+    js["peak_voltage_V"] = json_list(fig.peak_ea);
+    js["peak_current_A"] = json_list(fig.peak_i);
+    js["saturated_fraction"] = json_list(fig.saturated_fraction);
+  }
+  if (fig.ledger) {
+    js["max_ledger_residual_J"] = json_number(fig.max_ledger_residual);
+    js["ledger_energy_scale_J"] = json_number(fig.ledger_energy_scale);
+  }
+}
+
+}  // namespace
+
+std::string stats_json(const Scene& sc, const RunControls& rc, const SceneRun& run) {
+  Json js;
+  settings(js, sc, rc, run);
+  statistics(js, run);
+  figures(js, sc, run.figures);
+  return js.dump(2) + "\n";
+}
+
+std::string meta_json() {
+  utsname u{};
+  uname(&u);
+  Json meta;
+  meta["git_revision"] = build_info::kGitRevision;
+  meta["git_dirty"] = build_info::kGitDirty;
+  meta["compiler"] = build_info::kCompiler;
+  meta["flags"] = build_info::kFlags;
+  meta["build_type"] = build_info::kBuildType;
+  meta["eigen"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
+                  std::to_string(EIGEN_MINOR_VERSION);
+  meta["sundials"] = SUNDIALS_VERSION;
+  meta["boost"] = std::to_string(BOOST_VERSION / 100000) + "." + std::to_string(BOOST_VERSION / 100 % 1000);
+  meta["tomlplusplus"] = std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) + "." +
+                         std::to_string(TOML_LIB_PATCH);
+  meta["machine"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  meta["cpus"] = std::thread::hardware_concurrency();
+  return meta.dump(2) + "\n";
+}
+
+}  // namespace pumasim

@@ -1,0 +1,53 @@
+// One run of a scene, apart from the command line: the budgets a run gets
+// (refused up front when the scene alone exceeds them), the plant and the
+// integrator made from the scene, the driver run with the run recorder as its
+// observer, and what the run leaves: the trajectory's text, the figures and
+// the integrator's statistics, from which run_documents writes stats.json.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "experiments/simulation/driver.hpp"
+#include "experiments/simulation/run_recorder.hpp"
+#include "integrators/integrator.hpp"
+#include "models/scene/scene.hpp"
+
+namespace pumasim {
+
+inline constexpr long kDefaultStepBudget = 10'000'000;  // pumasim run --max-steps
+inline constexpr double kDefaultWallBudget = 600.0;      // [s], pumasim run --max-wall
+inline constexpr double kMaxOutputRows = 1e7;            // rows held in memory until the run ends
+
+// How a run is driven, beyond the scene.
+struct RunControls {
+  IntegratorOptions options;              // the scene's integrator settings, as resolved
+  bool adaptive = false;                  // the scene's integrator adapts its step (rtol, atol)
+  long max_steps = kDefaultStepBudget;    // steps in all; 0: no limit
+  double max_wall = kDefaultWallBudget;   // [s] wall-clock time; 0: no limit
+  Stops stops = Stops::kEvents;
+};
+
+// Refuses (std::invalid_argument, naming the scene keys) a run whose output
+// rows exceed kMaxOutputRows, or whose controller samples or set-point
+// updates alone exceed the step budget (each is a stop, so at least a step):
+// a refusal costs nothing, a 1e-12 s servo period would grind through the
+// whole budget first.
+void check_run_size(const Scene& scene, long max_steps);
+
+struct SceneRun {
+  RunResult result;
+  IntegratorStats stats;
+  std::vector<std::string> state_names;
+  std::vector<double> tolerance_scales;  // the plant's typical magnitude of each state
+  std::string trajectory_csv;
+  RunFigures figures;
+};
+
+// Runs the scene (integrator scene.integrator.name) over scene.duration;
+// progress(t) at every output, after the recorder has it (may be empty).
+SceneRun simulate_scene(const Scene& scene, const RunControls& controls,
+                        const std::function<void(double t)>& progress);
+
+}  // namespace pumasim

@@ -1,0 +1,181 @@
+// The command line as CLI11 parses it: bad input exits with status 2 and one
+// line on stderr naming the option and what it expects; the help lists every
+// command; negative numbers are values; repeated --set all apply; stiffness
+// and conditioning write CSV files with a header of named columns.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "experiments/cli.hpp"
+
+namespace pumasim {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result cli(const std::vector<std::string>& args) {
+  std::ostringstream out, err;
+  const int status = run_cli(args, out, err);
+  return {status, out.str(), err.str()};
+}
+
+const std::string kScene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+
+// Status 2, nothing on stdout, one line on stderr holding every fragment.
+void expect_bad(const std::vector<std::string>& args, const std::vector<std::string>& fragments) {
+  const Result r = cli(args);
+  EXPECT_EQ(r.status, kExitBadInput) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  EXPECT_EQ(r.err.rfind("pumasim: ", 0), 0u) << r.err;
+  for (const auto& f : fragments) EXPECT_NE(r.err.find(f), std::string::npos) << f << " in: " << r.err;
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("pumasim_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::vector<std::string> lines_of(const fs::path& p) {
+  std::ifstream f(p);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(f, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(CliParsing, AnUnknownOptionIsNamedWithTheValidOnes) {
+  expect_bad({"run", kScene, "--speed=3"}, {"unknown option '--speed'", "expected one of:", "--t-end", "--max-wall"});
+  expect_bad({"check", kScene, "--dt", "0.001"}, {"unknown option '--dt'", "--set"});
+  expect_bad({"run", kScene, "other.toml"}, {"unexpected argument 'other.toml'"});
+}
+
+TEST(CliParsing, AMissingValueNamesTheOption) {
+  expect_bad({"run", kScene, "--t-end"}, {"--t-end: expected a value"});
+  expect_bad({"stiffness", kScene, "--samples"}, {"--samples: expected a value"});
+  expect_bad({"run", kScene, "--set"}, {"--set: expected a value"});
+}
+
+TEST(CliParsing, AMissingArgumentSaysWhatWasExpected) {
+  expect_bad({"run"}, {"run: missing scene", "expected a scene file"});
+  expect_bad({"dynamics", "--robot", "puma560", "--q=qz"}, {"missing --backend", "expected a dynamics back-end"});
+}
+
+TEST(CliParsing, AWrongTypeNamesTheOptionAndTheValue) {
+  expect_bad({"run", kScene, "--t-end", "abc"}, {"--t-end: expected a number > 0, got 'abc'"});
+  expect_bad({"run", kScene, "--dt", "nan"}, {"--dt: expected a number > 0, got 'nan'"});
+  expect_bad({"run", kScene, "--rtol=inf"}, {"--rtol: expected a number > 0, got 'inf'"});
+  expect_bad({"stiffness", kScene, "--samples", "2.5"}, {"--samples: expected a whole number in [1, 10000], got '2.5'"});
+  expect_bad({"run", kScene, "--integrator", "rk45"}, {"--integrator: unknown integrator 'rk45'; expected one of:"});
+  expect_bad({"run", kScene, "--backend", "fast"}, {"--backend: unknown dynamics back-end 'fast'"});
+}
+
+TEST(CliParsing, AnOutOfRangeValueNamesTheOptionAndTheRange) {
+  expect_bad({"run", kScene, "--t-end=-1"}, {"--t-end: expected a number > 0, got '-1'"});
+  expect_bad({"run", kScene, "--max-steps", "-5"}, {"--max-steps: expected a whole number >= 0 (0: no limit)"});
+  expect_bad({"run", kScene, "--max-wall", "-1"}, {"--max-wall: expected seconds >= 0 (0: no limit)"});
+  expect_bad({"stiffness", kScene, "--samples", "0"}, {"--samples: expected a whole number in [1, 10000], got '0'"});
+  expect_bad({"conditioning", kScene, "--samples", "100001"}, {"--samples: expected a whole number in [1, 100000]"});
+  expect_bad({"run", kScene, "--late-events", "--stop-at-outputs"}, {"--late-events", "--stop-at-outputs"});
+}
+
+TEST(CliParsing, ACsvFileOutsideAnExistingFolderIsRefusedBeforeTheAnalysis) {
+  expect_bad({"stiffness", kScene, "--csv", "/nonexistent/folder/s.csv"},
+             {"--csv: expected a file in an existing folder, got '/nonexistent/folder/s.csv'"});
+}
+
+TEST(CliParsing, NegativeNumbersAreValuesWithOrWithoutEquals) {
+  for (const std::vector<std::string>& q : {std::vector<std::string>{"--q", "-0.1,0.2,-0.3,0,0,0"},
+                                            std::vector<std::string>{"--q=-0.1,0.2,-0.3,0,0,0"}}) {
+    std::vector<std::string> args{"dynamics", "--robot", "puma560", "--backend", "crba", "--tau", "-1,-2,-3,0,0,0"};
+    args.insert(args.end(), q.begin(), q.end());
+    const Result r = cli(args);
+    ASSERT_EQ(r.status, kExitOk) << r.err;
+    EXPECT_NE(r.out.find("\"q\": [\n    -0.1,"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"tau_in\": [\n    -1.0,"), std::string::npos) << r.out;
+  }
+}
+
+TEST(CliParsing, EveryRepeatedSetApplies) {
+  const Result r = cli({"check", kScene, "--set", "motor.inductance=1e-5", "--set=scene.output_interval=0.02"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("inductance = [ 1.0000000000000001e-05,"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("output_interval = 0.02"), std::string::npos) << r.out;
+}
+
+TEST(CliParsing, TheHelpListsEveryCommandOnStdout) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"help"}, std::vector<std::string>{"--help"}, std::vector<std::string>{"-h"}}) {
+    const Result r = cli(args);
+    EXPECT_EQ(r.status, kExitOk) << r.err;
+    EXPECT_TRUE(r.err.empty()) << r.err;
+    for (const char* c : {"dynamics", "check", "run", "stiffness", "conditioning", "integrators", "backends", "help"}) {
+      EXPECT_NE(r.out.find("  " + std::string(c) + " "), std::string::npos) << c << " in:\n" << r.out;
+    }
+  }
+}
+
+TEST(CliParsing, ACommandsHelpListsItsOptions) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"help", "run"}, std::vector<std::string>{"run", "--help"}}) {
+    const Result r = cli(args);
+    EXPECT_EQ(r.status, kExitOk) << r.err;
+    for (const char* o : {"--integrator", "--backend", "--rtol", "--atol", "--dt", "--t-end", "--out", "--force",
+                          "--exact-jacobian", "--max-steps", "--max-wall", "--late-events", "--stop-at-outputs",
+                          "--set"}) {
+      EXPECT_NE(r.out.find(o), std::string::npos) << o << " in:\n" << r.out;
+    }
+  }
+  expect_bad({"help", "fly"}, {"help: unknown command 'fly'; expected one of: dynamics"});
+}
+
+TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {
+  const fs::path d = scratch("stiffness");
+  const Result r = cli({"stiffness", kScene, "--t-end", "0.01", "--samples", "2", "--csv", (d / "s.csv").string(),
+                        "--steps-csv", (d / "steps.csv").string()});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const auto s = lines_of(d / "s.csv");
+  ASSERT_EQ(s.size(), 4u) << "header, then t = 0, 0.005, 0.01";
+  EXPECT_EQ(s[0],
+            "t [s],spectral_radius [1/s],stiffness_ratio [-],fastest_tau [s],fastest_re [1/s],fastest_im [1/s],"
+            "fastest_state,slowest_tau [s],slowest_re [1/s],slowest_im [1/s],slowest_state,unstable_modes [-]");
+  EXPECT_EQ(s[1].rfind("0,", 0), 0u) << s[1];
+  EXPECT_EQ(std::count(s[3].begin(), s[3].end(), ','), 11) << s[3];
+  const auto b = lines_of(d / "steps.csv");
+  ASSERT_EQ(b.size(), 6u);
+  EXPECT_EQ(b[0], "integrator,predicted_step [s],measured_step [s],note");
+  EXPECT_EQ(b[1].rfind("euler,", 0), 0u) << b[1];
+  EXPECT_NE(r.out.find("largest spectral radius"), std::string::npos) << r.out;
+  // A named file is replaced (the user asked for it); no temporary file is left beside it.
+  ASSERT_EQ(cli({"stiffness", kScene, "--t-end", "0.01", "--samples", "1", "--csv", (d / "s.csv").string()}).status,
+            kExitOk);
+  EXPECT_EQ(lines_of(d / "s.csv").size(), 3u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(d), {}), 2);
+  fs::remove_all(d);
+}
+
+TEST(CliOutput, ConditioningWritesACsvFileWithNamedColumns) {
+  const fs::path d = scratch("conditioning");
+  const Result r = cli({"conditioning", kScene, "--samples", "4", "--csv", (d / "c.csv").string()});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const auto c = lines_of(d / "c.csv");
+  ASSERT_EQ(c.size(), 6u) << "header, then 5 samples";
+  EXPECT_EQ(c[0].rfind("t [s],q1 [rad],q2 [rad],q3 [rad],cond_H [-],min_eig_H [kg m^2],qdd_error_", 0), 0u) << c[0];
+  EXPECT_NE(c[0].find(",qdd_error_crba [-]"), std::string::npos) << c[0];
+  EXPECT_NE(r.out.find("largest cond(H)"), std::string::npos) << r.out;
+  fs::remove_all(d);
+}
+
+}  // namespace
+}  // namespace pumasim
