@@ -24,6 +24,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "integrators/adams_bashforth.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry_entries.hpp"
 
@@ -198,15 +199,12 @@ class AdamsBashforth final : public FixedStep {
       rk4(h, ring_[head_].data());  // bootstrap the history with RK4
       return;
     }
-    static constexpr double kB2[] = {3.0 / 2, -1.0 / 2};
-    static constexpr double kB3[] = {23.0 / 12, -16.0 / 12, 5.0 / 12};
-    static constexpr double kB4[] = {55.0 / 24, -59.0 / 24, 37.0 / 24, -9.0 / 24};
     // A step shortened to land on a stop (h < dt) integrates the same
     // polynomial through the history, whose points are dt apart, over [0, h]:
     // dt * beta_j(h / dt), not h times the full step's weights (that is an
     // O(dt^2) local error at every stop, which held AB3 and AB4 to order 2).
     grid_ = full ? h : dt();
-    const double* b = full ? (k_ == 2 ? kB2 : k_ == 3 ? kB3 : kB4) : coefficients(h / grid_);
+    const double* b = full ? adams_bashforth_weights(k_) : coefficients(h / grid_);
     const double w = full ? h : grid_;
     for (int i = 0; i < m; ++i) {
       double s = 0;

@@ -6,6 +6,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "integrators/adams_bashforth.hpp"
+
 namespace pumasim {
 namespace {
 
@@ -14,16 +16,11 @@ using C = std::complex<double>;
 // Adams-Bashforth k: zeta^k - zeta^(k-1) - z sum_j b_j zeta^(k-1-j), the
 // coefficients b_j of the explicit k-step formula.
 bool ab_stable(int k, C z) {
-  static const std::vector<std::vector<double>> b = {
-      {1.5, -0.5},
-      {23.0 / 12, -16.0 / 12, 5.0 / 12},
-      {55.0 / 24, -59.0 / 24, 37.0 / 24, -9.0 / 24},
-  };
-  const std::vector<double>& c = b[static_cast<std::size_t>(k - 2)];
+  const double* c = adams_bashforth_weights(k);
   // Monic polynomial p(zeta) = zeta^k + a_{k-1} zeta^{k-1} + ... + a_0.
   std::vector<C> a(static_cast<std::size_t>(k));  // a[i]: coefficient of zeta^i
   a[static_cast<std::size_t>(k - 1)] = -1.0 - z * c[0];
-  for (int j = 1; j < k; ++j) a[static_cast<std::size_t>(k - 1 - j)] = -z * c[static_cast<std::size_t>(j)];
+  for (int j = 1; j < k; ++j) a[static_cast<std::size_t>(k - 1 - j)] = -z * c[j];
   Eigen::MatrixXcd M = Eigen::MatrixXcd::Zero(k, k);  // companion matrix
   for (int i = 1; i < k; ++i) M(i, i - 1) = 1.0;
   for (int i = 0; i < k; ++i) M(i, k - 1) = -a[static_cast<std::size_t>(i)];
