@@ -44,6 +44,7 @@
 #include <boost/numeric/odeint.hpp>
 
 #include "integrators/integrator.hpp"
+#include "integrators/time_rule.hpp"
 #include "integrators/rosenbrock_coefficients.hpp"
 #include "integrators/registry_entries.hpp"
 
@@ -100,13 +101,10 @@ class OdeintBase : public Integrator {
 
   // Attempts until one step is accepted (or a root, or a failure).
   Outcome step(double t_stop) override {
-    const double span = std::max(1.0, std::abs(t_stop));
     if (h_ <= 0) h_ = std::min(1e-4, std::max(t_stop - t_, 0.0));
     for (;;) {
-      // A stop closer than rounding (a sample grid k * period computed apart
-      // from the time reached) is reached: a step of 1e-18 s would drag the
-      // step-size controller down to an underflow.
-      if (t_stop - t_ <= 1e-12 * span) {
+      // A stop at the same instant (time_rule.hpp) is reached.
+      if (!before(t_, t_stop)) {
         t_start_ = t_ = t_stop;
         return {};
       }

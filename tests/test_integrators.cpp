@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
+#include "integrators/time_rule.hpp"
 #include "models/scene/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
@@ -573,6 +575,28 @@ TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
       "--exact-jacobian: rk4 uses no Jacobian");
   bad({"run", scene, "--integrator", "rk45", "--out", dir.string()},
       "unknown integrator 'rk45'; expected one of: ab2");
+}
+
+}  // namespace
+}  // namespace pumasim
+
+namespace pumasim {
+namespace {
+
+// integrators/time_rule.hpp: instants within 1e-12 max(1, |a|, |b|) s are one instant.
+TEST(TimeRule, InstantsWithinRoundingAreOneInstant) {
+  EXPECT_TRUE(same_time(0.3, 0.1 * 3));   // 0.30000000000000004
+  EXPECT_FALSE(before(0.3, 0.1 * 3));     // so a stop at 0.1 * 3 is reached at 0.3
+  EXPECT_FALSE(before(0.1 * 3, 0.3));
+  EXPECT_TRUE(before(0.3, 0.3 + 1e-9));
+  EXPECT_TRUE(same_time(0.0, 5e-13));     // absolute near 0
+  EXPECT_FALSE(same_time(0.0, 2e-12));
+  EXPECT_TRUE(same_time(1e4, 1e4 + 5e-9));  // relative far from 0
+  EXPECT_FALSE(same_time(1e4, 1e4 + 2e-8));
+  const double inf = std::numeric_limits<double>::infinity();  // no next event
+  EXPECT_TRUE(before(1e300, inf));
+  EXPECT_FALSE(same_time(0.0, inf));
+  EXPECT_TRUE(same_time(inf, inf));
 }
 
 }  // namespace
