@@ -8,51 +8,7 @@
 
 namespace pumasim {
 
-const char* to_string(FrictionModel m) {
-  switch (m) {
-    case FrictionModel::kNone: return "none";
-    case FrictionModel::kViscous: return "viscous";
-    case FrictionModel::kPaper: return "paper";
-    case FrictionModel::kHybrid: return "hybrid";
-    case FrictionModel::kKarnopp: return "karnopp";
-    case FrictionModel::kTanh: return "tanh";
-  }
-  return "?";
-}
-
-int StateLayout::index(const std::string& name) const {
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    if (names[k] == name) return static_cast<int>(k);
-  }
-  return -1;
-}
-
-template <class S>
-struct Plant::Workspace {
-  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-  using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
-  std::unique_ptr<BasicDynamicsBackend<S>> backend;
-  Vec q, qd, u, ea, tau, qdd, h, tm, applied;
-  Mat H, Hc;
-  Cholesky<S, Eigen::Dynamic> chol;
-  explicit Workspace(int n)
-      : q(n), qd(n), u(n), ea(n), tau(n), qdd(n), h(n), tm(n), applied(n), H(n, n), Hc(n, n), chol(n) {}
-};
-
 namespace {
-
-bool is_electrical(const PlantConfig& c) {
-  if (!c.drive) return false;
-  const bool any = std::any_of(c.motor.begin(), c.motor.end(),
-                               [](const MotorParams& m) { return m.inductance > 0; });
-  const bool all = std::all_of(c.motor.begin(), c.motor.end(),
-                               [](const MotorParams& m) { return m.inductance > 0; });
-  if (any && !all) {
-    throw std::invalid_argument("plant: armature inductance must be > 0 for every joint or 0 for "
-                                "every joint (the reduced model)");
-  }
-  return all;
-}
 
 bool on_grid(double t, double period) {
   if (!(period > 0)) return false;
@@ -64,83 +20,74 @@ double next_on_grid(double t, double period) {
   return (std::floor(t / period + 1e-9) + 1.0) * period;
 }
 
+std::vector<double> gear_ratios(const PlantConfig& c) {
+  std::vector<double> Z;
+  for (int j = 0; j < c.n; ++j) Z.push_back(c.robot.joints[static_cast<std::size_t>(j)].gear_ratio);
+  return Z;
+}
+
+template <class T>
+std::vector<T> if_drive(const PlantConfig& c, const std::vector<T>& v) {
+  return c.drive ? v : std::vector<T>{};
+}
+
 }  // namespace
 
 RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held) {
   return n < robot.dof() ? lock_joints(robot, n, q_held.head(robot.dof())) : robot;
 }
 
-Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
-  const int n = cfg_.n;
-  if (cfg_.robot.dof() != 6 && cfg_.n != cfg_.robot.dof()) {
-    throw std::invalid_argument("plant: held joints need a 6-joint robot");
-  }
-  if (n < 1 || n > cfg_.robot.dof()) throw std::invalid_argument("plant: joint count out of range");
+PlantConfig Plant::checked(PlantConfig c) {
+  const int n = c.n;
+  if (c.robot.dof() != 6 && c.n != c.robot.dof()) throw std::invalid_argument("plant: held joints need a 6-joint robot");
+  if (n < 1 || n > c.robot.dof()) throw std::invalid_argument("plant: joint count out of range");
   const auto sized = [n](std::size_t s) { return s == static_cast<std::size_t>(n); };
-  if (!sized(cfg_.friction.size())) throw std::invalid_argument("plant: one friction block per joint");
-  if (cfg_.drive && (!sized(cfg_.amplifier.size()) || !sized(cfg_.motor.size()))) {
+  if (!sized(c.friction.size())) throw std::invalid_argument("plant: one friction block per joint");
+  if (c.drive && (!sized(c.amplifier.size()) || !sized(c.motor.size()))) {
     throw std::invalid_argument("plant: one amplifier and motor per joint");
   }
-  if (cfg_.controller != ControllerMode::kNone) {
-    if (!sized(cfg_.piv.size())) throw std::invalid_argument("plant: one PIV controller per joint");
-    if (!cfg_.reference && cfg_.q0.size() != n) {
+  if (c.controller != ControllerMode::kNone) {
+    if (!sized(c.piv.size())) throw std::invalid_argument("plant: one PIV controller per joint");
+    if (!c.reference && c.q0.size() != n) {
       throw std::invalid_argument("plant: a controller needs a reference, or initial angles to hold");
     }
-    if (!cfg_.drive) throw std::invalid_argument("plant: a controller needs the drive (amplifier, motor)");
-  } else if (cfg_.drive) {
+    if (!c.drive) throw std::invalid_argument("plant: a controller needs the drive (amplifier, motor)");
+  } else if (c.drive) {
     throw std::invalid_argument("plant: a drive needs a controller");
-  } else if (cfg_.q0.size() != n) {
+  } else if (c.q0.size() != n) {
     throw std::invalid_argument("plant: a passive arm needs n initial angles");
   }
-  if (cfg_.controller == ControllerMode::kSampled && !(cfg_.servo_period > 0)) {
+  if (c.controller == ControllerMode::kSampled && !(c.servo_period > 0)) {
     throw std::invalid_argument("plant: a sampled controller needs a servo period > 0");
   }
-  model_ = simulated_robot(cfg_.robot, n, cfg_.q_held);
+  return c;
+}
 
-  // State layout.
+Plant::Plant(PlantConfig config)
+    : cfg_(checked(std::move(config))),
+      model_(simulated_robot(cfg_.robot, cfg_.n, cfg_.q_held)),
+      body_(gear_ratios(cfg_)),
+      amplifier_(if_drive(cfg_, cfg_.amplifier)),
+      motor_(if_drive(cfg_, cfg_.motor), if_drive(cfg_, cfg_.amplifier)),
+      friction_(cfg_.friction),
+      controller_(cfg_.controller, cfg_.piv, gear_ratios(cfg_), cfg_.servo_period),
+      ledger_(cfg_.energy_ledger) {
+  const int n = cfg_.n;
   layout_.n = n;
-  layout_.q = 0;
-  layout_.qd = n;
-  int next = 2 * n;
-  if (is_electrical(cfg_)) layout_.i = next, next += n;
-  if (cfg_.controller == ControllerMode::kContinuous) layout_.z = next, next += n;
-  if (cfg_.energy_ledger) layout_.e = next, next += 3;
-  layout_.size = next;
-  const auto add = [&](const char* prefix) {
-    for (int j = 0; j < n; ++j) layout_.names.push_back(prefix + std::to_string(j + 1));
-  };
-  add("q");
-  add("qd");
-  if (layout_.i >= 0) add("i_motor");
-  if (layout_.z >= 0) add("z_piv");
-  if (layout_.e >= 0) {
-    for (const char* name : {"e_in", "e_copper", "e_friction"}) layout_.names.emplace_back(name);
-  }
-  // Typical magnitudes (tolerance_scale): angles 1 rad, speeds 1 rad/s; a
-  // current its stall value at full command, min(K_A u_max, V_max) / (R0 + R);
-  // a PIV integral its full range, integral_limit / |Ki|; energies 1 J.
-  scale_.assign(static_cast<std::size_t>(layout_.size), 1.0);
-  for (int j = 0; j < n; ++j) {
-    if (layout_.i >= 0) {
-      const AmplifierParams& A = cfg_.amplifier[j];
-      const double v = command_voltage_range(A, cfg_.piv[j]);
-      const double r = A.output_resistance + cfg_.motor[j].resistance;
-      if (v > 0 && r > 0 && std::isfinite(v / r)) scale_[layout_.i + j] = v / r;
-    }
-    if (layout_.z >= 0 && cfg_.piv[j].ki != 0) scale_[layout_.z + j] = cfg_.piv[j].integral_limit / std::abs(cfg_.piv[j].ki);
-  }
+  body_.declare(layout_);
+  std::vector<double> full_command;  // the stall current's scale: min(K_A u_max, V_max)
+  for (int j = 0; j < n && cfg_.drive; ++j) full_command.push_back(command_voltage_range(cfg_.amplifier[j], cfg_.piv[j]));
+  motor_.declare(layout_, full_command);
+  controller_.declare(layout_);
+  ledger_.declare(layout_);
 
   wd_ = std::make_unique<Workspace<double>>(n);
   wd_->backend = find_backend(cfg_.backend).make(model_);
   wj_ = std::make_unique<Workspace<Dual>>(n);
   wj_->backend = find_backend(cfg_.backend).make_dual(model_);
-  for (const auto& f : cfg_.friction) {
-    needs_bias_ |= f.model == FrictionModel::kPaper || f.model == FrictionModel::kKarnopp;
-    hybrid_ |= f.model == FrictionModel::kHybrid;
-  }
-  u_held_.assign(n, 0.0);
-  integral_.assign(n, 0.0);
-  mode_.assign(n, SlipMode::kStuck);
+  ds_.controller.u_held.assign(n, 0.0);
+  ds_.controller.integral.assign(n, 0.0);
+  ds_.modes.assign(n, SlipMode::kStuck);
   xtmp_.resize(layout_.size);
   ftmp_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
@@ -149,136 +96,78 @@ Plant::Plant(PlantConfig config) : cfg_(std::move(config)) {
 Plant::~Plant() = default;
 
 const ReferenceSample& Plant::current_reference(double t) {
-  if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ref_held_;
-  if (t != ref_time_) {
-    cfg_.reference->eval(t, ref_now_, ref_segment_, extend_piece_);
-    ref_time_ = t;
+  if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ds_.ref_held;
+  if (t != ds_.ref_time) {
+    cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    ds_.ref_time = t;
   }
-  return ref_now_;
+  return ds_.ref_now;
 }
 
 const ReferenceSample& Plant::reference_at(double t) { return current_reference(t); }
 
 template <class S>
-void Plant::controller(double t, const S* x, Workspace<S>& w) {
-  const int n = layout_.n;
-  if (cfg_.controller == ControllerMode::kSampled) {
-    for (int j = 0; j < n; ++j) w.u[j] = S(u_held_[j]);
-    return;
-  }
-  if (cfg_.controller == ControllerMode::kNone) {
-    for (int j = 0; j < n; ++j) w.u[j] = S(0);
-    return;
-  }
-  const ReferenceSample& r = current_reference(t);
-  for (int j = 0; j < n; ++j) {
-    // Motor-side angles: the card reads the motor encoder.
-    const PivParams& P = cfg_.piv[j];
-    const double Z = cfg_.robot.joints[j].gear_ratio;
-    const S e = S(Z) * (S(r.q[j]) - w.q[j]);
-    const S z = x[layout_.z + j];
-    const S v = S(P.kp) * e + S(P.ki) * z - S(P.kv * Z) * w.qd[j] + S(P.kvff * Z * r.qd[j]) +
-                S(P.kaff * Z * r.qdd[j]) + S(P.offset);
-    w.u[j] = saturate(v, P.output_limit);
+void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
+  if (controller_.mode() == ControllerMode::kContinuous) {
+    controller_.continuous_output(current_reference(t), x, layout_.z, w);
+  } else {
+    controller_.held_output(ds_.controller, w);
   }
 }
 
+// Amplifier and motor: e_a, the current (state or algebraic), K i; the
+// electrical powers for the ledger.
 template <class S>
-void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
-  const int n = layout_.n;
-  for (int j = 0; j < n; ++j) {
-    w.q[j] = x[layout_.q + j];
-    w.qd[j] = x[layout_.qd + j];
-  }
-  controller(t, x, w);
-  S p_in(0), p_cu(0), p_f(0);  // energy ledger: power in, copper and friction losses [W]
-  // Drive: amplifier and motor.
-  for (int j = 0; j < n; ++j) {
+void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
+  for (int j = 0; j < layout_.n; ++j) {
     if (!cfg_.drive) {
       w.tm[j] = S(0);
       w.ea[j] = S(0);
       continue;
     }
-    const AmplifierParams& A = cfg_.amplifier[j];
-    const MotorParams& M = cfg_.motor[j];
-    const S wm = S(cfg_.robot.joints[j].gear_ratio) * w.qd[j];
-    const S ea = saturate(S(A.gain) * w.u[j], A.voltage_limit);
+    const S wm = S(body_.gear_ratio(j)) * w.qd[j];
+    const S ea = amplifier_.output(j, w.u[j]);
     w.ea[j] = ea;
-    const S R = S(A.output_resistance + M.resistance);
-    S i;
-    if (layout_.i >= 0) {
-      i = x[layout_.i + j];
-      xdot[layout_.i + j] = (ea - R * i - S(M.torque_constant) * wm) / S(M.inductance);
-    } else {
-      i = (ea - S(M.torque_constant) * wm) / R;
-    }
-    w.tm[j] = S(M.torque_constant) * i;
-    if (layout_.e >= 0) {
-      p_in += ea * i;
-      p_cu += R * i * i;
+    const S i = motor_.current(j, ea, wm, x, xdot, layout_.i);
+    w.tm[j] = S(motor_.params(j).torque_constant) * i;
+    if (ledger_.on()) {
+      w.p_in += ea * i;
+      w.p_cu += S(motor_.loop_resistance(j)) * i * i;
     }
   }
-  // Friction and the joint torques.
-  const bool hybrid = hybrid_ && friction_on_;
-  const bool need_bias = needs_bias_ || hybrid;
+}
+
+// Friction, the joint torques and the accelerations (constrained where the
+// hybrid model holds a joint).
+template <class S>
+void Plant::friction_and_accelerations(Workspace<S>& w) {
+  const bool need_bias = friction_on_ && friction_.needs_applied_torque();
   if (need_bias) w.backend->bias(w.q, w.qd, w.h);
-  for (int j = 0; j < n; ++j) {
-    const double Z = cfg_.robot.joints[j].gear_ratio;
+  for (int j = 0; j < layout_.n; ++j) {
+    const double Z = body_.gear_ratio(j);
     const S wm = S(Z) * w.qd[j];
     w.applied[j] = need_bias ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
-    const S tf = friction_on_ ? friction_torque(cfg_.friction[j], wm, w.applied[j], mode_[j]) : S(0);
+    const S tf = friction_on_ ? friction_.torque(j, wm, w.applied[j], ds_.modes) : S(0);
     w.tau[j] = S(Z) * (w.tm[j] - tf);
-    if (layout_.e >= 0) p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
+    if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
-  if (!hybrid) {
-    w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
+  if (friction_on_ && friction_.has_events()) {
+    body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, ds_.modes); });
   } else {
-    // Hybrid stick/slip: a stuck joint has qdd_j = 0 and its friction is
-    // whatever holds it. Solve H qdd = tau - h with the stuck joints' rows and
-    // columns replaced by the identity (the free block is unchanged since
-    // qdd_stuck = 0); then each stuck joint's row of H gives the torque its
-    // friction must resist: applied = K i - (h_j + H_j. qdd) / Z_j.
-    const auto stuck = [&](int j) {
-      return cfg_.friction[j].model == FrictionModel::kHybrid && mode_[j] == SlipMode::kStuck;
-    };
-    w.backend->mass_matrix(w.q, w.H);
-    w.Hc = w.H;
-    for (int j = 0; j < n; ++j) {
-      w.qdd[j] = w.tau[j] - w.h[j];
-      if (!stuck(j)) continue;
-      w.qdd[j] = S(0);
-      for (int k = 0; k < n; ++k) w.Hc(j, k) = w.Hc(k, j) = S(k == j ? 1 : 0);
-    }
-    w.chol.factor(w.Hc);
-    w.chol.solve_in_place(w.qdd);
-    for (int j = 0; j < n; ++j) {
-      if (!stuck(j)) continue;
-      S sum = w.h[j];
-      for (int k = 0; k < n; ++k) sum += w.H(j, k) * w.qdd[k];
-      w.applied[j] = w.tm[j] - sum / S(cfg_.robot.joints[j].gear_ratio);
-    }
+    body_.accelerations(w);
   }
-  for (int j = 0; j < n; ++j) {
-    xdot[layout_.q + j] = w.qd[j];
-    xdot[layout_.qd + j] = w.qdd[j];
-  }
-  if (layout_.e >= 0) {
-    xdot[layout_.e] = p_in;
-    xdot[layout_.e + 1] = p_cu;
-    xdot[layout_.e + 2] = p_f;
-  }
-  if (layout_.z >= 0) {
-    const ReferenceSample& r = current_reference(t);
-    for (int j = 0; j < n; ++j) {
-      const PivParams& P = cfg_.piv[j];
-      const S e = S(cfg_.robot.joints[j].gear_ratio) * (S(r.q[j]) - w.q[j]);
-      const S iz = S(P.ki) * x[layout_.z + j];
-      const S ie = S(P.ki) * e;
-      const bool windup = (iz >= S(P.integral_limit) && ie > S(0)) ||
-                          (iz <= S(-P.integral_limit) && ie < S(0));
-      xdot[layout_.z + j] = windup ? S(0) : e;
-    }
-  }
+}
+
+template <class S>
+void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
+  body_.load(layout_, x, w);
+  controller_output(t, x, w);
+  ledger_.reset(w);
+  drive(x, xdot, w);
+  friction_and_accelerations(w);
+  body_.store(layout_, w, xdot);
+  ledger_.store(layout_, w, xdot);
+  if (layout_.z >= 0) controller_.integral_rates(current_reference(t), x, layout_.z, w, xdot);
 }
 
 void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
@@ -346,10 +235,10 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
   // a first-order forward difference of step sqrt(eps) max(1, t).
   constexpr double d = 1e-5;  // [s]
   struct Continued {  // the continued piece for the duration of the difference, even on a throw
-    explicit Continued(Plant& p) : p_(p) { p_.extend_piece_ = true, p_.ref_time_ = std::nan(""); }
-    ~Continued() { p_.extend_piece_ = false, p_.ref_time_ = std::nan(""); }  // the cache held a continued piece
-    Plant& p_;
-  } continued(*this);
+    explicit Continued(PlantDiscreteState& s) : s_(s) { s_.extend_piece = true, s_.ref_time = std::nan(""); }
+    ~Continued() { s_.extend_piece = false, s_.ref_time = std::nan(""); }  // the cache held a continued piece
+    PlantDiscreteState& s_;
+  } continued(ds_);
   rhs(t, x, dfdt);
   rhs(t + d, x, ft_[0].data());
   rhs(t + 2 * d, x, ft_[1].data());
@@ -371,68 +260,49 @@ double Plant::next_time_event(double t) const {
   return next;
 }
 
-void Plant::sample_controller(double t, const double* x) {
-  const ReferenceSample& r = current_reference(t);
-  for (int j = 0; j < layout_.n; ++j) {
-    const PivParams& P = cfg_.piv[j];
-    const double Z = cfg_.robot.joints[j].gear_ratio;
-    const double q = x[layout_.q + j], qd = x[layout_.qd + j];
-    const double e = Z * (r.q[j] - q);
-    integral_[j] += e * cfg_.servo_period;
-    if (P.ki != 0) {
-      const double lim = P.integral_limit / std::abs(P.ki);
-      integral_[j] = std::clamp(integral_[j], -lim, lim);
-    }
-    const double v = P.kp * e + P.ki * integral_[j] - P.kv * Z * qd + P.kvff * Z * r.qd[j] +
-                     P.kaff * Z * r.qdd[j] + P.offset;
-    u_held_[j] = saturate(v, P.output_limit);
-  }
-}
-
 void Plant::on_time_event(double t, double* x) {
   if (cfg_.controller == ControllerMode::kNone) return;
   if (cfg_.reference) {  // the reference's smooth piece from here on
-    ref_segment_ = cfg_.reference->segment_after(t);
-    ref_time_ = std::numeric_limits<double>::quiet_NaN();
+    ds_.ref_segment = cfg_.reference->segment_after(t);
+    ds_.ref_time = std::numeric_limits<double>::quiet_NaN();
   }
   if (cfg_.reference && cfg_.setpoint_interval > 0 && on_grid(t, cfg_.setpoint_interval)) {
-    cfg_.reference->eval(t, ref_held_);
+    cfg_.reference->eval(t, ds_.ref_held);
   }
   if (cfg_.controller == ControllerMode::kSampled && on_grid(t, cfg_.servo_period)) {
-    sample_controller(t, x);
+    controller_.sample(current_reference(t), x, layout_.q, layout_.qd, ds_.controller);
   }
   settle_modes(t, x);
 }
 
-int Plant::num_roots() const { return hybrid_ ? layout_.n : 0; }
+int Plant::num_roots() const { return friction_.has_events() ? layout_.n : 0; }
 
 void Plant::roots(double t, const double* x, double* g) {
   rhs(t, x, ftmp_.data());  // fills the applied torques
   for (int j = 0; j < layout_.n; ++j) {
-    const FrictionParams& f = cfg_.friction[j];
-    if (f.model != FrictionModel::kHybrid) {
+    if (!friction_.has_events(j)) {
       g[j] = 1.0;
       continue;
     }
-    const double wm = cfg_.robot.joints[j].gear_ratio * x[layout_.qd + j];
-    g[j] = mode_[j] == SlipMode::kStuck ? f.static_torque - std::abs(wd_->applied[j])
-                                        : wm * static_cast<int>(mode_[j]);
+    const double wm = body_.gear_ratio(j) * x[layout_.qd + j];
+    g[j] = ds_.modes[j] == SlipMode::kStuck ? friction_.params(j).static_torque - std::abs(applied_torque(j))
+                                            : wm * static_cast<int>(ds_.modes[j]);
   }
 }
 
 void Plant::on_root(int j, double t, double* x) {
-  if (mode_[j] != SlipMode::kStuck) {  // the speed reached zero: stick
+  if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick
     x[layout_.qd + j] = 0.0;
-    mode_[j] = SlipMode::kStuck;
+    ds_.modes[j] = SlipMode::kStuck;
   } else {  // break-away: |applied| crossed Fs, slip in its direction
     rhs(t, x, ftmp_.data());
-    mode_[j] = wd_->applied[j] >= 0 ? SlipMode::kPositive : SlipMode::kNegative;
+    ds_.modes[j] = applied_torque(j) >= 0 ? SlipMode::kPositive : SlipMode::kNegative;
   }
   settle_modes(t, x);
 }
 
 void Plant::settle_modes(double t, double* x) {
-  if (!hybrid_) return;
+  if (!friction_.has_events()) return;
   // A mode switch (or a controller sample) changes every stuck joint's applied
   // torque at once through H; release, one at a time, the stuck joint whose
   // applied torque exceeds Fs the most, until the modes are consistent. Each
@@ -444,56 +314,60 @@ void Plant::settle_modes(double t, double* x) {
     int worst = -1;
     double excess = 0.0;
     for (int j = 0; j < layout_.n; ++j) {
-      const FrictionParams& f = cfg_.friction[j];
-      if (f.model != FrictionModel::kHybrid || mode_[j] != SlipMode::kStuck) continue;
-      const double e = std::abs(wd_->applied[j]) - f.static_torque;
+      if (!friction_.stuck(j, ds_.modes)) continue;
+      const double e = std::abs(applied_torque(j)) - friction_.params(j).static_torque;
       if (e > excess) excess = e, worst = j;
     }
     if (worst < 0) return;
-    mode_[worst] = wd_->applied[worst] > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+    ds_.modes[worst] = applied_torque(worst) > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+  }
+}
+
+// The discrete state at t = 0: no held output or integral, every hybrid
+// joint stuck, the set-point the reference's start (or, without a reference,
+// the initial pose q, which a controller then holds).
+void Plant::start_discrete_state(const Eigen::VectorXd& q) {
+  ds_.ref_time = std::numeric_limits<double>::quiet_NaN();
+  ds_.ref_segment = 0;
+  std::fill(ds_.controller.u_held.begin(), ds_.controller.u_held.end(), 0.0);
+  std::fill(ds_.controller.integral.begin(), ds_.controller.integral.end(), 0.0);
+  std::fill(ds_.modes.begin(), ds_.modes.end(), SlipMode::kStuck);
+  if (cfg_.reference) return;
+  ds_.ref_held.q.setZero();
+  ds_.ref_held.qd.setZero();
+  ds_.ref_held.qdd.setZero();
+  ds_.ref_held.p.setZero();
+  ds_.ref_held.v.setZero();
+  ds_.ref_held.q.head(layout_.n) = q;
+}
+
+// At rest at q: the currents hold gravity and the PIV integrals supply the
+// voltage that drives them.
+void Plant::hold_gravity(const Eigen::VectorXd& q, double* x) {
+  Eigen::VectorXd g(layout_.n);
+  wd_->backend->gravity(q, g);
+  for (int j = 0; j < layout_.n; ++j) {
+    const double i = motor_.holding_current(j, g[j], body_.gear_ratio(j));
+    if (layout_.i >= 0) x[layout_.i + j] = i;
+    const double I = controller_.holding_integral(j, motor_.loop_resistance(j) * i / amplifier_.params(j).gain);
+    if (layout_.z >= 0) x[layout_.z + j] = I;
+    ds_.controller.integral[static_cast<std::size_t>(j)] = I;
   }
 }
 
 void Plant::initial_state(double* x) {
   const int n = layout_.n;
-  ref_time_ = std::numeric_limits<double>::quiet_NaN();
-  ref_segment_ = 0;
-  std::fill(u_held_.begin(), u_held_.end(), 0.0);
-  std::fill(integral_.begin(), integral_.end(), 0.0);
-  std::fill(mode_.begin(), mode_.end(), SlipMode::kStuck);
   std::fill(x, x + layout_.size, 0.0);
   Eigen::VectorXd q(n);
   if (cfg_.reference) {
-    cfg_.reference->eval(0.0, ref_held_);
-    q = ref_held_.q.head(n);
+    cfg_.reference->eval(0.0, ds_.ref_held);
+    q = ds_.ref_held.q.head(n);
   } else {
     q = cfg_.q0;
-    // Without a reference a controller holds the initial pose.
-    ref_held_ = ReferenceSample{};
-    ref_held_.q.setZero();
-    ref_held_.qd.setZero();
-    ref_held_.qdd.setZero();
-    ref_held_.q.head(n) = q;
   }
+  start_discrete_state(q);
   for (int j = 0; j < n; ++j) x[layout_.q + j] = q[j];
-  if (cfg_.drive) {
-    // At rest on the reference: currents hold gravity, integrals supply the voltage.
-    Eigen::VectorXd g(n);
-    wd_->backend->gravity(q, g);
-    for (int j = 0; j < n; ++j) {
-      const MotorParams& M = cfg_.motor[j];
-      const AmplifierParams& A = cfg_.amplifier[j];
-      const PivParams& P = cfg_.piv[j];
-      const double i = g[j] / (cfg_.robot.joints[j].gear_ratio * M.torque_constant);
-      if (layout_.i >= 0) x[layout_.i + j] = i;
-      const double u = (A.output_resistance + M.resistance) * i / A.gain - P.offset;
-      const double I = P.ki != 0 ? std::clamp(u / P.ki, -P.integral_limit / std::abs(P.ki),
-                                              P.integral_limit / std::abs(P.ki))
-                                 : 0.0;
-      if (layout_.z >= 0) x[layout_.z + j] = I;
-      integral_[j] = I;
-    }
-  }
+  if (cfg_.drive) hold_gravity(q, x);
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
   settle_modes(0.0, x);  // hybrid joints start stuck unless already pushed past Fs
 }
@@ -512,7 +386,7 @@ double Plant::mechanical_energy(const double* x, double* kinetic) {
 double Plant::magnetic_energy(const double* x) const {
   if (layout_.i < 0) return 0.0;
   double E = 0;
-  for (int j = 0; j < layout_.n; ++j) E += 0.5 * cfg_.motor[j].inductance * x[layout_.i + j] * x[layout_.i + j];
+  for (int j = 0; j < layout_.n; ++j) E += 0.5 * motor_.params(j).inductance * x[layout_.i + j] * x[layout_.i + j];
   return E;
 }
 
@@ -532,7 +406,7 @@ void Plant::tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) c
 void Plant::drive_signals(double t, const double* x, DriveSignals* out) {
   eval(t, x, ftmp_.data(), *wd_);
   for (int j = 0; j < layout_.n; ++j) {
-    out[j] = {wd_->u[j], wd_->ea[j], cfg_.drive ? wd_->tm[j] / cfg_.motor[j].torque_constant : 0.0};
+    out[j] = {wd_->u[j], wd_->ea[j], cfg_.drive ? wd_->tm[j] / motor_.params(j).torque_constant : 0.0};
   }
 }
 

@@ -1,16 +1,22 @@
-// The coupled electro-mechanical plant as one state-space ODE x' = f(t, x).
-//
-// Blocks, per simulated joint (drive.hpp for the laws):
+// The coupled electro-mechanical plant as one state-space ODE x' = f(t, x),
+// assembled from blocks (models/plant/blocks/), per simulated joint:
 //   reference -> PIV controller -> amplifier -> DC motor -> gear and rotor
 //   -> friction -> rigid body (any back-end from the registry)
-// A scene includes only what it needs, and leaving a block out removes its
-// states. The state is [q | qd | i | z] over the n simulated joints:
-//   q, qd   always (joints n+1..6 are held: their links ride on link n)
+// plus an optional energy ledger. A scene includes only what it needs, and
+// leaving a block out removes its states. Each block declares its slice of
+// the state (names, typical magnitudes) and computes its derivatives; its
+// parameters are const. The state is [q | qd | i | z | e] over the n
+// simulated joints:
+//   q, qd   rigid body, always (joints n+1..6 are held: their links ride on link n)
 //   i       motor currents, only with a drive whose La > 0 (La = 0: algebraic)
 //   z       PIV integrals, only with a continuous controller
-// Discrete parts are events for the integrators: controller samples and
-// set-point updates at known times (next_time_event / on_time_event), and,
-// for the hybrid friction model, root functions (roots / on_root).
+//   e       the energy ledger, when asked for
+// The scratch of one evaluation (PlantWorkspace) and the discrete state
+// (PlantDiscreteState: held set-point and controller output, stick/slip
+// modes) are separate objects. Discrete parts are events for the
+// integrators: controller samples and set-point updates at known times
+// (next_time_event / on_time_event), and, for the hybrid friction model,
+// root functions (roots / on_root).
 //
 // The torque that friction must resist at rest ("applied torque", motor
 // side) is K i - h_j / Z_j for the paper's rule and Karnopp (the coupling
@@ -26,12 +32,18 @@
 #include <Eigen/Core>
 
 #include "models/dynamics/backend.hpp"
-#include "models/robot/drive.hpp"
+#include "models/plant/blocks/amplifier.hpp"
+#include "models/plant/blocks/energy_ledger.hpp"
+#include "models/plant/blocks/friction.hpp"
+#include "models/plant/blocks/motor.hpp"
+#include "models/plant/blocks/piv_controller.hpp"
+#include "models/plant/blocks/rigid_body.hpp"
+#include "models/plant/state_layout.hpp"
+#include "models/plant/workspace.hpp"
 #include "models/reference/trajectory.hpp"
+#include "models/robot/drive.hpp"
 
 namespace pumasim {
-
-enum class ControllerMode { kNone, kContinuous, kSampled };
 
 struct PlantConfig {
   RobotModel robot;                      // all joints
@@ -64,16 +76,17 @@ struct DriveSignals {
   double i = 0;   // motor current [A]
 };
 
-struct StateLayout {
-  int n = 0;      // simulated joints
-  int q = 0;      // offsets of the blocks; -1 when absent
-  int qd = 0;
-  int i = -1;
-  int z = -1;
-  int e = -1;     // energy ledger: e_in, e_copper, e_friction
-  int size = 0;
-  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1.., e_in, e_copper, e_friction
-  int index(const std::string& name) const;  // -1 if absent
+// What changes only at events: the reference as the controller sees it (the
+// held set-point, the cached sample and the smooth piece since the last time
+// event), the sampled controller's held output and integral, and the hybrid
+// friction's stuck/slipping modes.
+struct PlantDiscreteState {
+  ReferenceSample ref_held{}, ref_now{};
+  double ref_time = std::numeric_limits<double>::quiet_NaN();
+  int ref_segment = 0;
+  bool extend_piece = false;  // inside time_derivative: the reference piece continued past its ends
+  PivDiscreteState controller;
+  FrictionModes modes;
 };
 
 class Plant {
@@ -88,7 +101,7 @@ class Plant {
   int size() const { return layout_.size; }
   // A typical magnitude of state component i, in its unit (the integrators'
   // absolute tolerance is atol times this).
-  double tolerance_scale(int i) const { return scale_[static_cast<std::size_t>(i)]; }
+  double tolerance_scale(int i) const { return layout_.scale[static_cast<std::size_t>(i)]; }
 
   // x(0): on the reference at rest, currents and integrals in equilibrium
   // with gravity; also (re)starts the discrete state at t = 0.
@@ -126,7 +139,7 @@ class Plant {
   void roots(double t, const double* x, double* g);
   void on_root(int joint, double t, double* x);
   void settle_modes(double t, double* x);
-  SlipMode slip_mode(int joint) const { return mode_[static_cast<std::size_t>(joint)]; }
+  SlipMode slip_mode(int joint) const { return ds_.modes[static_cast<std::size_t>(joint)]; }
 
   // Stored energy at x [J]: mechanical (1/2 qd' H qd + V(q), rotor inertia
   // included) and magnetic (1/2 La i^2). With the ledger, the balance
@@ -153,32 +166,37 @@ class Plant {
 
  private:
   template <class S>
-  struct Workspace;
+  using Workspace = PlantWorkspace<S>;
+  static PlantConfig checked(PlantConfig config);
   template <class S>
   void eval(double t, const S* x, S* xdot, Workspace<S>& w);
   template <class S>
-  void controller(double t, const S* x, Workspace<S>& w);
+  void controller_output(double t, const S* x, Workspace<S>& w);
+  template <class S>
+  void drive(const S* x, S* xdot, Workspace<S>& w);
+  template <class S>
+  void friction_and_accelerations(Workspace<S>& w);
   const ReferenceSample& current_reference(double t);
-  void sample_controller(double t, const double* x);
+  void start_discrete_state(const Eigen::VectorXd& q);
+  void hold_gravity(const Eigen::VectorXd& q, double* x);
+  double applied_torque(int joint) const { return wd_->applied[joint]; }
 
-  PlantConfig cfg_;
+  const PlantConfig cfg_;
+  const RobotModel model_;  // the simulated joints (held links merged)
+  // The blocks.
+  const RigidBodyBlock body_;
+  const AmplifierBlock amplifier_;
+  const MotorBlock motor_;
+  const FrictionBlock friction_;
+  const PivController controller_;
+  const EnergyLedgerBlock ledger_;
   StateLayout layout_;
-  std::vector<double> scale_;  // tolerance_scale per component
-  RobotModel model_;  // the simulated joints (held links merged)
   std::unique_ptr<Workspace<double>> wd_;
   std::unique_ptr<Workspace<Dual>> wj_;
-  // Discrete state.
-  ReferenceSample ref_held_{}, ref_now_{};
-  double ref_time_ = std::numeric_limits<double>::quiet_NaN();
-  int ref_segment_ = 0;  // the reference's smooth piece since the last time event (Reference::eval)
-  std::vector<double> u_held_, integral_;
-  std::vector<SlipMode> mode_;
+  PlantDiscreteState ds_;
   std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
   std::vector<double> ft_[2];        // time_derivative scratch
-  bool extend_piece_ = false;        // inside time_derivative: the reference piece continued past its ends
   bool friction_on_ = true;          // off only inside rhs_split
-  bool needs_bias_ = false;          // paper or Karnopp friction: the applied torque needs h
-  bool hybrid_ = false;              // some joint has the hybrid stick/slip model
 };
 
 }  // namespace pumasim

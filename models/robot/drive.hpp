@@ -26,26 +26,12 @@ struct MotorParams {
   double torque_constant = 0.1;  // K [N m/A] = back-EMF constant [V s/rad]
 };
 
-enum class FrictionModel : std::uint8_t {
-  kNone,
-  kViscous,  // B w_m
-  // The paper's rule (sec. 4): at "zero" speed the friction balances the applied
-  // torque up to the static level, else it is the kinetic level against the
-  // motion. Floating-point speed is never exactly zero, so "zero" is
-  // |w_m| <= zero_speed, a named parameter (tiny by default: the rule then
-  // almost always sees motion, as in the paper's LabVIEW test ABS(V) = 0).
-  kPaper,
-  // Exact hybrid stick/slip: a stuck joint stays stuck (qd = qdd = 0) while the
-  // torque it must resist is within the static level; events at the speed's
-  // zero crossings and at break-away (needs an integrator that finds roots).
-  kHybrid,
-  // Karnopp (1985): the paper's rule with a finite band |w_m| < zero_speed.
-  kKarnopp,
-  // Smooth: Fk tanh(w_m / speed_scale); small speed_scale makes the ODE stiff.
-  kTanh,
-};
-
-const char* to_string(FrictionModel m);
+// The friction laws (models/plant/friction/: one file each, and their
+// registry): none, viscous B w_m, the paper's rule (sec. 4: at "zero" speed
+// |w_m| <= zero_speed the friction balances the applied torque up to the static
+// level), exact hybrid stick/slip with events, Karnopp (the paper's rule with a
+// finite band), and smooth tanh.
+enum class FrictionModel : std::uint8_t { kNone, kViscous, kPaper, kHybrid, kKarnopp, kTanh };
 
 struct FrictionParams {
   FrictionModel model = FrictionModel::kNone;
@@ -64,35 +50,7 @@ S sign_of(const S& x) {
   return x > S(0) ? S(1) : (x < S(0) ? S(-1) : S(0));
 }
 
-// Friction torque on the motor shaft, opposing motion [N m, motor side].
-// w: shaft speed; tau_applied: the torque the friction must resist when the
-// shaft is at rest (see Plant); mode: the hybrid model's slip state.
-template <class S>
-S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, SlipMode mode) {
-  using std::tanh;
-  switch (f.model) {
-    case FrictionModel::kNone: return S(0);
-    case FrictionModel::kViscous: return S(f.viscous) * w;
-    case FrictionModel::kTanh: return S(f.kinetic_torque) * tanh(w / S(f.speed_scale)) + S(f.viscous) * w;
-    case FrictionModel::kPaper:
-    case FrictionModel::kKarnopp: {
-      const S aw = w < S(0) ? S(-w) : w;
-      if (aw <= S(f.zero_speed)) {
-        const S Fs(f.static_torque);
-        if (tau_applied > Fs) return Fs;
-        if (tau_applied < S(-Fs)) return -Fs;
-        return tau_applied;  // sticks: friction balances the applied torque
-      }
-      return S(f.kinetic_torque) * sign_of(w) + S(f.viscous) * w;
-    }
-    case FrictionModel::kHybrid:
-      if (mode == SlipMode::kStuck) return tau_applied;  // the constraint force (Plant)
-      return S(f.kinetic_torque) * S(static_cast<double>(static_cast<int>(mode))) + S(f.viscous) * w;
-  }
-  return S(0);
-}
-
-// PIV&F law of the Compumotor 6000-series servo cards (shared/reference/puma560.md,
+// PIV&F law of the Compumotor 6000-series servo cards (models/robots/puma560_sources.md,
 // sec. 7, from the 6250 user guide, ch. 4): P and I on the position error, V on
 // the measured velocity (feedback, not error), velocity and acceleration
 // feed-forward, an integral windup limit, output saturation at +-10 V:

@@ -202,11 +202,8 @@ void write_drive(toml::table& doc, const PlantConfig& pc) {
 // ---------------------------------------------------------------- [friction]
 
 std::vector<std::pair<std::string, FrictionModel>> friction_models() {
-  std::vector<std::pair<std::string, FrictionModel>> out;
-  for (FrictionModel m : {FrictionModel::kNone, FrictionModel::kViscous, FrictionModel::kPaper,
-                          FrictionModel::kHybrid, FrictionModel::kKarnopp, FrictionModel::kTanh}) {
-    out.emplace_back(to_string(m), m);
-  }
+  std::vector<std::pair<std::string, FrictionModel>> out;  // the plant's registry of laws, in its order
+  FrictionLaws::for_each([&](auto law) { out.emplace_back(decltype(law)::kName, decltype(law)::kModel); });
   return out;
 }
 

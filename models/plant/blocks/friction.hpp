@@ -1,0 +1,46 @@
+// Friction block: one law per joint from the registry (models/plant/friction/),
+// on the motor shaft. No continuous state; the hybrid law's stuck/slipping
+// modes are discrete state (FrictionModes), switched by the plant's root
+// functions.
+#pragma once
+
+#include <vector>
+
+#include "models/plant/friction/registry.hpp"
+#include "models/plant/workspace.hpp"
+
+namespace pumasim {
+
+using FrictionModes = std::vector<SlipMode>;
+
+class FrictionBlock {
+ public:
+  explicit FrictionBlock(const std::vector<FrictionParams>& params) : p_(params) {
+    for (const auto& f : p_) {
+      needs_applied_ |= pumasim::needs_applied_torque(f.model);
+      events_ |= has_stick_slip_events(f.model);
+    }
+  }
+  const FrictionParams& params(int j) const { return p_[static_cast<std::size_t>(j)]; }
+  // Some joint's law reads the torque it must resist at rest (so f needs h).
+  bool needs_applied_torque() const { return needs_applied_; }
+  // Some joint's law has stuck/slipping modes switched at root functions.
+  bool has_events() const { return events_; }
+  bool has_events(int j) const { return pumasim::has_stick_slip_events(params(j).model); }
+  // Joint j is held by its friction (the rigid body then constrains it).
+  bool stuck(int j, const FrictionModes& modes) const {
+    return has_events(j) && modes[static_cast<std::size_t>(j)] == SlipMode::kStuck;
+  }
+
+  template <class S>
+  S torque(int j, const S& wm, const S& applied, const FrictionModes& modes) const {
+    return friction_torque(params(j), wm, applied, modes[static_cast<std::size_t>(j)]);
+  }
+
+ private:
+  const std::vector<FrictionParams> p_;
+  bool needs_applied_ = false;
+  bool events_ = false;
+};
+
+}  // namespace pumasim

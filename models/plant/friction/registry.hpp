@@ -1,0 +1,64 @@
+// The friction models: one file per law (this folder) and one line in
+// FrictionLaws below. A law is a type with
+//   kModel               its enumerator (models/robot/drive.hpp: the scene's name for it)
+//   kName                its name in scene files
+//   kNeedsAppliedTorque  it reads the torque it must resist at rest (the plant then computes h)
+//   kStickSlipEvents     its stuck/slipping modes switch at root functions (the hybrid model)
+//   torque<S>(params, w_m, applied, mode)   the friction torque on the motor shaft [N m]
+// Dispatch is a compile-time chain of comparisons over the list: no virtual
+// call and no lookup by name in the right-hand side.
+#pragma once
+
+#include <string>
+
+#include "models/plant/friction/hybrid.hpp"
+#include "models/plant/friction/none.hpp"
+#include "models/plant/friction/stick_band.hpp"
+#include "models/plant/friction/tanh.hpp"
+#include "models/plant/friction/viscous.hpp"
+
+namespace pumasim {
+
+template <class... Laws>
+struct FrictionLawList {
+  template <class F>
+  static void visit(FrictionModel m, F&& f) {
+    ((m == Laws::kModel ? (f(Laws{}), true) : false) || ...);
+  }
+  template <class F>
+  static void for_each(F&& f) {
+    (f(Laws{}), ...);
+  }
+};
+
+using FrictionLaws =
+    FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction, TanhFriction>;
+
+// Friction torque on the motor shaft, opposing motion [N m, motor side].
+// w: shaft speed; tau_applied: the torque the friction must resist when the
+// shaft is at rest (see Plant); mode: the hybrid model's slip state.
+template <class S>
+S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, SlipMode mode) {
+  S tf(0);
+  FrictionLaws::visit(f.model, [&](auto law) { tf = decltype(law)::torque(f, w, tau_applied, mode); });
+  return tf;
+}
+
+inline bool needs_applied_torque(FrictionModel m) {
+  bool r = false;
+  FrictionLaws::visit(m, [&](auto law) { r = decltype(law)::kNeedsAppliedTorque; });
+  return r;
+}
+
+inline bool has_stick_slip_events(FrictionModel m) {
+  bool r = false;
+  FrictionLaws::visit(m, [&](auto law) { r = decltype(law)::kStickSlipEvents; });
+  return r;
+}
+
+// The model's name in scene files ("?" for none registered).
+const char* to_string(FrictionModel m);
+// The model named `name`; false if no law has that name.
+bool friction_model_from_name(const std::string& name, FrictionModel* m);
+
+}  // namespace pumasim

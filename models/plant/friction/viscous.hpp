@@ -1,0 +1,20 @@
+// Viscous friction on the motor shaft: B w_m.
+#pragma once
+
+#include "models/robot/drive.hpp"
+
+namespace pumasim {
+
+struct ViscousFriction {
+  static constexpr FrictionModel kModel = FrictionModel::kViscous;
+  static constexpr const char* kName = "viscous";
+  static constexpr bool kNeedsAppliedTorque = false;
+  static constexpr bool kStickSlipEvents = false;
+
+  template <class S>
+  static S torque(const FrictionParams& f, const S& w, const S&, SlipMode) {
+    return S(f.viscous) * w;
+  }
+};
+
+}  // namespace pumasim

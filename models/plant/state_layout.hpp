@@ -1,0 +1,32 @@
+// The plant's state vector as slices that the blocks declare: each block
+// appends its components (names and typical magnitudes) and keeps the offset
+// it was given.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace pumasim {
+
+struct StateLayout {
+  int n = 0;      // simulated joints
+  int q = 0;      // offsets of the slices; -1 when absent
+  int qd = 0;
+  int i = -1;
+  int z = -1;
+  int e = -1;     // energy ledger: e_in, e_copper, e_friction
+  int size = 0;
+  std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1.., e_in, e_copper, e_friction
+  // A typical magnitude of each component, in its unit (the integrators'
+  // absolute tolerance is atol times this).
+  std::vector<double> scale;
+
+  // Appends a slice; returns its offset.
+  int add(const std::vector<std::string>& slice_names, const std::vector<double>& slice_scale);
+  int index(const std::string& name) const;  // -1 if absent
+};
+
+// "q1", "q2", ... "q<n>".
+std::vector<std::string> joint_names(const char* prefix, int n);
+
+}  // namespace pumasim
