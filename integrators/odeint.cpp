@@ -104,7 +104,7 @@ class OdeintBase : public Integrator {
     if (h_ <= 0) h_ = std::min(1e-4, std::max(t_stop - t_, 0.0));
     for (;;) {
       // A stop at the same instant (time_rule.hpp) is reached.
-      if (!before(t_, t_stop)) {
+      if (!before(t_, t_stop, t_stop)) {
         t_start_ = t_ = t_stop;
         return {};
       }

@@ -1,7 +1,9 @@
-// The one rule for "the same time": two instants closer than rounding of
-// times of their size, 1e-12 max(1, |a|, |b|) [s], are the same instant. A
-// stop computed apart from the time reached (k * period against a sum of
-// steps) lands within it; a step shorter than it would drag a step-size
+// The one rule for "the same time": two instants of a run closer than
+// 1e-12 max(1, |horizon|) [s] are the same instant, the horizon being the
+// largest time in play (the driver: the run's end; a stepper: its stop). A
+// stop computed apart from the time reached (k * period or k * output
+// interval against a sum of fixed steps, whose rounding grows with the number
+// of steps) lands within it; a step shorter than it would drag a step-size
 // controller down to an underflow. The driver (experiments/simulation: end of
 // run, outputs, events due) and the odeint steppers (a stop reached) decide
 // with it; CVODE and ARKODE stop exactly at their stop time. The plant's
@@ -17,14 +19,16 @@ namespace pumasim {
 
 inline constexpr double kSameTimeRelative = 1e-12;
 
+// The width of one instant in a run whose times reach `horizon` [s].
+inline double time_tolerance(double horizon) { return kSameTimeRelative * std::max(1.0, std::abs(horizon)); }
 
-// An infinite time (no next event) is the same only as itself.
-inline bool same_time(double a, double b) {
+// a is before b and not the same instant (an infinite b, no next event, is
+// after every finite a).
+inline bool before(double a, double b, double horizon) { return a < b - time_tolerance(horizon); }
+
+inline bool same_time(double a, double b, double horizon) {
   if (!std::isfinite(a) || !std::isfinite(b)) return a == b;
-  return std::abs(a - b) <= kSameTimeRelative * std::max({1.0, std::abs(a), std::abs(b)});
+  return std::abs(a - b) <= time_tolerance(horizon);
 }
-
-// a is before b and not the same instant.
-inline bool before(double a, double b) { return a < b && !same_time(a, b); }
 
 }  // namespace pumasim

@@ -583,20 +583,25 @@ TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
 namespace pumasim {
 namespace {
 
-// integrators/time_rule.hpp: instants within 1e-12 max(1, |a|, |b|) s are one instant.
-TEST(TimeRule, InstantsWithinRoundingAreOneInstant) {
-  EXPECT_TRUE(same_time(0.3, 0.1 * 3));   // 0.30000000000000004
-  EXPECT_FALSE(before(0.3, 0.1 * 3));     // so a stop at 0.1 * 3 is reached at 0.3
-  EXPECT_FALSE(before(0.1 * 3, 0.3));
-  EXPECT_TRUE(before(0.3, 0.3 + 1e-9));
-  EXPECT_TRUE(same_time(0.0, 5e-13));     // absolute near 0
-  EXPECT_FALSE(same_time(0.0, 2e-12));
-  EXPECT_TRUE(same_time(1e4, 1e4 + 5e-9));  // relative far from 0
-  EXPECT_FALSE(same_time(1e4, 1e4 + 2e-8));
+// integrators/time_rule.hpp: instants within 1e-12 max(1, |horizon|) s are one instant.
+TEST(TimeRule, InstantsWithinRoundingOfTheRunsTimesAreOneInstant) {
+  EXPECT_TRUE(same_time(0.3, 0.1 * 3, 1.0));  // 0.30000000000000004
+  EXPECT_FALSE(before(0.3, 0.1 * 3, 1.0));    // a stop at 0.1 * 3 is reached at 0.3
+  EXPECT_TRUE(before(0.3, 0.3 + 1e-9, 1.0));
+  EXPECT_TRUE(same_time(0.0, 5e-13, 0.0));    // absolute near 0
+  EXPECT_FALSE(same_time(0.0, 2e-12, 0.0));
+  // 80,000 fixed steps of 1e-5 s sum to 0.8 - 1.0e-12: the same instant as
+  // the output time 0.8 in a 24 s run.
+  double t = 0;
+  for (int k = 0; k < 80000; ++k) t += 1e-5;
+  EXPECT_NE(t, 0.8);
+  EXPECT_TRUE(same_time(t, 0.8, 24.0));
+  EXPECT_FALSE(before(t, 0.8, 24.0));
+  EXPECT_FALSE(same_time(1e4, 1e4 + 2e-8, 1e4));
   const double inf = std::numeric_limits<double>::infinity();  // no next event
-  EXPECT_TRUE(before(1e300, inf));
-  EXPECT_FALSE(same_time(0.0, inf));
-  EXPECT_TRUE(same_time(inf, inf));
+  EXPECT_TRUE(before(1e300, inf, 1.0));
+  EXPECT_FALSE(same_time(0.0, inf, 1.0));
+  EXPECT_TRUE(same_time(inf, inf, 1.0));
 }
 
 }  // namespace

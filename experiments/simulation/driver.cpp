@@ -39,7 +39,7 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, c
 // the time events due (stopping at events, exactly the one stopped at;
 // otherwise every event passed since the last stop, each applied now, late).
 // True when the integrator must restart.
-bool apply_events(Plant& plant, const Outcome& o, double t, bool time_event_now, double& t_event,
+bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool time_event_now, double& t_event,
                   double* x, RunResult& res) {
   if (o.status == Outcome::kRoot) {
     plant.on_root(o.root, t, x);
@@ -47,7 +47,7 @@ bool apply_events(Plant& plant, const Outcome& o, double t, bool time_event_now,
     return true;
   }
   if (!time_event_now) return false;
-  for (; !before(t, t_event); t_event = plant.next_time_event(t_event)) {
+  for (; !before(t, t_event, t_end); t_event = plant.next_time_event(t_event)) {
     plant.on_time_event(t_event, x);
     ++res.time_events;
   }
@@ -72,7 +72,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   double t = 0.0;
   // The next time event not yet applied (initial_state applied those at 0).
   double t_event = plant.next_time_event(0.0);
-  while (before(t, t_end)) {
+  while (before(t, t_end, t_end)) {
     double stop = t_end;
     if (stop_at_events) stop = std::min(stop, t_event);
     if (stop_at_outputs) stop = std::min(stop, output_time());
@@ -85,7 +85,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     }
     // Outputs inside the step, from the method's dense output; one at the
     // step's end waits until the events there are applied.
-    for (double to = output_time(); before(to, t); to = output_time()) {
+    for (double to = output_time(); before(to, t, t_end); to = output_time()) {
       integrator.dense_state(to, xo.data());
       if (observe) observe(to, xo.data());
       ++k_out;
@@ -98,13 +98,14 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       res.failure = std::move(why);
       break;
     }
-    const bool output_now = !before(t, output_time()) && before(k_out * output_interval, t_end + output_interval);
+    const bool output_now = !before(t, output_time(), t_end) &&
+                            k_out * output_interval <= t_end + output_interval - time_tolerance(t_end);
     // Time events due here: the one stopped at, or (late events) every one
     // passed since the last output.
-    const bool time_event_now = !before(t, t_event) && (stop_at_events || !before(t, output_time()));
+    const bool time_event_now = !before(t, t_event, t_end) && (stop_at_events || !before(t, output_time(), t_end));
     if (!output_now && !time_event_now && o.status != Outcome::kRoot) continue;
     x.assign(xs, xs + plant.size());
-    if (apply_events(plant, o, t, time_event_now, t_event, x.data(), res)) integrator.reset(sys, t, x.data());
+    if (apply_events(plant, o, t, t_end, time_event_now, t_event, x.data(), res)) integrator.reset(sys, t, x.data());
     if (output_now) {
       if (observe) observe(t, x.data());
       ++k_out;
