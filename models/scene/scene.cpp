@@ -30,9 +30,6 @@ const Bounds kPositive = Bounds::positive();
 const Bounds kNonNegative = Bounds::non_negative();
 const Bounds kJointAngle{-4 * M_PI, 4 * M_PI};  // [rad] held joints, initial pose
 const Bounds kRampShare{0.0, 0.5, true};        // (0, 0.5]: blend, jerk_fraction
-// [rad/s] Karnopp's default band, wider than the paper rule's "zero"
-// (FrictionParams' zero_speed), since the band is the model.
-constexpr double kKarnoppBand = 1e-3;
 
 // ---------------------------------------------------------------- [scene]
 
@@ -207,23 +204,33 @@ std::vector<std::pair<std::string, FrictionModel>> friction_models() {
   return out;
 }
 
-FrictionModel model_of(const PlantConfig& pc) { return pc.friction[0].model; }
-bool dissipative(const PlantConfig& pc) { return model_of(pc) != FrictionModel::kNone; }
-bool coulomb(const PlantConfig& pc) { return dissipative(pc) && model_of(pc) != FrictionModel::kViscous; }
-bool banded(const PlantConfig& pc) {
-  return model_of(pc) == FrictionModel::kPaper || model_of(pc) == FrictionModel::kKarnopp;
-}
-bool smooth(const PlantConfig& pc) { return model_of(pc) == FrictionModel::kTanh; }
+// The keys each law reads, and its default band, from the plant's registry.
+FrictionKeys keys_of(const PlantConfig& pc) { return friction_keys(pc.friction[0].model); }
+bool dissipative(const PlantConfig& pc) { return keys_of(pc).viscous; }
+bool coulomb(const PlantConfig& pc) { return keys_of(pc).levels; }
+bool banded(const PlantConfig& pc) { return keys_of(pc).zero_speed; }
+bool smooth(const PlantConfig& pc) { return keys_of(pc).speed_scale; }
 
-void karnopp_band(StrictTable&, PlantConfig& pc) {
-  if (model_of(pc) != FrictionModel::kKarnopp) return;
-  for (FrictionParams& f : pc.friction) f.zero_speed = kKarnoppBand;
+// The law's default band, before zero_speed is read (when it is).
+void default_band(StrictTable&, PlantConfig& pc) {
+  if (!banded(pc)) return;
+  for (FrictionParams& f : pc.friction) f.zero_speed = keys_of(pc).default_zero_speed;
+}
+
+// "none | viscous | ...", the registry's names (kept: the entry's meaning is a view).
+const std::string& friction_model_names() {
+  static const std::string names = [] {
+    std::string out;
+    FrictionLaws::for_each([&](auto law) { out += (out.empty() ? "" : " | ") + std::string(decltype(law)::kName); });
+    return out;
+  }();
+  return names;
 }
 
 // Keys that mean nothing for the model are unknown keys.
 const std::vector<Entry<PlantConfig>> kFrictionEntries = {
     {"model", scene_io::shared_choice(friction_models(), PUMASIM_AT(s.friction[j].model)),
-     "none | viscous | paper | hybrid | karnopp | tanh", Need::kRequired, nullptr, karnopp_band},
+     friction_model_names(), Need::kRequired, nullptr, default_band},
     {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
      "B [N m s/rad] (every model but none)", Need::kOptional, dissipative},
     {"static_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),

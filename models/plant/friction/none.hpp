@@ -1,6 +1,7 @@
 // No friction: the shaft turns freely.
 #pragma once
 
+#include "models/plant/friction/law.hpp"
 #include "models/robot/drive.hpp"
 
 namespace pumasim {
@@ -10,6 +11,7 @@ struct NoFriction {
   static constexpr const char* kName = "none";
   static constexpr bool kNeedsAppliedTorque = false;  // the torque to resist at rest (needs h)
   static constexpr bool kStickSlipEvents = false;     // stuck/slipping modes switched by root functions
+  static constexpr FrictionKeys kKeys{};
 
   template <class S>
   static S torque(const FrictionParams&, const S&, const S&, SlipMode) {

@@ -1,9 +1,11 @@
-// The friction models: one file per law (this folder) and one line in
-// FrictionLaws below. A law is a type with
+// The friction models: one file per law (this folder), one line in
+// FrictionLaws below, and its enumerator (FrictionModel, models/robot/drive.hpp,
+// the parameters' vocabulary that the reference layer's planner reads too). A law is a type with
 //   kModel               its enumerator (models/robot/drive.hpp: the scene's name for it)
 //   kName                its name in scene files
 //   kNeedsAppliedTorque  it reads the torque it must resist at rest (the plant then computes h)
 //   kStickSlipEvents     its stuck/slipping modes switch at root functions (the hybrid model)
+//   kKeys                the [friction] keys it reads and its default band (law.hpp)
 //   torque<S>(params, w_m, applied, mode)   the friction torque on the motor shaft [N m]
 // Dispatch is a compile-time chain of comparisons over the list: no virtual
 // call and no lookup by name in the right-hand side.
@@ -54,6 +56,12 @@ inline bool has_stick_slip_events(FrictionModel m) {
   bool r = false;
   FrictionLaws::visit(m, [&](auto law) { r = decltype(law)::kStickSlipEvents; });
   return r;
+}
+
+inline FrictionKeys friction_keys(FrictionModel m) {
+  FrictionKeys k;
+  FrictionLaws::visit(m, [&](auto law) { k = decltype(law)::kKeys; });
+  return k;
 }
 
 // The model's name in scene files ("?" for none registered).

@@ -8,6 +8,7 @@
 // its zero_speed is tiny by default. Karnopp's band is finite.
 #pragma once
 
+#include "models/plant/friction/law.hpp"
 #include "models/robot/drive.hpp"
 
 namespace pumasim {
@@ -29,6 +30,7 @@ struct PaperRuleFriction {
   static constexpr const char* kName = "paper";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr FrictionKeys kKeys{true, true, true, false, 1e-6};  // ABS(V) = 0, nearly
 
   template <class S>
   static S torque(const FrictionParams& f, const S& w, const S& applied, SlipMode) {
@@ -41,6 +43,7 @@ struct KarnoppFriction {
   static constexpr const char* kName = "karnopp";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr FrictionKeys kKeys{true, true, true, false, 1e-3};  // a finite band
 
   template <class S>
   static S torque(const FrictionParams& f, const S& w, const S& applied, SlipMode) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "models/plant/friction/law.hpp"
 #include "models/robot/drive.hpp"
 
 namespace pumasim {
@@ -13,6 +14,7 @@ struct TanhFriction {
   static constexpr const char* kName = "tanh";
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr FrictionKeys kKeys{true, true, false, true};
 
   template <class S>
   static S torque(const FrictionParams& f, const S& w, const S&, SlipMode) {
