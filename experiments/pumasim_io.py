@@ -118,26 +118,25 @@ def has_stats(run_dir):
     return os.path.exists(os.path.join(run_dir, STATS))
 
 
-def read_stats(run_dir, check=True):
-    """stats.json of a run folder as a dict (check: the folder first, as check_run_folder)."""
+def _read_run_json(run_dir, name, check):
+    """A JSON document of a run folder as a dict (check: the folder first, as check_run_folder)."""
     if check:
-        check_run_folder(run_dir, needs=(STATS,))
-    path = os.path.join(run_dir, STATS)
+        check_run_folder(run_dir, needs=(name,))
+    path = os.path.join(run_dir, name)
     try:
         return read_json(path)
     except ValueError as e:
         raise RunFolderError(f"{path}: not JSON: {e}") from None
+
+
+def read_stats(run_dir, check=True):
+    """stats.json of a run folder as a dict."""
+    return _read_run_json(run_dir, STATS, check)
 
 
 def read_meta(run_dir, check=True):
     """meta.json of a run folder as a dict."""
-    if check:
-        check_run_folder(run_dir, needs=(META,))
-    path = os.path.join(run_dir, META)
-    try:
-        return read_json(path)
-    except ValueError as e:
-        raise RunFolderError(f"{path}: not JSON: {e}") from None
+    return _read_run_json(run_dir, META, check)
 
 
 def column_name(header_cell):

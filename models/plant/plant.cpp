@@ -88,7 +88,6 @@ Plant::Plant(PlantConfig config)
   ds_.controller.u_held.assign(n, 0.0);
   ds_.controller.integral.assign(n, 0.0);
   ds_.modes.assign(n, SlipMode::kStuck);
-  xtmp_.resize(layout_.size);
   ftmp_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
 }
@@ -183,21 +182,6 @@ void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
       fi[layout_.i + j] += fe[layout_.i + j];
       fe[layout_.i + j] = 0.0;
     }
-  }
-}
-
-void Plant::jacobian_fd(double t, const double* x, Eigen::MatrixXd& J) {
-  const int m = layout_.size;
-  J.resize(m, m);
-  std::vector<double> f0(m);
-  rhs(t, x, f0.data());
-  std::copy(x, x + m, xtmp_.begin());
-  for (int k = 0; k < m; ++k) {
-    const double h = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(x[k]));
-    xtmp_[k] = x[k] + h;
-    rhs(t, xtmp_.data(), ftmp_.data());
-    xtmp_[k] = x[k];
-    for (int r = 0; r < m; ++r) J(r, k) = (ftmp_[r] - f0[r]) / h;
   }
 }
 

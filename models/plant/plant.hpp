@@ -114,8 +114,8 @@ class Plant {
   // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
   // integrals. Allocation-free.
   void rhs_split(double t, const double* x, double* fe, double* fi);
-  // df/dx by forward differences (relative step sqrt(eps)) and exactly (dual numbers).
-  void jacobian_fd(double t, const double* x, Eigen::MatrixXd& J);
+  // df/dx exactly (dual numbers through the same code); differences are
+  // OdeSystem::jacobian's (integrators/registry.cpp).
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
   // df/dt at (t, x): f depends on t only through a continuously followed
   // reference, whose smooth piece since the last time event is continued for
@@ -194,7 +194,7 @@ class Plant {
   std::unique_ptr<Workspace<double>> wd_;
   std::unique_ptr<Workspace<Dual>> wj_;
   PlantDiscreteState ds_;
-  std::vector<double> xtmp_, ftmp_;  // jacobian_fd scratch
+  std::vector<double> ftmp_;        // f for roots, drive_signals and settle_modes
   std::vector<double> ft_[2];        // time_derivative scratch
   bool friction_on_ = true;          // off only inside rhs_split
 };

@@ -198,11 +198,6 @@ void write_drive(toml::table& doc, const PlantConfig& pc) {
 
 // ---------------------------------------------------------------- [friction]
 
-std::vector<std::pair<std::string, FrictionModel>> friction_models() {
-  std::vector<std::pair<std::string, FrictionModel>> out;  // the plant's registry of laws, in its order
-  FrictionLaws::for_each([&](auto law) { out.emplace_back(decltype(law)::kName, decltype(law)::kModel); });
-  return out;
-}
 
 // The keys each law reads, and its default band, from the plant's registry.
 FrictionKeys keys_of(const PlantConfig& pc) { return friction_keys(pc.friction[0].model); }
@@ -221,7 +216,7 @@ void default_band(StrictTable&, PlantConfig& pc) {
 const std::string& friction_model_names() {
   static const std::string names = [] {
     std::string out;
-    FrictionLaws::for_each([&](auto law) { out += (out.empty() ? "" : " | ") + std::string(decltype(law)::kName); });
+    for (const auto& choice : friction_model_choices()) out += (out.empty() ? "" : " | ") + choice.first;
     return out;
   }();
   return names;
@@ -229,7 +224,7 @@ const std::string& friction_model_names() {
 
 // Keys that mean nothing for the model are unknown keys.
 const std::vector<Entry<PlantConfig>> kFrictionEntries = {
-    {"model", scene_io::shared_choice(friction_models(), PUMASIM_AT(s.friction[j].model)),
+    {"model", scene_io::shared_choice(friction_model_choices(), PUMASIM_AT(s.friction[j].model)),
      friction_model_names(), Need::kRequired, nullptr, default_band},
     {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
      "B [N m s/rad] (every model but none)", Need::kOptional, dissipative},

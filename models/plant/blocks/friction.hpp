@@ -18,7 +18,8 @@ class FrictionBlock {
   explicit FrictionBlock(const std::vector<FrictionParams>& params) : p_(params) {
     for (const auto& f : p_) {
       needs_applied_ |= pumasim::needs_applied_torque(f.model);
-      events_ |= has_stick_slip_events(f.model);
+      joint_events_.push_back(has_stick_slip_events(f.model));
+      events_ |= joint_events_.back();
     }
   }
   const FrictionParams& params(int j) const { return p_[static_cast<std::size_t>(j)]; }
@@ -26,7 +27,7 @@ class FrictionBlock {
   bool needs_applied_torque() const { return needs_applied_; }
   // Some joint's law has stuck/slipping modes switched at root functions.
   bool has_events() const { return events_; }
-  bool has_events(int j) const { return pumasim::has_stick_slip_events(params(j).model); }
+  bool has_events(int j) const { return joint_events_[static_cast<std::size_t>(j)]; }
   // Joint j is held by its friction (the rigid body then constrains it).
   bool stuck(int j, const FrictionModes& modes) const {
     return has_events(j) && modes[static_cast<std::size_t>(j)] == SlipMode::kStuck;
@@ -39,6 +40,7 @@ class FrictionBlock {
 
  private:
   const std::vector<FrictionParams> p_;
+  std::vector<bool> joint_events_;  // per joint: its law has stick/slip events
   bool needs_applied_ = false;
   bool events_ = false;
 };

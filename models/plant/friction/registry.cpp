@@ -8,12 +8,20 @@ const char* to_string(FrictionModel m) {
   return name;
 }
 
+const std::vector<std::pair<std::string, FrictionModel>>& friction_model_choices() {
+  static const std::vector<std::pair<std::string, FrictionModel>> choices = [] {
+    std::vector<std::pair<std::string, FrictionModel>> out;
+    FrictionLaws::for_each([&](auto law) { out.emplace_back(decltype(law)::kName, decltype(law)::kModel); });
+    return out;
+  }();
+  return choices;
+}
+
 bool friction_model_from_name(const std::string& name, FrictionModel* m) {
-  bool found = false;
-  FrictionLaws::for_each([&](auto law) {
-    if (!found && name == decltype(law)::kName) *m = decltype(law)::kModel, found = true;
-  });
-  return found;
+  for (const auto& [n, model] : friction_model_choices()) {
+    if (n == name) return *m = model, true;
+  }
+  return false;
 }
 
 }  // namespace pumasim

@@ -12,6 +12,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "models/plant/friction/hybrid.hpp"
 #include "models/plant/friction/none.hpp"
@@ -66,6 +68,8 @@ inline FrictionKeys friction_keys(FrictionModel m) {
 
 // The model's name in scene files ("?" for none registered).
 const char* to_string(FrictionModel m);
+// (name, model) of every law, in the registry's order: what a scene may name.
+const std::vector<std::pair<std::string, FrictionModel>>& friction_model_choices();
 // The model named `name`; false if no law has that name.
 bool friction_model_from_name(const std::string& name, FrictionModel* m);
 
