@@ -61,7 +61,7 @@ PlantConfig one_joint(FrictionParams friction, double La, double u0) {
   c.controller = ControllerMode::kContinuous;
   PivParams P;
   P.offset = u0;
-  c.piv = {P};
+  c.controller_params = LawParams<PivController>{{P}};
   c.q0 = Eigen::VectorXd::Zero(1);
   return c;
 }
@@ -456,7 +456,7 @@ TEST(Plant, StartsInEquilibriumOnTheReference) {
   for (const char* name : {"paper_slow", "paper_slow_6dof", "paper_slow_reduced"}) {
     Scene sc = load_scene(scene_path(name));
     for (auto& f : sc.plant.friction) f = FrictionParams{};
-    for (auto& p : sc.plant.piv) p.kvff = p.kaff = 0;  // no feed-forward at t = 0
+    for (auto& p : law_params<PivController>(sc.plant)) p.kvff = p.kaff = 0;  // no feed-forward at t = 0
     Plant plant(sc.plant);
     std::vector<double> x(plant.size()), f(plant.size());
     plant.initial_state(x.data());
@@ -580,7 +580,7 @@ class BadScene : public ::testing::Test {
 TEST(SceneOverrides, ReplaceValuesAndNameTheOverrideInErrors) {
   const Scene sc = load_scene(scene_path("paper_slow"), {"motor.inductance=1e-5", "controller.kp=[1, 2, 3]"});
   EXPECT_EQ(sc.plant.motor[2].inductance, 1e-5);
-  EXPECT_EQ(sc.plant.piv[1].kp, 2.0);
+  EXPECT_EQ(law_params<PivController>(sc.plant)[1].kp, 2.0);
   const std::vector<std::pair<std::string, std::string>> bad{
       {"motor.inductance=-1", "--set motor.inductance=-1: motor.inductance: expected a number >= 0, got -1"},
       {"motor.inductanc=1", "--set motor.inductanc=1: unknown key 'motor.inductanc'"},

@@ -104,7 +104,7 @@ TEST(PlantBlocks, DeclareTheirSlicesWithTheirMagnitudes) {
   ASSERT_GE(L.z, 0);
   for (int j = 0; j < n; ++j) {
     const AmplifierParams& A = sc.plant.amplifier[j];
-    const PivParams& P = sc.plant.piv[j];
+    const PivParams& P = law_params<PivController>(sc.plant)[j];
     const double stall = std::min(A.gain * P.output_limit, A.voltage_limit) /
                          (A.output_resistance + sc.plant.motor[j].resistance);
     EXPECT_EQ(L.names[L.i + j], "i_motor" + std::to_string(j + 1));

@@ -138,7 +138,7 @@ void RunRecorder::drive_columns(double t, const double* x, Csv& csv, Sums& sums)
     fig_.peak_u[j] = std::max(fig_.peak_u[j], std::abs(d.u));
     fig_.peak_ea[j] = std::max(fig_.peak_ea[j], std::abs(d.ea));
     fig_.peak_i[j] = std::max(fig_.peak_i[j], std::abs(d.i));
-    const double u_lim = cfg_.piv[j].output_limit, v_lim = cfg_.amplifier[j].voltage_limit;
+    const double u_lim = controller_output_limit(cfg_.controller_params, j), v_lim = cfg_.amplifier[j].voltage_limit;
     if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(cfg_.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
       ++sums.saturated[j];
     }

@@ -47,7 +47,9 @@ PlantConfig Plant::checked(PlantConfig c) {
     throw std::invalid_argument("plant: one amplifier and motor per joint");
   }
   if (c.controller != ControllerMode::kNone) {
-    if (!sized(c.piv.size())) throw std::invalid_argument("plant: one PIV controller per joint");
+    if (!sized(controller_joints(c.controller_params))) {
+      throw std::invalid_argument("plant: one set of controller parameters per joint");
+    }
     if (!c.reference && c.q0.size() != n) {
       throw std::invalid_argument("plant: a controller needs a reference, or initial angles to hold");
     }
@@ -70,15 +72,18 @@ Plant::Plant(PlantConfig config)
       amplifier_(if_drive(cfg_, cfg_.amplifier)),
       motor_(if_drive(cfg_, cfg_.motor), if_drive(cfg_, cfg_.amplifier)),
       friction_(cfg_.friction),
-      controller_(cfg_.controller, cfg_.piv, gear_ratios(cfg_), cfg_.servo_period),
+      controller_(make_controller(cfg_.controller, cfg_.controller_params,
+                                  {gear_ratios(cfg_), cfg_.servo_period, cfg_.amplifier, cfg_.motor})),
       ledger_(cfg_.energy_ledger) {
   const int n = cfg_.n;
   layout_.n = n;
   body_.declare(layout_);
   std::vector<double> full_command;  // the stall current's scale: min(K_A u_max, V_max)
-  for (int j = 0; j < n && cfg_.drive; ++j) full_command.push_back(command_voltage_range(cfg_.amplifier[j], cfg_.piv[j]));
+  for (int j = 0; j < n && cfg_.drive; ++j) {
+    full_command.push_back(command_voltage_range(cfg_.amplifier[j], controller_output_limit(cfg_.controller_params, j)));
+  }
   motor_.declare(layout_, full_command);
-  controller_.declare(layout_);
+  std::visit([&](const auto& c) { c.declare(layout_); }, controller_);
   ledger_.declare(layout_);
 
   wd_ = std::make_unique<Workspace<double>>(n);
@@ -86,7 +91,7 @@ Plant::Plant(PlantConfig config)
   wj_ = std::make_unique<Workspace<Dual>>(n);
   wj_->backend = find_backend(cfg_.backend).make_dual(model_);
   ds_.controller.u_held.assign(n, 0.0);
-  ds_.controller.integral.assign(n, 0.0);
+  ds_.controller.memory.assign(std::visit([](const auto& c) { return c.discrete_size(); }, controller_), 0.0);
   ds_.modes.assign(n, SlipMode::kStuck);
   ftmp_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
@@ -107,11 +112,12 @@ const ReferenceSample& Plant::reference_at(double t) { return current_reference(
 
 template <class S>
 void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
-  if (controller_.mode() == ControllerMode::kContinuous) {
-    controller_.continuous_output(current_reference(t), x, layout_.z, w);
-  } else {
-    controller_.held_output(ds_.controller, w);
+  if (cfg_.controller == ControllerMode::kContinuous) {
+    std::visit([&](const auto& c) { c.output(current_reference(t), x, layout_, w); }, controller_);
+    return;
   }
+  const bool held = cfg_.controller == ControllerMode::kSampled;  // else no controller: u = 0
+  for (int j = 0; j < layout_.n; ++j) w.u[j] = held ? S(ds_.controller.u_held[static_cast<std::size_t>(j)]) : S(0);
 }
 
 // Amplifier and motor: e_a, the current (state or algebraic), K i; the
@@ -166,7 +172,9 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
   friction_and_accelerations(w);
   body_.store(layout_, w, xdot);
   ledger_.store(layout_, w, xdot);
-  if (layout_.z >= 0) controller_.integral_rates(current_reference(t), x, layout_.z, w, xdot);
+  if (cfg_.controller == ControllerMode::kContinuous) {
+    std::visit([&](const auto& c) { c.rates(current_reference(t), x, layout_, w, xdot); }, controller_);
+  }
 }
 
 void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
@@ -254,7 +262,7 @@ void Plant::on_time_event(double t, double* x) {
     cfg_.reference->eval(t, ds_.ref_held);
   }
   if (cfg_.controller == ControllerMode::kSampled && on_grid(t, cfg_.servo_period)) {
-    controller_.sample(current_reference(t), x, layout_.q, layout_.qd, ds_.controller);
+    std::visit([&](const auto& c) { c.sample(current_reference(t), x, layout_, *wd_, ds_.controller); }, controller_);
   }
   settle_modes(t, x);
 }
@@ -314,7 +322,7 @@ void Plant::start_discrete_state(const Eigen::VectorXd& q) {
   ds_.ref_time = std::numeric_limits<double>::quiet_NaN();
   ds_.ref_segment = 0;
   std::fill(ds_.controller.u_held.begin(), ds_.controller.u_held.end(), 0.0);
-  std::fill(ds_.controller.integral.begin(), ds_.controller.integral.end(), 0.0);
+  std::fill(ds_.controller.memory.begin(), ds_.controller.memory.end(), 0.0);
   std::fill(ds_.modes.begin(), ds_.modes.end(), SlipMode::kStuck);
   if (cfg_.reference) return;
   ds_.ref_held.q.setZero();
@@ -325,17 +333,16 @@ void Plant::start_discrete_state(const Eigen::VectorXd& q) {
   ds_.ref_held.q.head(layout_.n) = q;
 }
 
-// At rest at q: the currents hold gravity and the PIV integrals supply the
-// voltage that drives them.
+// At rest at q: the currents hold gravity and the controller's memory (the
+// PIV integrals) supplies the voltage that drives them.
 void Plant::hold_gravity(const Eigen::VectorXd& q, double* x) {
   Eigen::VectorXd g(layout_.n);
   wd_->backend->gravity(q, g);
   for (int j = 0; j < layout_.n; ++j) {
     const double i = motor_.holding_current(j, g[j], body_.gear_ratio(j));
     if (layout_.i >= 0) x[layout_.i + j] = i;
-    const double I = controller_.holding_integral(j, motor_.loop_resistance(j) * i / amplifier_.params(j).gain);
-    if (layout_.z >= 0) x[layout_.z + j] = I;
-    ds_.controller.integral[static_cast<std::size_t>(j)] = I;
+    const double u = motor_.loop_resistance(j) * i / amplifier_.params(j).gain;
+    std::visit([&](const auto& c) { c.hold(j, u, x, layout_, ds_.controller); }, controller_);
   }
 }
 

@@ -1,6 +1,6 @@
 // The coupled electro-mechanical plant as one state-space ODE x' = f(t, x),
 // assembled from blocks (models/plant/blocks/), per simulated joint:
-//   reference -> PIV controller -> amplifier -> DC motor -> gear and rotor
+//   reference -> controller (a law: controller/) -> amplifier -> DC motor -> gear and rotor
 //   -> friction -> rigid body (any back-end from the registry)
 // plus an optional energy ledger. A scene includes only what it needs, and
 // leaving a block out removes its states. Each block declares its slice of
@@ -9,7 +9,7 @@
 // simulated joints:
 //   q, qd   rigid body, always (joints n+1..6 are held: their links ride on link n)
 //   i       motor currents, only with a drive whose La > 0 (La = 0: algebraic)
-//   z       PIV integrals, only with a continuous controller
+//   z       the controller law's memory (the PIV integrals), only with a continuous controller
 //   e       the energy ledger, when asked for
 // The scratch of one evaluation (PlantWorkspace) and the discrete state
 // (PlantDiscreteState: held set-point and controller output, stick/slip
@@ -36,8 +36,8 @@
 #include "models/plant/blocks/energy_ledger.hpp"
 #include "models/plant/blocks/friction.hpp"
 #include "models/plant/blocks/motor.hpp"
-#include "models/plant/blocks/piv_controller.hpp"
 #include "models/plant/blocks/rigid_body.hpp"
+#include "models/plant/controller/registry.hpp"
 #include "models/plant/state_layout.hpp"
 #include "models/plant/workspace.hpp"
 #include "models/reference/trajectory.hpp"
@@ -51,13 +51,13 @@ struct PlantConfig {
   Eigen::Matrix<double, 6, 1> q_held = Eigen::Matrix<double, 6, 1>::Zero();  // joints > n [rad]
   std::string backend = "crba";
   bool drive = true;                     // amplifier + motor (needs a controller)
-  ControllerMode controller = ControllerMode::kContinuous;
+  ControllerMode controller = ControllerMode::kContinuous;  // its timing
   double servo_period = 0.0;             // [s], sampled controller
   double setpoint_interval = 0.0;        // [s], reference held between updates; 0 = continuous
   std::vector<AmplifierParams> amplifier;  // one per simulated joint
   std::vector<MotorParams> motor;
   std::vector<FrictionParams> friction;
-  std::vector<PivParams> piv;
+  ControllerParams controller_params;  // the law (controller/registry.hpp) and its parameters per joint
   std::shared_ptr<const Reference> reference;  // what a controller follows
   Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
   // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
@@ -65,6 +65,16 @@ struct PlantConfig {
   // tau_f w_m, summed over the joints), integrated with the rest.
   bool energy_ledger = false;
 };
+
+// The parameters of controller law Law (its name must be the configuration's).
+template <class Law>
+std::vector<typename Law::Params>& law_params(PlantConfig& c) {
+  return std::get<LawParams<Law>>(c.controller_params).joints;
+}
+template <class Law>
+const std::vector<typename Law::Params>& law_params(const PlantConfig& c) {
+  return std::get<LawParams<Law>>(c.controller_params).joints;
+}
 
 // The model the plant simulates: the first n joints of `robot`, the others
 // held at q_held with their links riding on link n.
@@ -78,14 +88,14 @@ struct DriveSignals {
 
 // What changes only at events: the reference as the controller sees it (the
 // held set-point, the cached sample and the smooth piece since the last time
-// event), the sampled controller's held output and integral, and the hybrid
+// event), the sampled controller's held output and memory, and the hybrid
 // friction's stuck/slipping modes.
 struct PlantDiscreteState {
   ReferenceSample ref_held{}, ref_now{};
   double ref_time = std::numeric_limits<double>::quiet_NaN();
   int ref_segment = 0;
   bool extend_piece = false;  // inside time_derivative: the reference piece continued past its ends
-  PivDiscreteState controller;
+  ControllerDiscreteState controller;
   FrictionModes modes;
 };
 
@@ -188,7 +198,7 @@ class Plant {
   const AmplifierBlock amplifier_;
   const MotorBlock motor_;
   const FrictionBlock friction_;
-  const PivController controller_;
+  const ControllerBlock controller_;  // dispatched once per evaluation
   const EnergyLedgerBlock ledger_;
   StateLayout layout_;
   std::unique_ptr<Workspace<double>> wd_;

@@ -50,29 +50,10 @@ S sign_of(const S& x) {
   return x > S(0) ? S(1) : (x < S(0) ? S(-1) : S(0));
 }
 
-// PIV&F law of the Compumotor 6000-series servo cards (models/robots/puma560_sources.md,
-// sec. 7, from the 6250 user guide, ch. 4): P and I on the position error, V on
-// the measured velocity (feedback, not error), velocity and acceleration
-// feed-forward, an integral windup limit, output saturation at +-10 V:
-//   u = sat(Kp e + Ki z - Kv w + Kvff w_ref + Kaff a_ref + offset, +-u_max)
-// with e = Z (q_ref - q), w = Z qd, w_ref = Z qd_ref, a_ref = Z qdd_ref and z
-// the integral of e, clamped so |Ki z| <= integral_limit. The gains act on
-// MOTOR-side angles, as the card reads the motor encoders; so one gain sign
-// serves every joint whatever the sign of its gear ratio.
-struct PivParams {
-  double kp = 0.0;              // [V/rad], motor side
-  double ki = 0.0;              // [V/(rad s)]
-  double kv = 0.0;              // [V s/rad]
-  double kvff = 0.0;            // [V s/rad]
-  double kaff = 0.0;            // [V s^2/rad]
-  double integral_limit = 10.0; // [V], limit of |Ki z|
-  double output_limit = 10.0;   // [V], DAC range
-  double offset = 0.0;          // [V], SOFFS
-};
-
-// The largest amplifier output the controller can command: min(K_A u_max, V_max) [V].
-inline double command_voltage_range(const AmplifierParams& A, const PivParams& P) {
-  return std::min(A.gain * P.output_limit, A.voltage_limit);
+// The largest amplifier output a controller whose output is limited to
+// +-output_limit can command: min(K_A u_max, V_max) [V].
+inline double command_voltage_range(const AmplifierParams& A, double output_limit) {
+  return std::min(A.gain * output_limit, A.voltage_limit);
 }
 
 template <class S>

@@ -16,28 +16,14 @@
 
 #include <toml++/toml.h>
 
+#include "models/robot/bounds.hpp"
+
 namespace pumasim {
 
 // Bad user input in a configuration file. main() turns it into exit status 2.
 class ConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-// Closed or half-open interval for a number, with how to say it in a message.
-struct Bounds {
-  double lo = -std::numeric_limits<double>::infinity();
-  double hi = std::numeric_limits<double>::infinity();
-  bool lo_open = false;  // lo itself is not allowed
-  bool hi_open = false;
-  bool or_infinity = false;  // +inf allowed too (a limit that means "none")
-
-  static Bounds any() { return {}; }
-  static Bounds non_negative() { return {0.0}; }
-  static Bounds positive() { return {0.0, std::numeric_limits<double>::infinity(), true}; }
-  static Bounds positive_or_infinity() { return {0.0, std::numeric_limits<double>::infinity(), true, false, true}; }
-  bool contains(double x) const;
-  std::string describe() const;  // "a number > 0", "a number > 0 or inf"
 };
 
 // Parse a whole file; a syntax error becomes a ConfigError naming file and line.

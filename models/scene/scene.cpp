@@ -249,31 +249,60 @@ toml::table write_friction(const PlantConfig& pc) { return write_entries(kFricti
 
 bool sampled(const PlantConfig& pc) { return pc.controller == ControllerMode::kSampled; }
 
-const std::vector<Entry<PlantConfig>> kControllerEntries = {
-    {"mode",
-     scene_io::choice<ControllerMode>({{"continuous", ControllerMode::kContinuous}, {"sampled", ControllerMode::kSampled}},
-                                      PUMASIM_AT(s.controller)),
-     "continuous (integral is a state) | sampled (zero-order hold)", Need::kRequired},
-    {"servo_period", scene_io::number(kPositive, PUMASIM_AT(s.servo_period)), "[s] (sampled)", Need::kRequired,
-     sampled},
-    {"setpoint_interval", scene_io::number(kNonNegative, PUMASIM_AT(s.setpoint_interval)),
-     "[s] reference held between updates; 0: continuous"},
-    {"kp", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kp)), "[V/rad] motor side", Need::kRequired},
-    {"ki", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].ki)), "[V/(rad s)]"},
-    {"kv", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kv)), "[V s/rad] on the measured speed"},
-    {"kvff", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kvff)), "[V s/rad] speed feed-forward"},
-    {"kaff", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].kaff)), "[V s^2/rad] acceleration feed-forward"},
-    {"integral_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.piv[j].integral_limit)), "[V] limit of |Ki z|"},
-    {"output_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.piv[j].output_limit)), "[V] DAC range"},
-    {"offset", scene_io::per_joint(kAny, PUMASIM_AT(s.piv[j].offset)), "[V] SOFFS"},
-};
+// law: the registry's names; the law's parameters for n joints at their defaults.
+scene_io::Codec<PlantConfig> controller_law() {
+  return {[](StrictTable& t, std::string_view key, PlantConfig& pc, int n) {
+            default_controller_params(t.string(key, controller_law_names()), n, &pc.controller_params);
+          },
+          [](toml::table& out, std::string_view key, const PlantConfig& pc, int) {
+            out.insert(key, std::string(controller_law_name(pc.controller_params)));
+          },
+          nullptr};
+}
 
-// A controller drives the drive: both or neither.
+template <class Law>
+bool law_is(const PlantConfig& pc) {
+  return std::holds_alternative<LawParams<Law>>(pc.controller_params);
+}
+
+// The timing, then each law's own keys (ControllerKey: law.hpp), which apply
+// when it is the scene's law.
+const std::vector<Entry<PlantConfig>>& controller_entries() {
+  static const std::vector<Entry<PlantConfig>> entries = [] {
+    std::vector<Entry<PlantConfig>> e = {
+        {"law", controller_law(), "the control law (first: the default)"},
+        {"mode",
+         scene_io::choice<ControllerMode>(
+             {{"continuous", ControllerMode::kContinuous}, {"sampled", ControllerMode::kSampled}},
+             PUMASIM_AT(s.controller)),
+         "continuous (the law's memory is a state) | sampled (zero-order hold)", Need::kRequired},
+        {"servo_period", scene_io::number(kPositive, PUMASIM_AT(s.servo_period)), "[s] (sampled)", Need::kRequired,
+         sampled},
+        {"setpoint_interval", scene_io::number(kNonNegative, PUMASIM_AT(s.setpoint_interval)),
+         "[s] reference held between updates; 0: continuous"},
+    };
+    ControllerLaws::for_each([&](auto tag) {
+      using Law = typename decltype(tag)::Law;
+      for (const ControllerKey<typename Law::Params>& k : Law::keys()) {
+        const auto member = k.member;
+        const auto at = [member](auto& s, int j) -> auto& {
+          return std::get<LawParams<Law>>(s.controller_params).joints[static_cast<std::size_t>(j)].*member;
+        };
+        e.push_back({k.key, scene_io::per_joint(k.bounds, at), k.meaning,
+                     k.required ? Need::kRequired : Need::kOptional, &law_is<Law>});
+      }
+    });
+    return e;
+  }();
+  return entries;
+}
+
+// A controller drives the drive: both or neither. Without `law`, the first law.
 void read_controller(StrictTable& root, PlantConfig& pc) {
   pc.controller = ControllerMode::kNone;
   if (auto t = root.optional_table("controller")) {
-    pc.piv.assign(pc.n, PivParams{});
-    read_entries(*t, kControllerEntries, pc, pc.n);
+    default_controller_params(controller_law_names().front(), pc.n, &pc.controller_params);
+    read_entries(*t, controller_entries(), pc, pc.n);
     if (!pc.drive) root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
   } else if (pc.drive) {
     root.fail("amplifier", "a [controller] to drive the amplifier", "no controller");
@@ -281,7 +310,7 @@ void read_controller(StrictTable& root, PlantConfig& pc) {
 }
 
 void write_controller(toml::table& doc, const PlantConfig& pc) {
-  if (pc.controller != ControllerMode::kNone) doc.insert("controller", write_entries(kControllerEntries, pc, pc.n));
+  if (pc.controller != ControllerMode::kNone) doc.insert("controller", write_entries(controller_entries(), pc, pc.n));
 }
 
 // ---------------------------------------------------------------- [reference]
@@ -600,7 +629,7 @@ PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSe
                                          Timing::unit_speed(path.length()));
   DriveLimits lim;
   for (int j = 0; j < n; ++j) {
-    lim.voltage.push_back(r.voltage_fraction * command_voltage_range(pc.amplifier[j], pc.piv[j]));
+    lim.voltage.push_back(r.voltage_fraction * command_voltage_range(pc.amplifier[j], controller_output_limit(pc.controller_params, j)));
   }
   lim.current = r.current_limit;
   lim.joint_speed = r.joint_speed_limit;

@@ -1,0 +1,98 @@
+// The controller laws: one file per law (this folder; what a law provides:
+// law.hpp) and one line in ControllerLaws below. Everything else follows from
+// the list: the parameters a plant configuration holds (ControllerParams, a
+// variant over the laws), the block the plant runs (ControllerBlock), the
+// scene's [controller] law names and keys (models/scene/scene.cpp walks each
+// law's keys()), and the names the command line and the tests list.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include "models/plant/controller/computed_torque.hpp"
+#include "models/plant/controller/law.hpp"
+#include "models/plant/controller/piv.hpp"
+
+namespace pumasim {
+
+// A law's parameters, one per simulated joint (a type per law, so that two
+// laws may share a Params struct).
+template <class L>
+struct LawParams {
+  using Law = L;
+  std::vector<typename L::Params> joints;
+};
+
+template <class L>
+struct LawTag {
+  using Law = L;
+};
+
+template <class... Laws>
+struct ControllerLawList {
+  using Params = std::variant<LawParams<Laws>...>;
+  using Block = std::variant<Laws...>;
+  // f(LawTag<Law>{}) for every law, in the list's order.
+  template <class F>
+  static void for_each(F&& f) {
+    (f(LawTag<Laws>{}), ...);
+  }
+  // f(LawTag<Law>{}) for the law named `name`; false if none is.
+  template <class F>
+  static bool visit(std::string_view name, F&& f) {
+    return ((name == Laws::kName ? (f(LawTag<Laws>{}), true) : false) || ...);
+  }
+};
+
+using ControllerLaws = ControllerLawList<PivController, ComputedTorqueController>;
+using ControllerParams = ControllerLaws::Params;  // the first law's, empty, by default
+using ControllerBlock = ControllerLaws::Block;
+
+// The laws' names, in the list's order (the first is the default).
+inline std::vector<std::string> controller_law_names() {
+  std::vector<std::string> names;
+  ControllerLaws::for_each([&](auto tag) { names.emplace_back(decltype(tag)::Law::kName); });
+  return names;
+}
+
+// The named law's parameters for n joints, each at its struct's defaults;
+// false if no law has that name.
+inline bool default_controller_params(std::string_view name, int n, ControllerParams* out) {
+  return ControllerLaws::visit(name, [&](auto tag) {
+    using Law = typename decltype(tag)::Law;
+    *out = LawParams<Law>{std::vector<typename Law::Params>(static_cast<std::size_t>(n))};
+  });
+}
+
+inline std::string_view controller_law_name(const ControllerParams& p) {
+  return std::visit([](const auto& lp) { return std::decay_t<decltype(lp)>::Law::kName; }, p);
+}
+
+inline std::size_t controller_joints(const ControllerParams& p) {
+  return std::visit([](const auto& lp) { return lp.joints.size(); }, p);
+}
+
+// Joint j's output range: |u| <= this [V].
+inline double controller_output_limit(const ControllerParams& p, int j) {
+  return std::visit(
+      [j](const auto& lp) {
+        return std::decay_t<decltype(lp)>::Law::output_limit(lp.joints[static_cast<std::size_t>(j)]);
+      },
+      p);
+}
+
+// The block of the law the parameters belong to.
+inline ControllerBlock make_controller(ControllerMode mode, const ControllerParams& p, const ControllerContext& c) {
+  return std::visit(
+      [&](const auto& lp) {
+        using Law = typename std::decay_t<decltype(lp)>::Law;
+        return ControllerBlock(std::in_place_type<Law>, mode, lp.joints, c);
+      },
+      p);
+}
+
+}  // namespace pumasim
