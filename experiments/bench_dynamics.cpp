@@ -6,6 +6,9 @@
 // the ODE right-hand side). Each benchmark also carries the operation counts
 // of one call (Counted scalar) as user counters, so that one JSON file holds
 // both; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
+// The JSON's context names the build that ran (pumasim_flags: -march=native or
+// not, pumasim_build_type, pumasim_compiler, pumasim_git_revision), from the
+// build information fixed when the program was built (cmake/build_info.cmake).
 //
 //   bench_dynamics --benchmark_out=results/bench/dynamics.json --benchmark_out_format=json
 #include <benchmark/benchmark.h>
@@ -16,6 +19,7 @@
 #include "models/dynamics/backend.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
+#include "pumasim_build_info.hpp"  // generated at build time
 
 namespace {
 
@@ -84,6 +88,10 @@ int main(int argc, char** argv) {
       }
     }
   }
+  benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);
+  benchmark::AddCustomContext("pumasim_compiler", pumasim::build_info::kCompiler);
+  benchmark::AddCustomContext("pumasim_flags", pumasim::build_info::kFlags);
+  benchmark::AddCustomContext("pumasim_build_type", pumasim::build_info::kBuildType);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
   benchmark::RunSpecifiedBenchmarks();
