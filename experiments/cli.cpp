@@ -22,14 +22,14 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "experiments/simulation/run_documents.hpp"
 #include "experiments/simulation/run_folder.hpp"
+#include "experiments/simulation/run_request.hpp"
 #include "experiments/simulation/scene_run.hpp"
 #include "experiments/stiffness.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
-#include "models/robot/robot_file.hpp"
+#include "models/robot/dynamics_query.hpp"
 #include "models/scene/scene.hpp"
 
 namespace pumasim {
@@ -174,16 +174,7 @@ void add_scene(CLI::App* app, SceneArgs& a) {
 
 // The scene, loaded and checked: its integrator exists (`check` says so with
 // the file, line and key, as `run` would otherwise fail without them).
-Scene load_checked_scene(const SceneArgs& a) {
-  Scene sc = load_scene(a.file, a.sets);
-  try {
-    find_integrator(sc.integrator.name);
-  } catch (const std::invalid_argument&) {
-    throw ConfigError(sc.integrator.name_where + "expected one of: " + integrator_names() + "; got \"" +
-                      sc.integrator.name + "\"");
-  }
-  return sc;
-}
+Scene load_checked_scene(const SceneArgs& a) { return pumasim::load_checked_scene(a.file, a.sets); }
 
 // ---------------------------------------------------------------- dynamics
 
@@ -204,52 +195,45 @@ Json json_vector(const Eigen::VectorXd& v) {
 }
 
 // H, h, g at (q, qd); tau from qdd and qdd from tau when given.
-Json dynamics_json(DynamicsBackend& backend, const RobotModel& model, bool rotor, const Eigen::VectorXd& q,
-                   const Eigen::VectorXd& qd, const std::optional<Eigen::VectorXd>& qdd_in,
-                   const std::optional<Eigen::VectorXd>& tau_in) {
-  const int n = model.dof();
-  Eigen::MatrixXd H(n, n);
-  Eigen::VectorXd h(n), g(n), result(n);
-  backend.mass_matrix(q, H);
-  backend.bias(q, qd, h);
-  backend.gravity(q, g);
+Json dynamics_json(const RobotDynamics& rd, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                   const std::optional<Eigen::VectorXd>& qdd_in, const std::optional<Eigen::VectorXd>& tau_in,
+                   const DynamicsValues& v) {
+  const int n = rd.model.dof();
   Json doc;
-  doc["backend"] = backend.name();
-  doc["robot"] = model.name;
+  doc["backend"] = rd.backend->name();
+  doc["robot"] = rd.model.name;
   doc["n"] = n;
-  doc["rotor_inertia_included"] = rotor;
+  doc["rotor_inertia_included"] = rd.rotor_inertia;
   doc["q"] = json_vector(q);
   doc["qd"] = json_vector(qd);
   doc["mass_matrix"] = Json::array();
-  for (int i = 0; i < n; ++i) doc["mass_matrix"].push_back(json_vector(H.row(i).transpose()));
-  doc["bias"] = json_vector(h);
-  doc["gravity"] = json_vector(g);
+  for (int i = 0; i < n; ++i) doc["mass_matrix"].push_back(json_vector(v.mass_matrix.row(i).transpose()));
+  doc["bias"] = json_vector(v.bias);
+  doc["gravity"] = json_vector(v.gravity);
   if (qdd_in) {
-    backend.inverse_dynamics(q, qd, *qdd_in, result);
     doc["qdd_in"] = json_vector(*qdd_in);
-    doc["tau"] = json_vector(result);
+    doc["tau"] = json_vector(*v.tau);
   }
   if (tau_in) {
-    backend.forward_dynamics(q, qd, *tau_in, result);
     doc["tau_in"] = json_vector(*tau_in);
-    doc["qdd"] = json_vector(result);
+    doc["qdd"] = json_vector(*v.qdd);
   }
   return doc;
 }
 
 int cmd_dynamics(const DynamicsArgs& a, std::ostream& out) {
-  RobotModel model = load_robot(a.robot);
-  const bool rotor = !a.no_rotor_inertia;
-  if (!rotor) model = without_rotor_inertia(model);
-  auto backend = make_backend(a.backend, model);  // cannot describe this robot: invalid_argument
-  const int n = model.dof();
-  const Eigen::VectorXd q = parse_vector(a.q, n, "--q", &model);
+  // The robot, without its rotor inertias if asked, and the back-end (one
+  // that cannot describe this robot: invalid_argument).
+  const RobotDynamics rd = robot_dynamics(a.robot, a.backend, !a.no_rotor_inertia);
+  const int n = rd.model.dof();
+  const Eigen::VectorXd q = parse_vector(a.q, n, "--q", &rd.model);
   const Eigen::VectorXd qd = a.qd ? parse_vector(*a.qd, n, "--qd") : Eigen::VectorXd::Zero(n);
   std::optional<Eigen::VectorXd> qdd, tau;
   if (a.qdd) qdd = parse_vector(*a.qdd, n, "--qdd");
   if (a.tau) tau = parse_vector(*a.tau, n, "--tau");
+  const DynamicsValues v = evaluate_dynamics(*rd.backend, q, qd, qdd, tau);
   // Everything is checked before anything is printed: nothing half-written.
-  out << dynamics_json(*backend, model, rotor, q, qd, qdd, tau).dump(2) << "\n";
+  out << dynamics_json(rd, q, qd, qdd, tau, v).dump(2) << "\n";
   return kExitOk;
 }
 
@@ -296,59 +280,22 @@ struct RunArgs {
   bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false;
 };
 
-// --backend: the scene's robot as simulated must be one the back-end can describe.
-void override_backend(Scene& sc, const std::string& name) {
-  const BackendInfo& info = find_backend(name);
-  const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
-  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw UsageError("--backend: " + why);
-  sc.plant.backend = name;
-}
-
-// The integrator's settings: the scene's, overridden by --dt (fixed-step
-// methods) or --rtol and --atol (adaptive ones); an option the method cannot
-// honour is refused. The scene records what was used.
-IntegratorOptions integrator_options(Scene& sc, const RunArgs& a, bool& adaptive) {
-  const IntegratorInfo& info = find_integrator(sc.integrator.name);
-  IntegratorOptions io;
-  io.dt = sc.integrator.dt;
-  io.rtol = sc.integrator.rtol;
-  io.atol = sc.integrator.atol;
-  io.exact_jacobian = a.exact_jacobian;
-  adaptive = info.make(io)->capabilities().adaptive;
-  if (a.dt) {
-    if (adaptive) throw UsageError("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
-    io.dt = sc.integrator.dt = *a.dt;
-  }
-  if (a.rtol || a.atol) {
-    if (!adaptive) throw UsageError("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
-    if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
-    if (a.atol) io.atol = sc.integrator.atol = *a.atol;
-  }
-  if (io.exact_jacobian && !info.make(IntegratorOptions{})->capabilities().uses_jacobian) {
-    throw UsageError("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
-  }
-  if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) throw UsageError("--dt, --rtol, --atol: expected numbers > 0");
-  return io;
-}
-
-// The command line's changes to the scene, and how the run is driven.
+// The command line's changes to the scene, and how the run is driven
+// (experiments/simulation/run_request: the checks and their messages).
 RunControls run_controls(Scene& sc, const RunArgs& a) {
-  if (a.backend) override_backend(sc, *a.backend);
-  if (a.integrator) sc.integrator.name = *a.integrator;
-  RunControls rc;
-  rc.options = integrator_options(sc, a, rc.adaptive);
-  // A step budget for the whole run, so that a method crawling through a
-  // chattering discontinuity (steps of nanoseconds) ends as a reported
-  // failure instead of running for hours; and a wall-clock budget, as the
-  // step budget's time depends on the method.
-  if (a.max_steps) rc.max_steps = static_cast<long>(*a.max_steps);
-  if (rc.max_steps > 0) rc.options.max_steps = rc.max_steps;  // also each integrator's own per-call limit
-  if (a.max_wall) rc.max_wall = *a.max_wall;
-  if (a.t_end) sc.duration = *a.t_end;
-  rc.stops = a.late_events       ? Stops::kOutputsLateEvents
-             : a.stop_at_outputs ? Stops::kEventsAndOutputs
-                                 : Stops::kEvents;
-  return rc;
+  RunRequest r;
+  r.integrator = a.integrator;
+  r.backend = a.backend;
+  r.dt = a.dt;
+  r.rtol = a.rtol;
+  r.atol = a.atol;
+  r.t_end = a.t_end;
+  r.max_steps = a.max_steps;
+  r.max_wall = a.max_wall;
+  r.exact_jacobian = a.exact_jacobian;
+  r.late_events = a.late_events;
+  r.stop_at_outputs = a.stop_at_outputs;
+  return pumasim::run_controls(sc, r);
 }
 
 // On a terminal, the run's time on stderr at most twice a second.
@@ -366,21 +313,25 @@ std::function<void(double)> progress_line(std::ostream& err, const Scene& sc) {
 int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   Scene sc = load_checked_scene(a.scene);
   const RunControls rc = run_controls(sc, a);
-  check_run_size(sc, rc.max_steps);
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
-  check_run_folder_target(dir, a.force);  // before the run: a refusal costs nothing
   const auto progress = progress_line(err, sc);
-  const SceneRun run = simulate_scene(sc, rc, progress);
-  if (progress) err << "\r" << std::string(60, ' ') << "\r";
-  const std::string stats = stats_json(sc, rc, run);
-  write_run_folder(dir, {{"trajectory.csv", run.trajectory_csv}, {"stats.json", stats}, {"meta.json", meta_json()},
-                         {"scene.resolved.toml", resolved_toml(sc)}},
-                   a.force);
-  out << stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
+  // Checks the run's size and the folder before the run, runs, writes the folder.
+  const auto clear_progress = [&] {
+    if (progress) err << "\r" << std::string(60, ' ') << "\r";
+  };
+  CompletedRun done;
+  try {
+    done = run_scene(sc, rc, dir, a.force, progress);
+  } catch (const RunFolderError&) {
+    clear_progress();
+    throw;
+  }
+  clear_progress();
+  out << done.stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
   err << "results: " << dir.string() << "/\n";
-  if (!run.result.ok) err << "pumasim run: " << run.result.failure << "\n";
-  return run.result.ok ? kExitOk : kExitInternal;
+  if (!done.run.result.ok) err << "pumasim run: " << done.run.result.failure << "\n";
+  return done.run.result.ok ? kExitOk : kExitInternal;
 }
 
 void add_run(CLI::App* app, RunArgs& a) {

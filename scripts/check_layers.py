@@ -10,6 +10,7 @@ The layers, lowest first (each a folder and a CMake target; ARCHITECTURE.md):
   integrators       the ODE interface, methods, registry: no model code
   experiments/simulation   the driver and run folders: models and integrators
   experiments, tests       anything below
+  python           the Python module (pybind11): anything below but tests
 
 Run by the build (the check_layers target) and by hand:
   /usr/bin/python3 scripts/check_layers.py
@@ -26,6 +27,7 @@ ALLOWED["integrators"] = ["integrators"]
 ALLOWED["experiments/simulation"] = MODELS + ["integrators", "experiments/simulation"]
 ALLOWED["experiments"] = MODELS + ["integrators", "experiments"]
 ALLOWED["tests"] = MODELS + ["integrators", "experiments", "tests"]
+ALLOWED["python"] = MODELS + ["integrators", "experiments", "python"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 
@@ -41,7 +43,7 @@ def folder_of(path, folders):
 def main():
     bad = []
     checked = 0
-    for top in ("models", "integrators", "experiments", "tests"):
+    for top in ("models", "integrators", "experiments", "tests", "python"):
         for d, _, names in os.walk(os.path.join(ROOT, top)):
             for n in sorted(names):
                 if not n.endswith((".hpp", ".cpp", ".h")):
@@ -56,7 +58,7 @@ def main():
                     text = fh.read()
                 for m in INCLUDE.finditer(text):
                     inc = m.group(1)
-                    if not inc.startswith(("models/", "integrators/", "experiments/", "tests/")):
+                    if not inc.startswith(("models/", "integrators/", "experiments/", "tests/", "python/")):
                         continue  # a sibling or a system header
                     target = folder_of(inc, ALLOWED) or inc.split("/")[0]
                     if folder_of(inc, ALLOWED[own]) is None:

@@ -84,6 +84,11 @@ std::string RunRecorder::finish() {
   fig_.peak_u.assign(n_, 0.0), fig_.peak_ea.assign(n_, 0.0), fig_.peak_i.assign(n_, 0.0);
   Sums sums;
   sums.saturated.assign(n_, 0);
+  path_error_.clear(), path_deviation_.clear();
+  if (cfg_.reference) {
+    path_error_.reserve(saved_.size() / static_cast<std::size_t>(m_ + 1));
+    path_deviation_.reserve(path_error_.capacity());
+  }
   for (std::size_t row = 0; row + m_ < saved_.size(); row += static_cast<std::size_t>(m_ + 1)) {
     ++fig_.rows;
     write_row(saved_[row], &saved_[row + 1], csv, sums);
@@ -91,6 +96,12 @@ std::string RunRecorder::finish() {
   }
   summarise(sums);
   return csv.text.str();
+}
+
+RunRecorder::Rows RunRecorder::take_rows() {
+  Rows r{std::move(saved_), std::move(path_error_), std::move(path_deviation_)};
+  saved_.clear(), path_error_.clear(), path_deviation_.clear();
+  return r;
 }
 
 // One row: time and state, the reference, the flange's pose, then the path,
@@ -121,6 +132,8 @@ void RunRecorder::path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums) {
   // (a joint-space interpolation leaves the path between via-points).
   const double dev = cfg_.reference->path().distance(p);
   csv.num(ref.p.x()), csv.num(ref.p.y()), csv.num(ref.p.z()), csv.num(1e3 * e), csv.num(1e3 * dev);
+  path_error_.push_back(e);
+  path_deviation_.push_back(dev);
   fig_.max_path_error = std::max(fig_.max_path_error, e);
   sums.sum_sq += e * e;
   fig_.max_path_deviation = std::max(fig_.max_path_deviation, dev);

@@ -38,6 +38,13 @@ class RunRecorder {
   // the figures. Call once, after the run.
   std::string finish();
   const RunFigures& figures() const { return fig_; }
+  // After finish(): the observed rows, [t, x...] per output, and each row's
+  // path error and deviation [m] (empty without a reference), moved out.
+  struct Rows {
+    std::vector<double> rows;
+    std::vector<double> path_error, path_deviation;
+  };
+  Rows take_rows();
 
  private:
   struct Csv;   // the text of trajectory.csv, numbers at full precision
@@ -55,6 +62,7 @@ class RunRecorder {
   std::vector<double> saved_;    // [t, x...] per output
   std::vector<double> signals_;  // [u, e_a, i] per joint per output (held_ only)
   std::vector<DriveSignals> now_;
+  std::vector<double> path_error_, path_deviation_;  // [m] per row (with a reference)
   RunFigures fig_;
 };
 

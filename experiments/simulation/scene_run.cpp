@@ -39,7 +39,8 @@ void check_run_size(const Scene& sc, long max_steps) {
   check_stops("controller.setpoint_interval", sc.plant.setpoint_interval, sc.duration, max_steps);
 }
 
-SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const std::function<void(double t)>& progress) {
+SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const std::function<void(double t)>& progress,
+                        bool keep_rows) {
   Plant plant(sc.plant);
   auto integ = make_integrator(sc.integrator.name, rc.options);
   RunRecorder recorder(plant, sc.duration, sc.output_interval);
@@ -50,6 +51,12 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const std::funct
   }, rc.max_steps, rc.stops, rc.max_wall);
   run.trajectory_csv = recorder.finish();
   run.figures = recorder.figures();
+  if (keep_rows) {
+    RunRecorder::Rows rows = recorder.take_rows();
+    run.rows = std::move(rows.rows);
+    run.path_error = std::move(rows.path_error);
+    run.path_deviation = std::move(rows.path_deviation);
+  }
   run.stats = integ->stats();
   run.state_names = plant.layout().names;
   for (int k = 0; k < plant.size(); ++k) run.tolerance_scales.push_back(plant.tolerance_scale(k));

@@ -43,11 +43,15 @@ struct SceneRun {
   std::vector<double> tolerance_scales;  // the plant's typical magnitude of each state
   std::string trajectory_csv;
   RunFigures figures;
+  // With keep_rows: the output rows, [t, x...] per row (state_names.size() + 1
+  // numbers each), and each row's path error and deviation [m] (empty
+  // without a reference).
+  std::vector<double> rows, path_error, path_deviation;
 };
 
 // Runs the scene (integrator scene.integrator.name) over scene.duration;
 // progress(t) at every output, after the recorder has it (may be empty).
 SceneRun simulate_scene(const Scene& scene, const RunControls& controls,
-                        const std::function<void(double t)>& progress);
+                        const std::function<void(double t)>& progress, bool keep_rows = false);
 
 }  // namespace pumasim

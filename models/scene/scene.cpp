@@ -655,4 +655,24 @@ std::string resolved_toml(const Scene& sc) {
   return out.str();
 }
 
+std::string discrete_state(const Scene& sc) {
+  const PlantConfig& pc = sc.plant;
+  std::string what;
+  const auto add = [&what](const std::string& s) { what += (what.empty() ? "" : "; ") + s; };
+  if (pc.controller == ControllerMode::kSampled) {
+    add("the sampled controller's held output (controller.mode = \"sampled\")");
+  }
+  if (pc.reference && pc.setpoint_interval > 0 && pc.controller != ControllerMode::kNone) {
+    add("the held set-point (controller.setpoint_interval > 0)");
+  }
+  for (const FrictionParams& f : pc.friction) {
+    if (has_stick_slip_events(f.model)) {
+      add(std::string("the stuck and slipping modes of the friction (friction.model = \"") + to_string(f.model) +
+          "\")");
+      break;
+    }
+  }
+  return what;
+}
+
 }  // namespace pumasim

@@ -76,4 +76,12 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 // The scene with every default filled in, as TOML.
 std::string resolved_toml(const Scene& scene);
 
+// What the plant's right-hand side depends on besides (t, x): discrete state
+// that changes only at events (a sampled controller's held output, a held
+// set-point, the hybrid friction's stuck and slipping modes), named with the
+// scene keys that ask for it, "; "-separated; "" when f(t, x) alone is the
+// plant (its time events are then the reference's breakpoints only, where f
+// has kinks).
+std::string discrete_state(const Scene& scene);
+
 }  // namespace pumasim

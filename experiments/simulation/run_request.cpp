@@ -1,0 +1,123 @@
+#include "experiments/simulation/run_request.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+#include "experiments/simulation/run_documents.hpp"
+#include "experiments/simulation/run_folder.hpp"
+#include "integrators/registry.hpp"
+
+namespace pumasim {
+namespace {
+
+// What the command line's validators refuse before a request is made; the
+// same message for a request made otherwise (the Python module).
+void check_value(const char* option, const std::optional<double>& v, const char* expected, bool ok) {
+  if (!v || (std::isfinite(*v) && ok)) return;
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, *v);
+  throw std::invalid_argument(std::string(option) + ": expected " + expected + ", got '" + std::string(buf, r.ptr) +
+                              "'");
+}
+
+void check_request(const RunRequest& r) {
+  check_value("--dt", r.dt, "a number > 0", r.dt > 0.0);
+  check_value("--rtol", r.rtol, "a number > 0", r.rtol > 0.0);
+  check_value("--atol", r.atol, "a number > 0", r.atol > 0.0);
+  check_value("--t-end", r.t_end, "a number > 0", r.t_end > 0.0);
+  check_value("--max-steps", r.max_steps, "a whole number >= 0 (0: no limit)",
+              r.max_steps && *r.max_steps >= 0 && *r.max_steps <= 1e18 && *r.max_steps == std::floor(*r.max_steps));
+  check_value("--max-wall", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
+}
+
+// --backend: the scene's robot as simulated must be one the back-end can describe.
+void override_backend(Scene& sc, const std::string& name) {
+  const BackendInfo& info = find_backend(name);
+  const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
+  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw std::invalid_argument("--backend: " + why);
+  sc.plant.backend = name;
+}
+
+// The integrator's settings: the scene's, overridden by --dt (fixed-step
+// methods) or --rtol and --atol (adaptive ones); an option the method cannot
+// honour is refused. The scene records what was used.
+IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adaptive) {
+  const IntegratorInfo& info = find_integrator(sc.integrator.name);
+  IntegratorOptions io;
+  io.dt = sc.integrator.dt;
+  io.rtol = sc.integrator.rtol;
+  io.atol = sc.integrator.atol;
+  io.exact_jacobian = a.exact_jacobian;
+  adaptive = info.make(io)->capabilities().adaptive;
+  if (a.dt) {
+    if (adaptive) throw std::invalid_argument("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
+    io.dt = sc.integrator.dt = *a.dt;
+  }
+  if (a.rtol || a.atol) {
+    if (!adaptive) throw std::invalid_argument("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
+    if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
+    if (a.atol) io.atol = sc.integrator.atol = *a.atol;
+  }
+  if (io.exact_jacobian && !info.make(IntegratorOptions{})->capabilities().uses_jacobian) {
+    throw std::invalid_argument("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
+  }
+  if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) {
+    throw std::invalid_argument("--dt, --rtol, --atol: expected numbers > 0");
+  }
+  return io;
+}
+
+}  // namespace
+
+Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides) {
+  Scene sc = load_scene(file, overrides);
+  try {
+    find_integrator(sc.integrator.name);
+  } catch (const std::invalid_argument&) {
+    throw ConfigError(sc.integrator.name_where + "expected one of: " + integrator_names() + "; got \"" +
+                      sc.integrator.name + "\"");
+  }
+  return sc;
+}
+
+RunControls run_controls(Scene& sc, const RunRequest& a) {
+  check_request(a);
+  if (a.backend) override_backend(sc, *a.backend);
+  if (a.integrator) {
+    find_integrator(*a.integrator);  // an unknown name: the registry's message, before the scene changes
+    sc.integrator.name = *a.integrator;
+  }
+  RunControls rc;
+  rc.options = integrator_options(sc, a, rc.adaptive);
+  // A step budget for the whole run, so that a method crawling through a
+  // chattering discontinuity (steps of nanoseconds) ends as a reported
+  // failure instead of running for hours; and a wall-clock budget, as the
+  // step budget's time depends on the method.
+  if (a.max_steps) rc.max_steps = static_cast<long>(*a.max_steps);
+  if (rc.max_steps > 0) rc.options.max_steps = rc.max_steps;  // also each integrator's own per-call limit
+  if (a.max_wall) rc.max_wall = *a.max_wall;
+  if (a.t_end) sc.duration = *a.t_end;
+  rc.stops = a.late_events       ? Stops::kOutputsLateEvents
+             : a.stop_at_outputs ? Stops::kEventsAndOutputs
+                                 : Stops::kEvents;
+  return rc;
+}
+
+CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,
+                       bool force, const std::function<void(double t)>& progress, bool keep_rows) {
+  check_run_size(sc, rc.max_steps);
+  if (out) check_run_folder_target(*out, force);  // before the run: a refusal costs nothing
+  CompletedRun done;
+  done.run = simulate_scene(sc, rc, progress, keep_rows);
+  done.stats = stats_json(sc, rc, done.run);
+  if (out) {
+    write_run_folder(*out,
+                     {{"trajectory.csv", done.run.trajectory_csv}, {"stats.json", done.stats},
+                      {"meta.json", meta_json()}, {"scene.resolved.toml", resolved_toml(sc)}},
+                     force);
+  }
+  return done;
+}
+
+}  // namespace pumasim

@@ -1,0 +1,62 @@
+#include "models/robot/dynamics_query.hpp"
+
+#include <stdexcept>
+
+#include "models/robot/robot_file.hpp"
+
+namespace pumasim {
+namespace {
+
+void check_size(const Eigen::VectorXd& v, int n, const char* what) {
+  if (v.size() != n) {
+    throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(n) + " values (one per joint), got " +
+                                std::to_string(v.size()));
+  }
+}
+
+}  // namespace
+
+RobotDynamics robot_dynamics(const std::string& robot, const std::string& backend, bool rotor_inertia) {
+  RobotDynamics rd;
+  rd.model = load_robot(robot);
+  rd.rotor_inertia = rotor_inertia;
+  if (!rotor_inertia) rd.model = without_rotor_inertia(rd.model);
+  rd.backend = make_backend(backend, rd.model);
+  return rd;
+}
+
+Eigen::VectorXd pose_angles(const RobotModel& model, const std::string& name, const std::string& what) {
+  if (const NamedPose* p = model.pose(name)) return p->q;
+  std::string poses;
+  for (const auto& p : model.poses) poses += (poses.empty() ? "" : ", ") + p.name;
+  throw std::invalid_argument(what + ": expected a pose name of " + model.name + " (" +
+                              (poses.empty() ? "it has none" : poses) + ") or " + std::to_string(model.dof()) +
+                              " numbers, got '" + name + "'");
+}
+
+DynamicsValues evaluate_dynamics(DynamicsBackend& backend, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                 const std::optional<Eigen::VectorXd>& qdd, const std::optional<Eigen::VectorXd>& tau) {
+  const int n = backend.dof();
+  check_size(q, n, "q");
+  check_size(qd, n, "qd");
+  if (qdd) check_size(*qdd, n, "qdd");
+  if (tau) check_size(*tau, n, "tau");
+  DynamicsValues v;
+  v.mass_matrix.resize(n, n);
+  v.bias.resize(n);
+  v.gravity.resize(n);
+  backend.mass_matrix(q, v.mass_matrix);
+  backend.bias(q, qd, v.bias);
+  backend.gravity(q, v.gravity);
+  if (qdd) {
+    v.tau.emplace(n);
+    backend.inverse_dynamics(q, qd, *qdd, *v.tau);
+  }
+  if (tau) {
+    v.qdd.emplace(n);
+    backend.forward_dynamics(q, qd, *tau, *v.qdd);
+  }
+  return v;
+}
+
+}  // namespace pumasim

@@ -1,0 +1,288 @@
+"""Tests of the Python module `pumasim` (python/pumasim_module.cpp): against the pumasim binary (the
+same numbers, statistics, files and messages), against the C++ right-hand side as the integrators
+see it, and against scipy's solve_ivp. CTest runs them with the module's folder on PYTHONPATH and
+the binary in PUMASIM_BIN (python/CMakeLists.txt); by hand:
+
+    PYTHONPATH=build/release/python PUMASIM_BIN=build/release/bin/pumasim \
+        /usr/bin/python3 -m pytest -q tests/test_python_module.py
+"""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import pumasim
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+SCENES = os.path.join(ROOT, "experiments", "scenes")
+PASSIVE = os.path.join(SCENES, "passive_arm.toml")      # no drive, no controller: f(t, x) is the plant
+DRIVEN = os.path.join(SCENES, "paper_slow_viscous.toml")  # drive and continuous PIV following a reference
+HYBRID = os.path.join(SCENES, "stick_slip.toml")        # stick-slip modes: discrete state
+PUMASIM = os.environ.get("PUMASIM_BIN", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([PUMASIM, *args], capture_output=True, text=True, cwd=cwd)
+
+
+def cli_error(*args, cwd=None):
+    """The one line `pumasim` prints for bad input (exit status 2), without its "pumasim: " prefix."""
+    r = cli(*args, cwd=cwd)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith("pumasim: ") and r.stderr.count("\n") == 1, r.stderr
+    return r.stderr[len("pumasim: "):].rstrip("\n")
+
+
+# ---------------------------------------------------------------- registries and dynamics
+
+def test_registries_are_the_command_lines():
+    for command, names in (("backends", pumasim.backends()), ("integrators", pumasim.integrators())):
+        r = cli(command)
+        assert r.returncode == 0
+        assert names == [line.split("\t")[0] for line in r.stdout.splitlines()]
+        assert len(names) >= 5
+
+
+CASES = [  # (command-line options, keyword arguments)
+    (["--q=qn", "--qd=0.1,-0.2,0.3,0.4,-0.5,0.6", "--tau=1,2,3,0.1,0.2,0.3"],
+     dict(q="qn", qd=[0.1, -0.2, 0.3, 0.4, -0.5, 0.6], tau=[1, 2, 3, 0.1, 0.2, 0.3])),
+    (["--q=0.3,-0.7,1.1,0.2,0.9,-0.4", "--qd=1,0.5,-0.5,0,0.2,2", "--qdd=0.3,0.1,-2,1,0,0.5", "--no-rotor-inertia"],
+     dict(q=np.array([0.3, -0.7, 1.1, 0.2, 0.9, -0.4]), qd=(1, 0.5, -0.5, 0, 0.2, 2), qdd=[0.3, 0.1, -2, 1, 0, 0.5],
+          rotor_inertia=False)),
+    (["--q=qz", "--qdd=1,1,1,1,1,1", "--tau=0,0,0,0,0,0"], dict(q="qz", qdd=np.ones(6), tau=np.zeros(6))),
+]
+
+
+@pytest.mark.parametrize("backend", pumasim.backends())
+@pytest.mark.parametrize("case", range(len(CASES)))
+def test_dynamics_gives_the_command_lines_numbers(backend, case):
+    args, kwargs = CASES[case]
+    r = cli("dynamics", "--robot", "puma560", "--backend", backend, *args)
+    if r.returncode == 2:  # a back-end that cannot describe this robot (the folded closed form without rotors)
+        with pytest.raises(ValueError) as e:
+            pumasim.dynamics(robot="puma560", backend=backend, **kwargs)
+        assert r.stderr == "pumasim: " + str(e.value) + "\n"
+        return
+    assert r.returncode == 0, r.stderr
+    expected = json.loads(r.stdout)
+    got = pumasim.dynamics(robot="puma560", backend=backend, **kwargs)
+    assert list(got) == list(expected)  # the same keys in the same order
+    for key, value in expected.items():
+        if isinstance(value, list):
+            want = np.array(value, dtype=float)
+            assert got[key].shape == want.shape, key
+            # The same library call: the same numbers to the last bit (JSON numbers read back exactly).
+            np.testing.assert_array_equal(got[key], want, err_msg=key)
+        else:
+            assert got[key] == value, key
+
+
+def test_dynamics_takes_a_robot_file_path():
+    path = os.path.join(ROOT, "models", "robots", "puma560.toml")
+    a = pumasim.dynamics(robot=path, q="qr")
+    b = pumasim.dynamics(q="qr")
+    np.testing.assert_array_equal(a["gravity"], b["gravity"])
+    assert a["backend"] == "crba" and a["rotor_inertia_included"] is True
+
+
+# ---------------------------------------------------------------- the scene's right-hand side
+
+def test_scene_describes_its_plant():
+    s = pumasim.Scene.load(DRIVEN)
+    r = cli("check", DRIVEN)
+    assert r.returncode == 0
+    lines = r.stdout.splitlines()
+    state = next(l for l in lines if l.startswith("# state ("))
+    assert s.state_names == state.split(":", 1)[1].split()
+    assert s.size == len(s.state_names)
+    x0 = [float(v) for v in next(l for l in lines if l.startswith("# initial state:")).split(":", 1)[1].split()]
+    np.testing.assert_allclose(s.initial_state(), x0, rtol=1e-9, atol=1e-300)  # `check` prints 10 digits
+    assert r.stdout.startswith(s.resolved_toml())
+    assert s.discrete_state is None and s.name == "paper_slow_viscous"
+
+
+@pytest.mark.parametrize("scene", [PASSIVE, DRIVEN])
+def test_rhs_is_the_integrators_right_hand_side(scene):
+    # Two steps of forward Euler through the driver (x_{k+1} = x_k + h f(t_k, x_k), outputs at every
+    # step from the method's end state) against the same two steps taken with Scene.rhs: the state
+    # order, the time argument and the plant all have to agree. The driven scene's f depends on t
+    # through its reference and the controller.
+    h = 2.0 ** -14
+    s = pumasim.Scene.load(scene, overrides={"scene.output_interval": h})
+    run = pumasim.run(s, integrator="euler", dt=h, t_end=2 * h)
+    assert run.ok and run.x.shape == (3, s.size) and run.t[2] == 2 * h
+    x = s.initial_state()
+    np.testing.assert_array_equal(run.x[0], x)
+    for k in (1, 2):
+        x = x + h * s.rhs((k - 1) * h, x)
+        np.testing.assert_allclose(run.x[k], x, rtol=1e-14, atol=1e-14 * np.abs(x).max())
+    # and f moves: a test that would pass with f = 0 tests nothing
+    assert np.abs(run.x[2] - run.x[0]).max() > 1e3 * 1e-14 * np.abs(x).max()
+
+
+def central_jacobian(f, t, x, scales):
+    J = np.empty((x.size, x.size))
+    for k in range(x.size):
+        d = 1e-6 * max(scales[k], abs(x[k]))
+        e = np.zeros(x.size)
+        e[k] = d
+        J[:, k] = (f(t, x + e) - f(t, x - e)) / (2 * d)
+    return J
+
+
+@pytest.mark.parametrize("scene,t", [(PASSIVE, 0.3), (DRIVEN, 0.7)])
+def test_exact_jacobian_matches_differences_of_rhs(scene, t):
+    s = pumasim.Scene.load(scene)
+    x = pumasim.run(s, integrator="rk4", dt=1e-3, t_end=t).x[-1]  # a state in motion, not the start
+    J = s.jacobian(t, x)
+    assert J.shape == (s.size, s.size)
+    Jc = central_jacobian(s.rhs, t, x, s.tolerance_scales)
+    # per column (the entries of one derivative), and no smaller than a thousandth of the largest
+    # entry: a column that is zero (q1, about the vertical axis) holds the differences' rounding
+    scale = np.maximum(np.abs(J).max(axis=0), 1e-3 * np.abs(J).max())
+    assert (np.abs(J - Jc) / scale).max() < 1e-5
+    Jf = s.jacobian(t, x, exact=False)  # the integrators' forward differences
+    assert (np.abs(J - Jf) / scale).max() < 1e-3
+    assert np.abs(J - Jf).max() > 0  # differences, not the exact Jacobian again
+
+
+@pytest.mark.parametrize("method", ["Radau", "LSODA"])
+def test_solve_ivp_reproduces_a_builtin_run(method):
+    # The passive arm falling from qz for the scene's 2 s: scipy on Scene.rhs (with the exact
+    # Jacobian) and the built-in CVODE BDF, both far tighter than the comparison, agree at the end.
+    s = pumasim.Scene.load(PASSIVE)
+    builtin = pumasim.run(s, integrator="cvode-bdf", rtol=1e-12, atol=1e-14)
+    assert builtin.ok and builtin.t[-1] == s.duration
+    sol = solve_ivp(s.rhs, (0.0, s.duration), s.initial_state(), method=method, rtol=1e-10, atol=1e-12,
+                    jac=s.jacobian)
+    assert sol.success
+    np.testing.assert_allclose(sol.y[:, -1], builtin.x[-1], rtol=0, atol=1e-8)
+    assert np.abs(builtin.x[-1] - builtin.x[0]).max() > 0.1  # the arm has moved
+
+
+# ---------------------------------------------------------------- runs
+
+def test_run_is_pumasim_run(tmp_path):
+    # The same run through the module and the command line: the same trajectory file, the same
+    # statistics but for the wall times, and the module's arrays are that trajectory.
+    opts = ["--integrator", "cvode-bdf", "--rtol", "1e-6", "--atol", "1e-9", "--t-end", "1.5"]
+    r = cli("run", DRIVEN, *opts, "--out", str(tmp_path / "cli"))
+    assert r.returncode == 0, r.stderr
+    run = pumasim.run(pumasim.Scene.load(DRIVEN), integrator="cvode-bdf", rtol=1e-6, atol=1e-9, t_end=1.5,
+                      out=tmp_path / "py")
+    assert run.ok and run.out == str(tmp_path / "py")
+    for name in ("trajectory.csv", "scene.resolved.toml", ".pumasim-run"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    cli_stats = json.loads(r.stdout)
+    assert json.loads((tmp_path / "py" / "stats.json").read_text()) == run.stats
+    timing = {"integration_wall_time_s", "wall_time_s"}
+    assert list(run.stats) == list(cli_stats)
+    assert {k: v for k, v in run.stats.items() if k not in timing} == \
+        {k: v for k, v in cli_stats.items() if k not in timing}
+    table = np.genfromtxt(tmp_path / "cli" / "trajectory.csv", delimiter=",", names=True)
+    header = (tmp_path / "cli" / "trajectory.csv").read_text().splitlines()[0].split(",")
+    assert [h.split(" [")[0] for h in header[1:1 + len(run.state_names)]] == run.state_names
+    np.testing.assert_array_equal(run.t, table[table.dtype.names[0]])
+    np.testing.assert_array_equal(run.x, np.column_stack([table[n] for n in table.dtype.names[1:1 + run.x.shape[1]]]))
+    np.testing.assert_allclose(run.path_error_mm, table["path_error_mm"], rtol=1e-15, atol=0)
+    assert run.path_error_mm.max() == pytest.approx(run.stats["max_path_error_mm"], rel=1e-15)
+
+
+def test_run_writes_nothing_without_out(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # where the command line would write runs/passive_arm/
+    run = pumasim.run(PASSIVE, t_end=0.05)  # a path is a scene too; the scene's integrator (rk4)
+    assert run.ok and run.out is None and run.stats["integrator"] == "rk4"
+    assert run.t[-1] == pytest.approx(0.05) and run.path_error_mm.size == 0
+    assert os.listdir(tmp_path) == []
+
+
+# ---------------------------------------------------------------- discrete state
+
+def test_a_scene_with_discrete_state_refuses_rhs():
+    s = pumasim.Scene.load(HYBRID)
+    assert "friction.model" in s.discrete_state
+    x = s.initial_state()
+    for call in (lambda: s.rhs(0.0, x), lambda: s.jacobian(0.0, x)):
+        with pytest.raises(ValueError, match="discrete state"):
+            call()
+    sampled = pumasim.Scene.load(DRIVEN, overrides={"controller.mode": "sampled", "controller.servo_period": 1e-3})
+    assert "controller.mode" in sampled.discrete_state
+    assert sampled.time_events(0.0105) == pytest.approx([0.001 * k for k in range(1, 11)])
+    assert pumasim.run(sampled, integrator="cvode-bdf", t_end=0.05).ok  # run() takes it, with its events
+
+
+# ---------------------------------------------------------------- bad input
+
+def test_an_unknown_key_names_file_and_key(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(open(PASSIVE).read().replace("[friction]\n", "[friction]\nviscosity = 1.0\n"))
+    with pytest.raises(ValueError) as e:
+        pumasim.Scene.load(bad)
+    assert str(bad) in str(e.value) and "viscosity" in str(e.value)
+    assert str(e.value) == cli_error("check", str(bad))
+
+
+def test_overrides_are_the_command_lines_set():
+    with pytest.raises(ValueError) as e:
+        pumasim.Scene.load(PASSIVE, overrides={"friction.viscosity": 1.0})
+    assert str(e.value) == cli_error("check", PASSIVE, "--set", "friction.viscosity=1.0")
+    with pytest.raises(ValueError) as e:
+        pumasim.Scene.load(PASSIVE, overrides={"scene.duration": -1})
+    assert str(e.value) == cli_error("check", PASSIVE, "--set", "scene.duration=-1")
+    # every kind of value, and the command line's own strings
+    s = pumasim.Scene.load(PASSIVE, overrides={"scene.duration": 0.25, "scene.rotor_inertia": False,
+                                               "friction.viscous": [1e-3, 2e-3, 3e-3, 4e-5, 5e-5, 6e-5],
+                                               "integrator.name": "cvode-bdf"})
+    assert s.duration == 0.25 and s.integrator == "cvode-bdf"
+    t = pumasim.Scene.load(PASSIVE, overrides=["scene.duration=0.25", "scene.rotor_inertia=false",
+                                               "friction.viscous=[1e-3, 2e-3, 3e-3, 4e-5, 5e-5, 6e-5]",
+                                               'integrator.name="cvode-bdf"'])
+    assert s.resolved_toml() == t.resolved_toml()
+
+
+def test_bad_dynamics_input_is_a_value_error():
+    with pytest.raises(ValueError) as e:
+        pumasim.dynamics(backend="no-such-backend", q="qz")
+    assert str(e.value) in cli_error("dynamics", "--robot", "puma560", "--backend", "no-such-backend", "--q=qz")
+    assert "crba" in str(e.value)
+    with pytest.raises(ValueError, match=r"^q: expected 6 values \(one per joint\), got 3$"):
+        pumasim.dynamics(q=[0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="^tau: expected 6 values"):
+        pumasim.dynamics(q="qz", tau=np.zeros(7))
+    with pytest.raises(ValueError, match="qz"):
+        pumasim.dynamics(q="no-such-pose")
+    with pytest.raises(ValueError, match="1-D"):
+        pumasim.dynamics(q=np.zeros((2, 3)))
+    with pytest.raises(ValueError) as e:
+        pumasim.dynamics(robot="no_such_robot", q="qz")
+    assert str(e.value) == cli_error("dynamics", "--robot", "no_such_robot", "--backend", "crba", "--q=qz")
+
+
+def test_bad_state_and_run_options_are_value_errors(tmp_path):
+    s = pumasim.Scene.load(PASSIVE)
+    with pytest.raises(ValueError, match=r"^x: expected 12 values \(the scene's state\), got 11$"):
+        s.rhs(0.0, np.zeros(11))
+    with pytest.raises(ValueError, match="^x: expected 12 values"):
+        s.jacobian(0.0, np.zeros(13))
+    with pytest.raises(ValueError) as e:
+        pumasim.run(s, integrator="cvode-bdf", dt=1e-3)
+    assert str(e.value) == cli_error("run", PASSIVE, "--integrator", "cvode-bdf", "--dt", "1e-3",
+                                     "--out", str(tmp_path / "never"))
+    with pytest.raises(ValueError) as e:
+        pumasim.run(s, rtol=1e-6)
+    assert str(e.value) == cli_error("run", PASSIVE, "--rtol", "1e-6", "--out", str(tmp_path / "never"))
+    with pytest.raises(ValueError, match=r"^--t-end: expected a number > 0, got '-1'$"):
+        pumasim.run(s, t_end=-1.0)
+    with pytest.raises(ValueError, match="unknown integrator"):
+        pumasim.run(s, integrator="no-such-integrator")
+    # a folder pumasim did not write is never replaced, as by the command line
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep")
+    with pytest.raises(ValueError) as e:
+        pumasim.run(s, t_end=0.01, out=tmp_path / "mine", force=True)
+    assert str(e.value) == cli_error("run", PASSIVE, "--t-end", "0.01", "--out", str(tmp_path / "mine"), "--force")
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "keep"
+    assert not (tmp_path / "never").exists()
