@@ -148,7 +148,7 @@ TEST(ComputedTorque, SampledHoldsTheContinuousOutputAtTheSample) {
 // and viscous friction (smooth).
 TEST(ComputedTorque, ExactJacobianMatchesDifferences) {
   Scene sc = load_scene(scene_path("computed_torque"));
-  for (auto& f : sc.plant.friction) f.model = FrictionModel::kViscous;
+  for (auto& f : sc.plant.friction) f.model = friction_model<ViscousFriction>();
   Plant plant(sc.plant);
   const int m = plant.size();
   ASSERT_GE(plant.layout().i, 0);

@@ -413,7 +413,7 @@ TEST(IntegratorRegistry, UnknownNameListsTheValidOnes) {
 // paper_slow with viscous friction and the PIV sampled at 1 kHz.
 Scene sampled_paper_scene() {
   Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
-  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
+  for (auto& f : sc.plant.friction) f = FrictionParams{friction_model<ViscousFriction>(), 1e-3};
   sc.plant.controller = ControllerMode::kSampled;
   sc.plant.servo_period = 1e-3;
   return sc;
@@ -493,7 +493,7 @@ TEST(Imex, PlantSplitSumsToTheRightHandSide) {
 
 TEST(Imex, AgreesWithBdfOnThePlant) {
   Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml");
-  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
+  for (auto& f : sc.plant.friction) f = FrictionParams{friction_model<ViscousFriction>(), 1e-3};
   sc.plant.setpoint_interval = 1e-3;
   std::vector<double> a, b;
   for (const char* name : {"arkode-imex", "cvode-bdf"}) {

@@ -71,7 +71,7 @@ PlantConfig one_joint(FrictionParams friction, double La, double u0) {
 // tau = La / (R0 + R).
 TEST(Motor, LockedRotorCurrentRisesWithTimeConstantLaOverR) {
   FrictionParams f;
-  f.model = FrictionModel::kHybrid;
+  f.model = friction_model<HybridFriction>();
   f.static_torque = 1e6;
   Plant plant(one_joint(f, 1e-3, 1.5));
   const double i_inf = 2.0 * 1.5 / 2.0, tau = 1e-3 / 2.0;
@@ -90,7 +90,7 @@ TEST(Motor, LockedRotorCurrentRisesWithTimeConstantLaOverR) {
 // i = (K_A u0 - K w) / R_t, so w = K K_A u0 / (K^2 + R_t B) (motor side).
 TEST(Motor, FreeRunningSteadySpeed) {
   FrictionParams f;
-  f.model = FrictionModel::kViscous;
+  f.model = friction_model<ViscousFriction>();
   f.viscous = 1e-4;
   Plant plant(one_joint(f, 1e-3, 1.5));
   std::vector<double> x_end;
@@ -106,7 +106,7 @@ TEST(Motor, FreeRunningSteadySpeed) {
 // at zero speed the friction balances the applied torque up to the static
 // level; moving, it is the kinetic level against the motion.
 TEST(Friction, RulesCaseByCase) {
-  FrictionParams p{FrictionModel::kPaper, 0.0, 0.146, 0.124, 1e-6, 1e-2};
+  FrictionParams p{friction_model<PaperRuleFriction>(), 0.0, 0.146, 0.124, 1e-6, 1e-2};
   const SlipMode any = SlipMode::kStuck;
   EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, 0.1, any), 0.1);
   EXPECT_DOUBLE_EQ(friction_torque(p, 0.0, -0.1, any), -0.1);
@@ -116,21 +116,21 @@ TEST(Friction, RulesCaseByCase) {
   EXPECT_DOUBLE_EQ(friction_torque(p, 0.5, -0.3, any), 0.124);
   EXPECT_DOUBLE_EQ(friction_torque(p, -0.5, 0.3, any), -0.124);
   FrictionParams k = p;
-  k.model = FrictionModel::kKarnopp;
+  k.model = friction_model<KarnoppFriction>();
   k.zero_speed = 1e-3;
   k.viscous = 0.01;
   EXPECT_DOUBLE_EQ(friction_torque(k, 5e-4, 0.1, any), 0.1);
   EXPECT_DOUBLE_EQ(friction_torque(k, 2e-3, 0.1, any), 0.124 + 0.01 * 2e-3);
   FrictionParams th = p;
-  th.model = FrictionModel::kTanh;
+  th.model = friction_model<TanhFriction>();
   th.speed_scale = 0.05;
   EXPECT_DOUBLE_EQ(friction_torque(th, 0.05, 0.0, any), 0.124 * std::tanh(1.0));
   FrictionParams hy = p;
-  hy.model = FrictionModel::kHybrid;
+  hy.model = friction_model<HybridFriction>();
   EXPECT_DOUBLE_EQ(friction_torque(hy, 0.0, 0.13, SlipMode::kStuck), 0.13);
   EXPECT_DOUBLE_EQ(friction_torque(hy, 0.01, 0.0, SlipMode::kPositive), 0.124);
   EXPECT_DOUBLE_EQ(friction_torque(hy, -0.01, 0.0, SlipMode::kNegative), -0.124);
-  FrictionParams v{FrictionModel::kViscous, 0.02};
+  FrictionParams v{friction_model<ViscousFriction>(), 0.02};
   EXPECT_DOUBLE_EQ(friction_torque(v, 3.0, 1.0, any), 0.06);
   EXPECT_DOUBLE_EQ(friction_torque(FrictionParams{}, 3.0, 1.0, any), 0.0);
 }
@@ -141,7 +141,7 @@ TEST(Friction, RulesCaseByCase) {
 // joint to slipping at that time (fixed step: at the end of the step that
 // crosses it), and the joint then moves forward.
 TEST(Friction, HybridBreakAwayAtTheClosedFormTime) {
-  FrictionParams f{FrictionModel::kHybrid, 0.0, 0.146, 0.124, 1e-6, 1e-2};
+  FrictionParams f{friction_model<HybridFriction>(), 0.0, 0.146, 0.124, 1e-6, 1e-2};
   Plant plant(one_joint(f, 1e-3, 1.5));  // K i_inf = 0.15 > 0.146: breaks away
   ASSERT_EQ(plant.num_roots(), 1);
   const double tau = 5e-4, i_break = 0.146 / 0.1;
@@ -174,7 +174,7 @@ TEST(Friction, HybridBreakAwayAtTheClosedFormTime) {
 // reference moves must slip at some time.
 TEST(Friction, HybridModesStayConsistentWithEveryRootFinder) {
   Scene sc = load_scene(scene_path("paper_slow_6dof"));
-  for (auto& f : sc.plant.friction) f.model = FrictionModel::kHybrid;
+  for (auto& f : sc.plant.friction) f.model = friction_model<HybridFriction>();
   for (const char* name : {"cvode-bdf", "cvode-adams", "arkode-dirk", "odeint-dopri5", "rk4"}) {
     Plant plant(sc.plant);
     IntegratorOptions o;
@@ -289,7 +289,7 @@ TEST(Plant, EnergyLedgerClosesToTheTolerance) {
 
 Scene smooth_paper_scene() {
   Scene sc = load_scene(scene_path("paper_slow"));
-  for (auto& f : sc.plant.friction) f = FrictionParams{FrictionModel::kViscous, 1e-3};
+  for (auto& f : sc.plant.friction) f = FrictionParams{friction_model<ViscousFriction>(), 1e-3};
   sc.plant.setpoint_interval = 1e-3;  // held set-points: cheap right-hand side
   return sc;
 }

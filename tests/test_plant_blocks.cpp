@@ -22,11 +22,11 @@ TEST(FrictionRegistry, EveryLawHasAUniqueNameThatReadsBack) {
   FrictionLaws::for_each([&](auto law) {
     using L = decltype(law);
     EXPECT_TRUE(names.insert(L::kName).second) << L::kName;
-    EXPECT_TRUE(models.insert(static_cast<int>(L::kModel)).second) << L::kName;
+    EXPECT_TRUE(models.insert(friction_model<L>().index).second) << L::kName;
     FrictionModel m{};
     ASSERT_TRUE(friction_model_from_name(L::kName, &m)) << L::kName;
-    EXPECT_EQ(m, L::kModel);
-    EXPECT_STREQ(to_string(L::kModel), L::kName);
+    EXPECT_EQ(m, friction_model<L>());
+    EXPECT_STREQ(to_string(friction_model<L>()), L::kName);
     // An event-driven law needs the torque it must resist (to know when it breaks away).
     if (L::kStickSlipEvents) {
       EXPECT_TRUE(L::kNeedsAppliedTorque) << L::kName;
@@ -39,15 +39,15 @@ TEST(FrictionRegistry, EveryLawHasAUniqueNameThatReadsBack) {
 // Every law but none opposes the motion (torque has the sign of the speed)
 // away from "zero" speed, and none gives 0.
 TEST(FrictionRegistry, EveryLawOpposesTheMotion) {
-  const FrictionParams base{FrictionModel::kNone, 0.01, 0.146, 0.124, 1e-6, 1e-2};
+  const FrictionParams base{friction_model<NoFriction>(), 0.01, 0.146, 0.124, 1e-6, 1e-2};
   FrictionLaws::for_each([&](auto law) {
     using L = decltype(law);
     FrictionParams f = base;
-    f.model = L::kModel;
+    f.model = friction_model<L>();
     for (double w : {-3.0, -0.5, 0.5, 3.0}) {
       const SlipMode mode = w > 0 ? SlipMode::kPositive : SlipMode::kNegative;
       const double tf = friction_torque(f, w, 0.0, mode);
-      if (L::kModel == FrictionModel::kNone) {
+      if (friction_model<L>() == friction_model<NoFriction>()) {
         EXPECT_EQ(tf, 0.0);
       } else {
         EXPECT_GT(tf * w, 0.0) << L::kName << " w = " << w;

@@ -157,7 +157,7 @@ void TimeOptimalPlanner::drive_demand(const PathDynamics& d, int i, int j, doubl
   const double dq = d.dq[i][j], wm = Z * dq * sd;
   const double tau = d.a[i][j] * sdd + d.b[i][j] * sd * sd + d.c[i][j];
   const double sgn = dq > 0 ? 1.0 : dq < 0 ? -1.0 : 0.0;  // the direction the joint moves along the path
-  const double tf = f.model == FrictionModel::kNone ? 0.0 : f.kinetic_torque * sgn + f.viscous * wm;
+  const double tf = f.model.none() ? 0.0 : f.kinetic_torque * sgn + f.viscous * wm;
   amps = (tau / Z + tf) / K;
   volts = R * amps + K * wm;
 }

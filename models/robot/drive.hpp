@@ -31,10 +31,18 @@ struct MotorParams {
 // |w_m| <= zero_speed the friction balances the applied torque up to the static
 // level), exact hybrid stick/slip with events, Karnopp (the paper's rule with a
 // finite band), and smooth tanh.
-enum class FrictionModel : std::uint8_t { kNone, kViscous, kPaper, kHybrid, kKarnopp, kTanh };
+// Which friction law a joint follows: the law's place in the plant's list
+// (FrictionLaws, models/plant/friction/registry.hpp; friction_model<Law>()
+// names one). The first law, and the default, is none: no friction torque
+// whatever the numbers below.
+struct FrictionModel {
+  std::uint8_t index = 0;
+  constexpr bool none() const { return index == 0; }
+  friend bool operator==(FrictionModel, FrictionModel) = default;
+};
 
 struct FrictionParams {
-  FrictionModel model = FrictionModel::kNone;
+  FrictionModel model;          // none by default
   double viscous = 0.0;         // B [N m s/rad], added in every model but kNone
   double static_torque = 0.0;   // Fs [N m] (paper: 0.146)
   double kinetic_torque = 0.0;  // Fk [N m] (paper: 0.124)

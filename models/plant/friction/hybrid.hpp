@@ -14,7 +14,6 @@
 namespace pumasim {
 
 struct HybridFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kHybrid;
   static constexpr const char* kName = "hybrid";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = true;

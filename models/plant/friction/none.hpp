@@ -7,7 +7,6 @@
 namespace pumasim {
 
 struct NoFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kNone;
   static constexpr const char* kName = "none";
   static constexpr bool kNeedsAppliedTorque = false;  // the torque to resist at rest (needs h)
   static constexpr bool kStickSlipEvents = false;     // stuck/slipping modes switched by root functions

@@ -11,7 +11,7 @@ const char* to_string(FrictionModel m) {
 const std::vector<std::pair<std::string, FrictionModel>>& friction_model_choices() {
   static const std::vector<std::pair<std::string, FrictionModel>> choices = [] {
     std::vector<std::pair<std::string, FrictionModel>> out;
-    FrictionLaws::for_each([&](auto law) { out.emplace_back(decltype(law)::kName, decltype(law)::kModel); });
+    FrictionLaws::for_each([&](auto law) { out.emplace_back(decltype(law)::kName, friction_model<decltype(law)>()); });
     return out;
   }();
   return choices;

@@ -1,7 +1,7 @@
-// The friction models: one file per law (this folder), one line in
-// FrictionLaws below, and its enumerator (FrictionModel, models/robot/drive.hpp,
-// the parameters' vocabulary that the reference layer's planner reads too). A law is a type with
-//   kModel               its enumerator (models/robot/drive.hpp: the scene's name for it)
+// The friction models: one file per law (this folder) and one line in
+// FrictionLaws below. A joint's FrictionParams name its law by its place in
+// the list (FrictionModel, models/robot/drive.hpp; friction_model<Law>()); the
+// first law is none, the parameters' default. A law is a type with
 //   kName                its name in scene files
 //   kNeedsAppliedTorque  it reads the torque it must resist at rest (the plant then computes h)
 //   kStickSlipEvents     its stuck/slipping modes switch at root functions (the hybrid model)
@@ -11,7 +11,10 @@
 // call and no lookup by name in the right-hand side.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -25,18 +28,40 @@ namespace pumasim {
 
 template <class... Laws>
 struct FrictionLawList {
+  // The law's FrictionModel: its place in the list.
+  template <class Law>
+  static constexpr FrictionModel model_of() {
+    constexpr bool same[] = {std::is_same_v<Law, Laws>...};
+    for (std::size_t i = 0; i < sizeof...(Laws); ++i) {
+      if (same[i]) return FrictionModel{static_cast<std::uint8_t>(i)};
+    }
+    throw "not a friction law of the list";  // in a constant expression: a compile error
+  }
   template <class F>
   static void visit(FrictionModel m, F&& f) {
-    ((m == Laws::kModel ? (f(Laws{}), true) : false) || ...);
+    visit_in(m, f, std::index_sequence_for<Laws...>{});
   }
   template <class F>
   static void for_each(F&& f) {
     (f(Laws{}), ...);
   }
+
+ private:
+  template <class F, std::size_t... I>
+  static void visit_in(FrictionModel m, F& f, std::index_sequence<I...>) {
+    ((m.index == I ? (f(Laws{}), true) : false) || ...);
+  }
 };
 
 using FrictionLaws =
     FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction, TanhFriction>;
+
+template <class Law>
+constexpr FrictionModel friction_model() {
+  constexpr FrictionModel m = FrictionLaws::model_of<Law>();
+  return m;
+}
+static_assert(friction_model<NoFriction>().none(), "the first law, the default, is none");
 
 // Friction torque on the motor shaft, opposing motion [N m, motor side].
 // w: shaft speed; tau_applied: the torque the friction must resist when the

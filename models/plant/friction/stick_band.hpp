@@ -26,7 +26,6 @@ S stick_band_torque(const FrictionParams& f, const S& w, const S& tau_applied) {
 }
 
 struct PaperRuleFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kPaper;
   static constexpr const char* kName = "paper";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;
@@ -39,7 +38,6 @@ struct PaperRuleFriction {
 };
 
 struct KarnoppFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kKarnopp;
   static constexpr const char* kName = "karnopp";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;

@@ -10,7 +10,6 @@
 namespace pumasim {
 
 struct TanhFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kTanh;
   static constexpr const char* kName = "tanh";
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;

@@ -7,7 +7,6 @@
 namespace pumasim {
 
 struct ViscousFriction {
-  static constexpr FrictionModel kModel = FrictionModel::kViscous;
   static constexpr const char* kName = "viscous";
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;
