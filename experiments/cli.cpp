@@ -158,7 +158,8 @@ const CLI::Validator kWritableFile(
 // A scene file and its overrides: what check, run, stiffness and conditioning share.
 struct SceneArgs {
   std::string file;
-  std::vector<std::string> sets;  // --set section.key=value, repeatable
+  std::vector<std::string> sets;    // --set section.key=value, repeatable
+  std::vector<std::string> unsets;  // --unset section.key, repeatable
 };
 
 void add_scene(CLI::App* app, SceneArgs& a) {
@@ -170,12 +171,19 @@ void add_scene(CLI::App* app, SceneArgs& a) {
       ->type_name("SECTION.KEY=VALUE")
       ->take_all()
       ->allow_extra_args(false);  // one value per --set: the scene file may follow
+  app->add_option("--unset", a.unsets,
+                  "removes a key (or a table) of the scene file before the --set values and the checks, e.g. "
+                  "--unset friction.static_torque when --set friction.model=\"viscous\" switches the law; "
+                  "repeatable")
+      ->type_name("SECTION.KEY")
+      ->take_all()
+      ->allow_extra_args(false);
 }
 
 // The scene, loaded and checked: its integrator exists (`check` says so with
 // the file, line and key, as `run` would otherwise fail without them).
 Scene load_checked_scene(const SceneArgs& a) {
-  Scene sc = load_scene(a.file, a.sets);
+  Scene sc = load_scene(a.file, a.sets, a.unsets);
   try {
     find_integrator(sc.integrator.name);
   } catch (const std::invalid_argument&) {

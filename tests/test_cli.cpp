@@ -1,7 +1,8 @@
 // The command line as CLI11 parses it: bad input exits with status 2 and one
 // line on stderr naming the option and what it expects; the help lists every
-// command; negative numbers are values; repeated --set all apply; stiffness
-// and conditioning write CSV files with a header of named columns.
+// command; negative numbers are values; repeated --set all apply; --unset
+// removes keys (and an unknown key after a switch says why); stiffness and
+// conditioning write CSV files with a header of named columns.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -138,6 +139,51 @@ TEST(CliParsing, ACommandsHelpListsItsOptions) {
     }
   }
   expect_bad({"help", "fly"}, {"help: unknown command 'fly'; expected one of: dynamics"});
+}
+
+// --unset removes keys of the scene file before --set and the checks: the
+// scene switches its friction law from the command line.
+TEST(CliParsing, UnsetRemovesKeysSoThatASceneSwitchesItsFrictionLaw) {
+  const Result r = cli({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.static_torque",
+                        "--unset", "friction.kinetic_torque", "--unset=friction.zero_speed"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("[friction]\nmodel = 'viscous'\nviscous = [ 0.00148,"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("static_torque"), std::string::npos) << r.out;
+  // A table as a whole; then --set puts back what it names.
+  const Result t = cli({"check", kScene, "--unset", "friction", "--set", "friction.model=\"none\""});
+  ASSERT_EQ(t.status, kExitOk) << t.err;
+  EXPECT_NE(t.out.find("[friction]\nmodel = 'none'\n\n"), std::string::npos) << t.out;
+}
+
+// A key that the switch left without meaning: unknown, and the message says
+// why (the choice it does not apply to, and the --set that made it) and how
+// to remove every such key.
+TEST(CliParsing, AKeyLeftWithoutMeaningByASwitchSaysWhyAndHowToRemoveIt) {
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\""},
+             {"paper_slow.toml:", "unknown key 'friction.kinetic_torque'; expected one of: model, viscous",
+              "does not apply to friction.model = \"viscous\" (--set friction.model=\"viscous\")",
+              "--unset friction.kinetic_torque --unset friction.static_torque --unset friction.zero_speed"});
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.kinetic_torque",
+              "--unset", "friction.static_torque"},
+             {"paper_slow.toml:", "unknown key 'friction.zero_speed'", "with --unset friction.zero_speed)"});
+  // Set by --set itself: the override is named, and dropping it is the remedy.
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.kinetic_torque",
+              "--unset", "friction.static_torque", "--unset", "friction.zero_speed", "--set", "friction.zero_speed=1"},
+             {"--set friction.zero_speed=1: unknown key 'friction.zero_speed'", "does not apply to friction.model",
+              "drop --set friction.zero_speed=1"});
+  // In the file itself (no switch): the same reason, from the file's own choice.
+  expect_bad({"check", kScene, "--set", "reference.timing=\"quintic\"", "--set", "reference.traversal_time=20"},
+             {"unknown key 'reference.max_speed'", "does not apply to reference.timing = \"quintic\"",
+              "--unset reference.max_speed --unset reference.profile"});
+}
+
+TEST(CliParsing, UnsetOfAKeyTheSceneDoesNotHaveIsNamed) {
+  expect_bad({"check", kScene, "--unset", "friction.static_torq"},
+             {"--unset friction.static_torq: ", "paper_slow.toml has no key 'friction.static_torq'",
+              "[friction] has: kinetic_torque, model, static_torque, viscous, zero_speed"});
+  expect_bad({"run", kScene, "--unset", "planning.grid"}, {"paper_slow.toml has no table [planning]"});
+  expect_bad({"check", kScene, "--unset", "friction..model"}, {"--unset friction..model: expected section.key"});
+  expect_bad({"check", kScene, "--unset"}, {"--unset: expected a value"});
 }
 
 TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {

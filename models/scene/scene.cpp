@@ -566,8 +566,10 @@ void write_initial(toml::table& doc, const PlantConfig& pc) {
 
 }  // namespace
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 const std::vector<std::string>& unsets) {
   toml::table doc = parse_toml_file(path);
+  remove_keys(doc, unsets, path);
   apply_overrides(doc, overrides);
   StrictTable root(doc, path, "");
   Scene sc;
