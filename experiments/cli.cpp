@@ -301,7 +301,7 @@ struct RunArgs {
   SceneArgs scene;
   std::optional<std::string> integrator, backend, out;
   std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
-  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false;
+  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false, quiet = false;
 };
 
 // --backend: the scene's robot as simulated must be one the back-end can describe.
@@ -359,16 +359,26 @@ RunControls run_controls(Scene& sc, const RunArgs& a) {
   return rc;
 }
 
-// On a terminal, the run's time on stderr at most twice a second.
-std::function<void(double)> progress_line(std::ostream& err, const Scene& sc) {
-  if (!isatty(STDERR_FILENO)) return {};
-  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
-  return [&err, last, name = sc.name, duration = sc.duration](double t) {
-    if (std::chrono::steady_clock::now() - *last > std::chrono::milliseconds(500)) {
-      err << "\rpumasim run " << name << ": t = " << t << " / " << duration << " s   " << std::flush;
-      *last = std::chrono::steady_clock::now();
-    }
+// Where the run is, on one line of stderr rewritten in place (simulated time,
+// steps, the current step size, wall-clock time): from the driver's step
+// loop, first after a second, then every 0.25 s of wall-clock time; only on a
+// terminal and without --quiet. `width` keeps the length of the last line, to
+// clear it.
+ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::size_t& width) {
+  if (quiet || !isatty(STDERR_FILENO)) return {};
+  ProgressHook hook;
+  hook.report = [&err, &width, name = sc.name, duration = sc.duration](const RunProgress& p) {
+    char line[320];
+    int len = std::snprintf(line, sizeof line,
+                            "\rpumasim run %s: t = %.6g / %.6g s (%.0f%%), %ld steps, h = %.3g s, %.1f s elapsed",
+                            name.c_str(), p.t, duration, duration > 0 ? 100 * p.t / duration : 0.0, p.steps, p.h,
+                            p.wall);
+    len = std::clamp(len, 1, static_cast<int>(sizeof line) - 1);
+    const std::size_t shown = static_cast<std::size_t>(len) - 1;  // without the \r
+    err << line << std::string(width > shown ? width - shown : 0, ' ') << std::flush;
+    width = shown;
   };
+  return hook;
 }
 
 int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
@@ -378,15 +388,15 @@ int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
   check_run_folder_target(dir, a.force);  // before the run: a refusal costs nothing
-  const auto progress = progress_line(err, sc);
-  const SceneRun run = simulate_scene(sc, rc, progress);
-  if (progress) err << "\r" << std::string(60, ' ') << "\r";
+  std::size_t progress_width = 0;
+  const SceneRun run = simulate_scene(sc, rc, progress_line(err, sc, a.quiet, progress_width));
+  if (progress_width > 0) err << "\r" << std::string(progress_width, ' ') << "\r" << std::flush;
   const std::string stats = stats_json(sc, rc, run);
   write_run_folder(dir, {{"trajectory.csv", run.trajectory_csv}, {"stats.json", stats}, {"meta.json", meta_json()},
                          {"scene.resolved.toml", resolved_toml(sc)}},
                    a.force);
   out << stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
-  err << "results: " << dir.string() << "/\n";
+  if (!a.quiet) err << "results: " << dir.string() << "/\n";
   if (!run.result.ok) err << "pumasim run: " << run.result.failure << "\n";
   return run.result.ok ? kExitOk : kExitInternal;
 }
@@ -409,6 +419,8 @@ void add_run(CLI::App* app, RunArgs& a) {
              "(default 10000000)", "N");
   add_number(app, "--max-wall", a.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
              "(default 600)", "SECONDS");
+  app->add_flag("--quiet,-q", a.quiet, "no progress line and no 'results: DIR/' line on stderr (errors and a "
+                "failed run's reason still are)");
   auto* late = app->add_flag("--late-events", a.late_events,
                              "do not stop at controller samples and set-point updates; apply them late, at the "
                              "next output (shows what stepping over them does)");
@@ -578,10 +590,13 @@ const Command kCommands[] = {
      [](CLI::App* a, Parsed& p) { add_scene(a, p.check); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_check(p.check, o); }},
     {"run", "runs a scene and writes its run folder",
-     "Writes DIR: trajectory.csv, stats.json (also on stdout), scene.resolved.toml, meta.json, all at once at the "
-     "end. DIR must be new, or a pumasim run folder holding only what pumasim wrote, replaced only with --force: "
-     "pumasim never deletes what it did not write. More steps than --max-steps or more wall-clock time than "
-     "--max-wall end the run as a reported failure (exit status 1); a scene whose controller samples or "
+     "Writes DIR: trajectory.csv, stats.json, scene.resolved.toml, meta.json, all at once at the end. stdout "
+     "carries stats.json "
+     "alone (pipe it to jq); stderr the progress line (on a terminal, for runs over a second), 'results: DIR/' "
+     "and errors (--quiet: errors only). DIR must be new, or a pumasim run folder holding only what pumasim "
+     "wrote, replaced only with --force: pumasim never deletes what it did not write. More steps than "
+     "--max-steps or more wall-clock time than --max-wall end the run as a reported failure (exit status 1) "
+     "naming the state changing fastest relative to its typical magnitude; a scene whose controller samples or "
      "set-point updates alone exceed the step budget is refused before it runs. --atol is per unit of each "
      "state's typical magnitude: angles 1 rad, speeds 1 rad/s, currents the stall current at full command, PIV "
      "integrals their full range, energies 1 J (stats.json lists the resulting atol per state). The integrator "

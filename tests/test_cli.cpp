@@ -2,7 +2,9 @@
 // line on stderr naming the option and what it expects; the help lists every
 // command; negative numbers are values; repeated --set all apply; --unset
 // removes keys (and an unknown key after a switch says why); stiffness and
-// conditioning write CSV files with a header of named columns.
+// conditioning write CSV files with a header of named columns; pumasim run's
+// stdout is its JSON alone, and a step-budget failure names --max-steps and
+// the fastest-changing state.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,10 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "experiments/cli.hpp"
+#include "experiments/simulation/driver.hpp"
 
 namespace pumasim {
 namespace {
@@ -184,6 +189,57 @@ TEST(CliParsing, UnsetOfAKeyTheSceneDoesNotHaveIsNamed) {
   expect_bad({"run", kScene, "--unset", "planning.grid"}, {"paper_slow.toml has no table [planning]"});
   expect_bad({"check", kScene, "--unset", "friction..model"}, {"--unset friction..model: expected section.key"});
   expect_bad({"check", kScene, "--unset"}, {"--unset: expected a value"});
+}
+
+// stdout is the JSON document alone, parsed whole; with --quiet stderr is
+// empty (no "results:" line; no progress line either, which also needs a
+// terminal: tests/test_cli_process.py checks it on one).
+TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
+  const fs::path d = scratch("stdout");
+  const Result r = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string()});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);  // throws on anything but one JSON document
+  EXPECT_EQ(doc["scene"], "paper_slow");
+  EXPECT_EQ(r.err, "results: " + (d / "run").string() + "/\n");
+  const Result q = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string(), "--force", "--quiet"});
+  ASSERT_EQ(q.status, kExitOk) << q.err;
+  EXPECT_EQ(nlohmann::json::parse(q.out)["ok"], true);
+  EXPECT_TRUE(q.err.empty()) << q.err;
+  fs::remove_all(d);
+}
+
+// A run over its step budget: a reported failure (exit 1, files written)
+// naming --max-steps, the time, the last step and the state changing fastest
+// relative to its typical magnitude.
+TEST(CliOutput, AStepBudgetFailureNamesMaxStepsAndTheFastestState) {
+  const fs::path d = scratch("budget");
+  const Result r = cli({"run", kScene, "--integrator", "cvode-bdf", "--rtol", "1e-6", "--atol", "1e-9",
+                        "--max-steps", "300", "--out", (d / "run").string(), "--quiet"});
+  EXPECT_EQ(r.status, kExitInternal) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  const std::string failure = doc["failure"];
+  EXPECT_EQ(doc["ok"], false);
+  EXPECT_EQ(doc["steps"], 301);
+  for (const char* f : {"cvode-bdf: step budget of 300 steps exhausted at t = ", "(last step h = ",
+                        "fastest-changing component ", "(|f| / scale = ", "--max-steps N"}) {
+    EXPECT_NE(failure.find(f), std::string::npos) << f << " in: " << failure;
+  }
+  EXPECT_EQ(r.err, "pumasim run: " + failure + "\n");
+  EXPECT_TRUE(fs::exists(d / "run" / "stats.json"));
+  fs::remove_all(d);
+}
+
+// The measure is |f_i| / scale_i, the plant's tolerance scales: a component
+// with the larger |f| but a larger typical magnitude is not the fastest.
+TEST(CliOutput, TheFastestStateIsTheLargestRateOverItsScale) {
+  struct Two final : OdeSystem {
+    int size() const override { return 2; }
+    void rhs(double, const double*, double* f) override { f[0] = 10, f[1] = -1; }
+    std::string state_name(int i) const override { return i == 0 ? "big" : "small"; }
+    double tolerance_scale(int i) const override { return i == 0 ? 100.0 : 0.01; }
+  } sys;
+  const double x[2] = {3, 0.5};
+  EXPECT_EQ(fastest_scaled_component(sys, 0, x), "small = 0.5 (|f| / scale = 100 1/s, scale 0.01)");
 }
 
 TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {

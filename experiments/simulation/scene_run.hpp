@@ -46,8 +46,8 @@ struct SceneRun {
 };
 
 // Runs the scene (integrator scene.integrator.name) over scene.duration;
-// progress(t) at every output, after the recorder has it (may be empty).
-SceneRun simulate_scene(const Scene& scene, const RunControls& controls,
-                        const std::function<void(double t)>& progress);
+// progress.report (may be empty) by wall-clock time from the step loop
+// (driver.hpp: ProgressHook).
+SceneRun simulate_scene(const Scene& scene, const RunControls& controls, const ProgressHook& progress = {});
 
 }  // namespace pumasim

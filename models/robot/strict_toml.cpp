@@ -110,7 +110,10 @@ void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const s
       const bool bare = !p.empty() && std::all_of(p.begin(), p.end(), [](char c) {
         return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
       });
-      if (!bare) throw ConfigError("--unset " + key + ": expected section.key (names of the scene file, e.g. friction.static_torque)");
+      if (!bare) {
+        throw ConfigError("--unset " + key +
+                          ": expected section.key (names of the scene file, e.g. friction.static_torque)");
+      }
     }
     toml::table* table = &doc;
     std::string at;  // the path so far
@@ -122,8 +125,9 @@ void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const s
     if (!table->contains(parts.back())) {
       std::string present;
       for (const auto& [k, v] : *table) present += (present.empty() ? "" : ", ") + std::string(k.str());
+      const std::string where = at.empty() ? std::string("its top level") : "[" + at + "]";
       throw ConfigError("--unset " + key + ": " + file + " has no key '" + key + "'" +
-                        (present.empty() ? std::string() : "; " + (at.empty() ? std::string("its top level") : "[" + at + "]") + " has: " + present));
+                        (present.empty() ? std::string() : "; " + where + " has: " + present));
     }
     table->erase(parts.back());
   }
@@ -370,10 +374,8 @@ std::string StrictTable::why_not_applicable(const toml::key& k) const {
   }
   std::string unsets;  // every key of the file here that does not apply
   for (const auto& [key, v] : *table_) {
-    if (std::find(asked_.begin(), asked_.end(), key.str()) != asked_.end() || find(key.str()) == not_applicable_.end() ||
-        !override_of(key).empty()) {
-      continue;
-    }
+    const bool asked = std::find(asked_.begin(), asked_.end(), key.str()) != asked_.end();
+    if (asked || find(key.str()) == not_applicable_.end() || !override_of(key).empty()) continue;
     unsets += " --unset " + key_path(key.str());
   }
   return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
