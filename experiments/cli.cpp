@@ -290,7 +290,8 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   o << "\n# initial state:";
   char buf[32];
   for (double v : x) std::snprintf(buf, sizeof buf, " %.10g", v), o << buf;
-  o << "\n";
+  const RunContext robot = run_context({}, sc);  // what meta.json records of the robot file
+  o << "\n# robot file: " << robot.robot_file << " (fnv1a64 " << robot.robot_fnv1a64 << ")\n";
   out << o.str();
   return kExitOk;
 }
@@ -302,6 +303,7 @@ struct RunArgs {
   std::optional<std::string> integrator, backend, out;
   std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
   bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false, quiet = false;
+  std::vector<std::string> argv;  // the program and its arguments, for meta.json
 };
 
 // --backend: the scene's robot as simulated must be one the back-end can describe.
@@ -383,6 +385,7 @@ ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::
 
 int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   Scene sc = load_checked_scene(a.scene);
+  const RunContext context = run_context(a.argv, sc);  // the start time, the robot file's hash as loaded
   const RunControls rc = run_controls(sc, a);
   check_run_size(sc, rc.max_steps);
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
@@ -392,8 +395,9 @@ int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   const SceneRun run = simulate_scene(sc, rc, progress_line(err, sc, a.quiet, progress_width));
   if (progress_width > 0) err << "\r" << std::string(progress_width, ' ') << "\r" << std::flush;
   const std::string stats = stats_json(sc, rc, run);
-  write_run_folder(dir, {{"trajectory.csv", run.trajectory_csv}, {"stats.json", stats}, {"meta.json", meta_json()},
-                         {"scene.resolved.toml", resolved_toml(sc)}},
+  write_run_folder(dir,
+                   {{"trajectory.csv", run.trajectory_csv}, {"stats.json", stats}, {"meta.json", meta_json(context)},
+                    {"scene.resolved.toml", resolved_toml(sc)}},
                    a.force);
   out << stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
   if (!a.quiet) err << "results: " << dir.string() << "/\n";
@@ -586,12 +590,13 @@ const Command kCommands[] = {
     {"backends", "lists the dynamics back-ends", "", [](CLI::App*, Parsed&) {},
      [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(o); }},
     {"check", "checks a scene; prints it resolved, its state layout and initial state",
-     "Prints the scene with every default filled in, its state layout and its initial state.",
+     "Prints the scene with every default filled in (a robot file path made absolute), its state layout, its "
+     "initial state and the robot file with its hash.",
      [](CLI::App* a, Parsed& p) { add_scene(a, p.check); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_check(p.check, o); }},
     {"run", "runs a scene and writes its run folder",
-     "Writes DIR: trajectory.csv, stats.json, scene.resolved.toml, meta.json, all at once at the end. stdout "
-     "carries stats.json "
+     "Writes DIR: trajectory.csv, stats.json, scene.resolved.toml (re-runs as it is, from any folder), meta.json "
+     "(command line, start time, build, CPU, robot file hash), all at once at the end. stdout carries stats.json "
      "alone (pipe it to jq); stderr the progress line (on a terminal, for runs over a second), 'results: DIR/' "
      "and errors (--quiet: errors only). DIR must be new, or a pumasim run folder holding only what pumasim "
      "wrote, replaced only with --force: pumasim never deletes what it did not write. More steps than "
@@ -664,6 +669,7 @@ std::unique_ptr<CLI::App> make_app(Parsed& p) {
   app->footer("pumasim help <command> (or pumasim <command> --help) prints a command's options.\n"
               "Exit status: 0 success, 1 internal error or a failed run, 2 bad input.");
   app->require_subcommand(1);
+  app->set_version_flag("--version", std::string(), "prints the revision, compiler, flags and build type");
   app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // a repeated option: the last
   for (const Command& c : kCommands) {
     CLI::App* sub = app->add_subcommand(c.name, c.summary);
@@ -707,13 +713,16 @@ std::string parse_error_message(const CLI::App& sub, const CLI::ParseError& e) {
 }
 
 // Parses args into p; returns the command to run, or nullptr when help was
-// asked for with --help (then printed to out).
+// asked for with --help or the version with --version (then printed to out).
 const Command* parse(CLI::App& app, const std::vector<std::string>& args, std::ostream& out) {
   std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
   try {
     app.parse(reversed);
   } catch (const CLI::CallForHelp&) {
     out << app.help();  // the command's, when one was named
+    return nullptr;
+  } catch (const CLI::CallForVersion&) {
+    out << version_text() << "\n";
     return nullptr;
   } catch (const CLI::ParseError& e) {
     const auto chosen = app.get_subcommands();
@@ -733,13 +742,15 @@ bool is_command(const std::string& s) {
 
 }  // namespace
 
-int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err, const std::string& program) {
   try {
     if (args.empty()) throw UsageError("missing command; expected one of: " + command_names());
-    if (!is_command(args[0]) && args[0] != "--help" && args[0] != "-h") {
+    if (!is_command(args[0]) && args[0] != "--help" && args[0] != "-h" && args[0] != "--version") {
       throw UsageError("unknown command '" + args[0] + "'; expected one of: " + command_names());
     }
     Parsed parsed;
+    parsed.run.argv.assign(1, program);
+    parsed.run.argv.insert(parsed.run.argv.end(), args.begin(), args.end());
     const auto app = make_app(parsed);
     const Command* c = parse(*app, args, out);
     return c ? c->run(parsed, *app, out, err) : kExitOk;

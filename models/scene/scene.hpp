@@ -50,7 +50,7 @@ struct ReferenceSettings {
 struct Scene {
   std::string name;
   std::string file;
-  std::string robot_spec;  // as written in the file
+  std::string robot_spec;  // as written in the file; a file path made absolute
   bool rotor_inertia = true;  // false: the robot's rotor inertias removed (scene.rotor_inertia)
   double duration = 0.0;         // [s]
   double output_interval = 0.01; // [s]
