@@ -18,9 +18,10 @@ using Clock = std::chrono::steady_clock;
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 // The steady clock, read only every k-th step: k doubles while reads fall
-// less than 2.5 ms apart and halves when they fall more than 10 ms apart, so
-// that a fast method pays a counter per step and a slow one is still looked
-// at every few milliseconds.
+// less than 2.5 ms apart, and when they fall more than 10 ms apart it shrinks
+// at once in proportion (to what would have taken 5 ms), so that a fast
+// method pays a counter per step and one whose steps turn slow (Newton
+// failures, rejected steps) is looked at again within a read or two.
 class StepClock {
  public:
   explicit StepClock(Clock::time_point start) : start_(start), last_(start) {}
@@ -33,7 +34,7 @@ class StepClock {
     if (gap < std::chrono::microseconds(2500) && every_ < kMaxEvery) {
       every_ *= 2;
     } else if (gap > std::chrono::milliseconds(10) && every_ > 1) {
-      every_ /= 2;
+      every_ = std::max(1L, static_cast<long>(static_cast<double>(every_) * 5e-3 / seconds(gap)));
     }
     last_ = now;
     return true;

@@ -65,9 +65,9 @@ struct RunProgress {
 // method crawling through tiny steps shows where it is: first after `delay`
 // seconds, then about every `period` seconds. The loop does not read the
 // clock at every step: it counts steps and reads the clock every k of them, k
-// adapted as the run goes so that reads fall about 2.5-10 ms apart; a step
-// costs a counter, and report() is called only when due (it may allocate, the
-// loop does not).
+// adapted as the run goes so that reads fall about 2.5-10 ms apart (cut at
+// once when steps turn slow); a step costs a counter, and report() is called
+// only when due (it may allocate, the loop does not).
 struct ProgressHook {
   std::function<void(const RunProgress&)> report;  // empty: no reports
   double delay = 1.0;    // [s] before the first report
