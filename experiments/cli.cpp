@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -158,7 +157,8 @@ const CLI::Validator kWritableFile(
 // A scene file and its overrides: what check, run, stiffness and conditioning share.
 struct SceneArgs {
   std::string file;
-  std::vector<std::string> sets;  // --set section.key=value, repeatable
+  std::vector<std::string> sets;    // --set section.key=value, repeatable
+  std::vector<std::string> unsets;  // --unset section.key, repeatable
 };
 
 void add_scene(CLI::App* app, SceneArgs& a) {
@@ -170,11 +170,18 @@ void add_scene(CLI::App* app, SceneArgs& a) {
       ->type_name("SECTION.KEY=VALUE")
       ->take_all()
       ->allow_extra_args(false);  // one value per --set: the scene file may follow
+  app->add_option("--unset", a.unsets,
+                  "removes a key (or a table) of the scene file before the --set values and the checks, e.g. "
+                  "--unset friction.static_torque when --set friction.model=\"viscous\" switches the law; "
+                  "repeatable")
+      ->type_name("SECTION.KEY")
+      ->take_all()
+      ->allow_extra_args(false);
 }
 
 // The scene, loaded and checked: its integrator exists (`check` says so with
 // the file, line and key, as `run` would otherwise fail without them).
-Scene load_checked_scene(const SceneArgs& a) { return pumasim::load_checked_scene(a.file, a.sets); }
+Scene load_checked_scene(const SceneArgs& a) { return pumasim::load_checked_scene(a.file, a.sets, a.unsets); }
 
 // ---------------------------------------------------------------- dynamics
 
@@ -266,7 +273,8 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   o << "\n# initial state:";
   char buf[32];
   for (double v : x) std::snprintf(buf, sizeof buf, " %.10g", v), o << buf;
-  o << "\n";
+  const RunContext robot = run_context({}, sc);  // what meta.json records of the robot file
+  o << "\n# robot file: " << robot.robot_file << " (fnv1a64 " << robot.robot_fnv1a64 << ")\n";
   out << o.str();
   return kExitOk;
 }
@@ -277,7 +285,8 @@ struct RunArgs {
   SceneArgs scene;
   std::optional<std::string> integrator, backend, out;
   std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
-  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false;
+  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false, quiet = false;
+  std::vector<std::string> argv;  // the program and its arguments, for meta.json
 };
 
 // The command line's changes to the scene, and how the run is driven
@@ -298,38 +307,50 @@ RunControls run_controls(Scene& sc, const RunArgs& a) {
   return pumasim::run_controls(sc, r);
 }
 
-// On a terminal, the run's time on stderr at most twice a second.
-std::function<void(double)> progress_line(std::ostream& err, const Scene& sc) {
-  if (!isatty(STDERR_FILENO)) return {};
-  auto last = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
-  return [&err, last, name = sc.name, duration = sc.duration](double t) {
-    if (std::chrono::steady_clock::now() - *last > std::chrono::milliseconds(500)) {
-      err << "\rpumasim run " << name << ": t = " << t << " / " << duration << " s   " << std::flush;
-      *last = std::chrono::steady_clock::now();
-    }
+// Where the run is, on one line of stderr rewritten in place (simulated time,
+// steps, the current step size, wall-clock time): from the driver's step
+// loop, first after a second, then every 0.25 s of wall-clock time; only on a
+// terminal and without --quiet. `width` keeps the length of the last line, to
+// clear it.
+ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::size_t& width) {
+  if (quiet || !isatty(STDERR_FILENO)) return {};
+  ProgressHook hook;
+  hook.report = [&err, &width, name = sc.name, duration = sc.duration](const RunProgress& p) {
+    char line[320];
+    int len = std::snprintf(line, sizeof line,
+                            "\rpumasim run %s: t = %.6g / %.6g s (%.0f%%), %ld steps, h = %.3g s, %.1f s elapsed",
+                            name.c_str(), p.t, duration, duration > 0 ? 100 * p.t / duration : 0.0, p.steps, p.h,
+                            p.wall);
+    len = std::clamp(len, 1, static_cast<int>(sizeof line) - 1);
+    const std::size_t shown = static_cast<std::size_t>(len) - 1;  // without the \r
+    err << line << std::string(width > shown ? width - shown : 0, ' ') << std::flush;
+    width = shown;
   };
+  return hook;
 }
 
 int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   Scene sc = load_checked_scene(a.scene);
+  const RunContext context = run_context(a.argv, sc);  // the start time, the robot file's hash as loaded
   const RunControls rc = run_controls(sc, a);
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
-  const auto progress = progress_line(err, sc);
-  // Checks the run's size and the folder before the run, runs, writes the folder.
+  std::size_t progress_width = 0;
+  const ProgressHook progress = progress_line(err, sc, a.quiet, progress_width);
   const auto clear_progress = [&] {
-    if (progress) err << "\r" << std::string(60, ' ') << "\r";
+    if (progress_width > 0) err << "\r" << std::string(progress_width, ' ') << "\r" << std::flush;
   };
+  // Checks the run's size and the folder before the run, runs, writes the folder.
   CompletedRun done;
   try {
-    done = run_scene(sc, rc, dir, a.force, progress);
+    done = run_scene(sc, rc, dir, a.force, progress, &context);
   } catch (const RunFolderError&) {
     clear_progress();
     throw;
   }
   clear_progress();
   out << done.stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
-  err << "results: " << dir.string() << "/\n";
+  if (!a.quiet) err << "results: " << dir.string() << "/\n";
   if (!done.run.result.ok) err << "pumasim run: " << done.run.result.failure << "\n";
   return done.run.result.ok ? kExitOk : kExitInternal;
 }
@@ -352,6 +373,8 @@ void add_run(CLI::App* app, RunArgs& a) {
              "(default 10000000)", "N");
   add_number(app, "--max-wall", a.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
              "(default 600)", "SECONDS");
+  app->add_flag("--quiet,-q", a.quiet, "no progress line and no 'results: DIR/' line on stderr (errors and a "
+                "failed run's reason still are)");
   auto* late = app->add_flag("--late-events", a.late_events,
                              "do not stop at controller samples and set-point updates; apply them late, at the "
                              "next output (shows what stepping over them does)");
@@ -517,14 +540,18 @@ const Command kCommands[] = {
     {"backends", "lists the dynamics back-ends", "", [](CLI::App*, Parsed&) {},
      [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(o); }},
     {"check", "checks a scene; prints it resolved, its state layout and initial state",
-     "Prints the scene with every default filled in, its state layout and its initial state.",
+     "Prints the scene with every default filled in (a robot file path made absolute), its state layout, its "
+     "initial state and the robot file with its hash.",
      [](CLI::App* a, Parsed& p) { add_scene(a, p.check); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_check(p.check, o); }},
     {"run", "runs a scene and writes its run folder",
-     "Writes DIR: trajectory.csv, stats.json (also on stdout), scene.resolved.toml, meta.json, all at once at the "
-     "end. DIR must be new, or a pumasim run folder holding only what pumasim wrote, replaced only with --force: "
-     "pumasim never deletes what it did not write. More steps than --max-steps or more wall-clock time than "
-     "--max-wall end the run as a reported failure (exit status 1); a scene whose controller samples or "
+     "Writes DIR: trajectory.csv, stats.json, scene.resolved.toml (re-runs as it is, from any folder), meta.json "
+     "(command line, start time, build, CPU, robot file hash), all at once at the end. stdout carries stats.json "
+     "alone (pipe it to jq); stderr the progress line (on a terminal, for runs over a second), 'results: DIR/' "
+     "and errors (--quiet: errors only). DIR must be new, or a pumasim run folder holding only what pumasim "
+     "wrote, replaced only with --force: pumasim never deletes what it did not write. More steps than "
+     "--max-steps or more wall-clock time than --max-wall end the run as a reported failure (exit status 1) "
+     "naming the state changing fastest relative to its typical magnitude; a scene whose controller samples or "
      "set-point updates alone exceed the step budget is refused before it runs. --atol is per unit of each "
      "state's typical magnitude: angles 1 rad, speeds 1 rad/s, currents the stall current at full command, PIV "
      "integrals their full range, energies 1 J (stats.json lists the resulting atol per state). The integrator "
@@ -592,6 +619,7 @@ std::unique_ptr<CLI::App> make_app(Parsed& p) {
   app->footer("pumasim help <command> (or pumasim <command> --help) prints a command's options.\n"
               "Exit status: 0 success, 1 internal error or a failed run, 2 bad input.");
   app->require_subcommand(1);
+  app->set_version_flag("--version", std::string(), "prints the revision, compiler, flags and build type");
   app->option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);  // a repeated option: the last
   for (const Command& c : kCommands) {
     CLI::App* sub = app->add_subcommand(c.name, c.summary);
@@ -635,13 +663,16 @@ std::string parse_error_message(const CLI::App& sub, const CLI::ParseError& e) {
 }
 
 // Parses args into p; returns the command to run, or nullptr when help was
-// asked for with --help (then printed to out).
+// asked for with --help or the version with --version (then printed to out).
 const Command* parse(CLI::App& app, const std::vector<std::string>& args, std::ostream& out) {
   std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first
   try {
     app.parse(reversed);
   } catch (const CLI::CallForHelp&) {
     out << app.help();  // the command's, when one was named
+    return nullptr;
+  } catch (const CLI::CallForVersion&) {
+    out << version_text() << "\n";
     return nullptr;
   } catch (const CLI::ParseError& e) {
     const auto chosen = app.get_subcommands();
@@ -661,13 +692,15 @@ bool is_command(const std::string& s) {
 
 }  // namespace
 
-int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err, const std::string& program) {
   try {
     if (args.empty()) throw UsageError("missing command; expected one of: " + command_names());
-    if (!is_command(args[0]) && args[0] != "--help" && args[0] != "-h") {
+    if (!is_command(args[0]) && args[0] != "--help" && args[0] != "-h" && args[0] != "--version") {
       throw UsageError("unknown command '" + args[0] + "'; expected one of: " + command_names());
     }
     Parsed parsed;
+    parsed.run.argv.assign(1, program);
+    parsed.run.argv.insert(parsed.run.argv.end(), args.begin(), args.end());
     const auto app = make_app(parsed);
     const Command* c = parse(*app, args, out);
     return c ? c->run(parsed, *app, out, err) : kExitOk;

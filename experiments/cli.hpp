@@ -12,7 +12,9 @@ inline constexpr int kExitOk = 0;
 inline constexpr int kExitInternal = 1;
 inline constexpr int kExitBadInput = 2;
 
-// args excludes the program name: {"dynamics", "--robot", "puma560", ...}.
-int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+// args excludes the program name: {"dynamics", "--robot", "puma560", ...};
+// program is argv[0], which meta.json's command line starts with.
+int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
+            const std::string& program = "pumasim");
 
 }  // namespace pumasim

@@ -10,8 +10,16 @@ cross-check method, and the integrators with their settings. Every (variant,
 method, setting) is one run of `pumasim run`, written by pumasim atomically
 into build/sweeps/<sweep>/<variant>/<run>/ and repeated for the wall-time
 median; then a summary <run>.json is written atomically (temporary file and
-rename). A run with a summary is complete and is skipped on a re-run; an
-interrupted run leaves no summary and is redone.
+rename). A run with a summary is complete and is skipped on a re-run if its
+key still matches: a SHA-256 over everything that determines the run -- the
+scene as pumasim resolves it with the sweep's and the variant's --set values
+(`pumasim check`: every default filled in, the robot file's hash), the
+integrator and its options, t_end, the step budget, the repeats, and the
+program (`pumasim --version`: revision, compiler, flags; for a build with
+uncommitted changes also the binary's own SHA-256). A changed scene, robot
+file, setting, horizon or program re-runs the run instead of reusing it, and
+--merge refuses a summary whose key no longer matches. An interrupted run
+leaves no summary and is redone.
 
 Without --shard the runs go to N local processes (--jobs, default: the
 number of cores) and the results are merged at the end. --shard K/N takes only
@@ -45,6 +53,9 @@ writes nothing under results/.
 """
 import argparse
 import concurrent.futures
+import functools
+import hashlib
+import json
 import math
 import os
 import re
@@ -237,25 +248,91 @@ class CpuPinning:
         return cmd, (lambda: os.sched_setaffinity(0, {cpu})), cpu
 
 
-def execute(s, work, run, pinning=None):
-    """Runs one run (all repeats, pinned to this worker's CPU when `pinning`
-    is given) unless complete; returns its summary."""
+def run_options(s, run):
+    """pumasim run's options for a run, besides the scene file and the folder."""
     rid, variant, tag, name, opts, repeats = run
-    summary_path = os.path.join(work, rid + ".json")
-    if os.path.exists(summary_path):
-        return pumasim_io.read_json(summary_path)
-    out = os.path.join(work, rid)
-    cmd = [PUMASIM, "run", scene_file(s), "--integrator", name, "--out", out, "--force"] + opts
+    args = ["--integrator", name] + opts
     for o in s["set"] + variant["set"]:
-        cmd += ["--set", o]
+        args += ["--set", o]
     if s["t_end"]:
-        cmd += ["--t-end", repr(s["t_end"])]
+        args += ["--t-end", repr(s["t_end"])]
     # The sweep's budget is for adaptive methods and not for the references;
     # a fixed-step run's count is t_end / dt, known in advance: no budget.
     if s["max_steps"] and tag not in ("reference", "check") and "--rtol" in opts:
-        cmd += ["--max-steps", str(s["max_steps"])]
+        args += ["--max-steps", str(s["max_steps"])]
     if "--dt" in opts:  # no budget: the step count is t_end / dt
-        cmd += ["--max-steps", "0"]
+        args += ["--max-steps", "0"]
+    return args
+
+
+@functools.lru_cache(maxsize=None)
+def program_identity(pumasim):
+    """`pumasim --version` (revision, compiler, flags, build type); for a build
+    from a tree with uncommitted changes ("-dirty") also the binary's SHA-256,
+    as the revision alone does not say what it runs."""
+    p = subprocess.run([pumasim, "--version"], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SweepError(f"{pumasim} --version: exit status {p.returncode}: {p.stderr.strip()}")
+    ident = p.stdout.strip()
+    if "-dirty" in ident.split(" (")[0]:
+        with open(pumasim, "rb") as f:
+            ident += " sha256 " + hashlib.sha256(f.read()).hexdigest()
+    return ident
+
+
+@functools.lru_cache(maxsize=None)
+def resolved_scene(pumasim, scene, sets):
+    """The scene as pumasim resolves it with the --set values `sets` (a
+    tuple): `pumasim check`'s text (every default, the state layout, the
+    robot file's hash) without the lines that name where files lie (the scene
+    file's path; the robot file's path, its hash kept)."""
+    cmd = [pumasim, "check", scene]
+    for o in sets:
+        cmd += ["--set", o]
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    if p.returncode != 0:
+        raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
+    lines = []
+    for line in p.stdout.splitlines():
+        if line.startswith("# Resolved scene"):
+            continue
+        if line.startswith("# robot file: "):
+            line = "# robot file" + line[line.rfind(" ("):]
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+def run_key(s, run):
+    """SHA-256 (hex) of everything that determines a run: the resolved scene
+    (with the sweep's and the variant's --set values), pumasim run's options
+    (integrator, its settings, t_end, budget), the repeats and the program."""
+    variant, repeats = run[1], run[5]
+    doc = {"program": program_identity(PUMASIM),
+           "scene": resolved_scene(PUMASIM, scene_file(s), tuple(s["set"] + variant["set"])),
+           "options": run_options(s, run), "repeats": repeats}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
+def complete(work, run, key):
+    """The run's summary if it exists and was made with this key, else None."""
+    path = os.path.join(work, run[0] + ".json")
+    if not os.path.exists(path):
+        return None
+    sm = pumasim_io.read_json(path)
+    return sm if sm.get("key") == key else None
+
+
+def execute(s, work, run, pinning=None):
+    """Runs one run (all repeats, pinned to this worker's CPU when `pinning`
+    is given) unless complete with the same key; returns its summary."""
+    rid, variant, tag, name, opts, repeats = run
+    summary_path = os.path.join(work, rid + ".json")
+    key = run_key(s, run)
+    if (sm := complete(work, run, key)) is not None:
+        return sm
+    out = os.path.join(work, rid)
+    options = run_options(s, run)  # "--integrator", name, then the rest
+    cmd = [PUMASIM, "run", scene_file(s)] + options[:2] + ["--out", out, "--force"] + options[2:]
     walls = []
     full, preexec, cpu = pinning.wrap(cmd) if pinning else (cmd, None, None)
     for _ in range(repeats):
@@ -274,7 +351,8 @@ def execute(s, work, run, pinning=None):
     summary = {"id": rid, "variant": variant["label"], "value": variant["value"], "tag": tag,
                "integrator": name, "options": opts, "stats": st, "wall_times_s": walls,
                "wall_time_median_s": statistics.median(walls), "command": cmd,
-               "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None}
+               "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None,
+               "key": key, "program": program_identity(PUMASIM)}
     os.makedirs(os.path.dirname(summary_path), exist_ok=True)
     pumasim_io.write_json_atomic(summary_path, summary, indent=1)
     return summary
@@ -440,7 +518,10 @@ def merge(s, work, out_dir):
         p = os.path.join(work, run[0] + ".json")
         if not os.path.exists(p):
             raise SweepError(f"merge: run {run[0]} has no result yet ({p}); run the sweep (or its shards) first")
-        summaries[run[0]] = pumasim_io.read_json(p)
+        summaries[run[0]] = complete(work, run, run_key(s, run))
+        if summaries[run[0]] is None:
+            raise SweepError(f"merge: run {run[0]} ({p}) was made from another scene, setting or program than "
+                             "the sweep's now; run the sweep (or its shards) again")
     for v in s["variants"]:
         vdir = slug(v["label"])
         ref_sum, chk_sum = summaries[f"{vdir}/reference"], summaries[f"{vdir}/check"]
@@ -647,7 +728,7 @@ def main():
                 except (ValueError, AssertionError):
                     raise SweepError(f"--shard {args.shard}: expected K/N with 1 <= K <= N")
                 runs = [r for i, r in enumerate(runs) if i % n == k - 1]
-            todo = [r for r in runs if not os.path.exists(os.path.join(work, r[0] + ".json"))]
+            todo = [r for r in runs if complete(work, r, run_key(s, r)) is None]
             print(f"{s['name']}: {len(runs)} runs in this share, {len(runs) - len(todo)} already complete",
                   flush=True)
             pinning = CpuPinning()

@@ -247,7 +247,7 @@ PyRun run(const py::object& scene_in, const RunRequest& request, const py::objec
   CompletedRun done;
   {
     py::gil_scoped_release release;
-    done = run_scene(sc, rc, dir, force, {}, /*keep_rows=*/true);
+    done = run_scene(sc, rc, dir, force, {}, nullptr, /*keep_rows=*/true);
   }
   const SceneRun& r = done.run;
   const auto m = static_cast<py::ssize_t>(r.state_names.size());

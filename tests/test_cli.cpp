@@ -1,17 +1,26 @@
 // The command line as CLI11 parses it: bad input exits with status 2 and one
 // line on stderr naming the option and what it expects; the help lists every
-// command; negative numbers are values; repeated --set all apply; stiffness
-// and conditioning write CSV files with a header of named columns.
+// command; negative numbers are values; repeated --set all apply; --unset
+// removes keys (and an unknown key after a switch says why); stiffness and
+// conditioning write CSV files with a header of named columns; pumasim run's
+// stdout is its JSON alone, a step-budget failure names --max-steps and the
+// fastest-changing state, meta.json records the run's context, and a run
+// folder's resolved scene re-runs from another working directory.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "experiments/cli.hpp"
+#include "experiments/simulation/driver.hpp"
+#include "experiments/simulation/run_documents.hpp"
 
 namespace pumasim {
 namespace {
@@ -138,6 +147,203 @@ TEST(CliParsing, ACommandsHelpListsItsOptions) {
     }
   }
   expect_bad({"help", "fly"}, {"help: unknown command 'fly'; expected one of: dynamics"});
+}
+
+// --unset removes keys of the scene file before --set and the checks: the
+// scene switches its friction law from the command line.
+TEST(CliParsing, UnsetRemovesKeysSoThatASceneSwitchesItsFrictionLaw) {
+  const Result r = cli({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.static_torque",
+                        "--unset", "friction.kinetic_torque", "--unset=friction.zero_speed"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("[friction]\nmodel = 'viscous'\nviscous = [ 0.00148,"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("static_torque"), std::string::npos) << r.out;
+  // A table as a whole; then --set puts back what it names.
+  const Result t = cli({"check", kScene, "--unset", "friction", "--set", "friction.model=\"none\""});
+  ASSERT_EQ(t.status, kExitOk) << t.err;
+  EXPECT_NE(t.out.find("[friction]\nmodel = 'none'\n\n"), std::string::npos) << t.out;
+}
+
+// A key that the switch left without meaning: unknown, and the message says
+// why (the choice it does not apply to, and the --set that made it) and how
+// to remove every such key.
+TEST(CliParsing, AKeyLeftWithoutMeaningByASwitchSaysWhyAndHowToRemoveIt) {
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\""},
+             {"paper_slow.toml:", "unknown key 'friction.kinetic_torque'; expected one of: model, viscous",
+              "does not apply to friction.model = \"viscous\" (--set friction.model=\"viscous\")",
+              "--unset friction.kinetic_torque --unset friction.static_torque --unset friction.zero_speed"});
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.kinetic_torque",
+              "--unset", "friction.static_torque"},
+             {"paper_slow.toml:", "unknown key 'friction.zero_speed'", "with --unset friction.zero_speed)"});
+  // Set by --set itself: the override is named, and dropping it is the remedy.
+  expect_bad({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.kinetic_torque",
+              "--unset", "friction.static_torque", "--unset", "friction.zero_speed", "--set", "friction.zero_speed=1"},
+             {"--set friction.zero_speed=1: unknown key 'friction.zero_speed'", "does not apply to friction.model",
+              "drop --set friction.zero_speed=1"});
+  // In the file itself (no switch): the same reason, from the file's own choice.
+  expect_bad({"check", kScene, "--set", "reference.timing=\"quintic\"", "--set", "reference.traversal_time=20"},
+             {"unknown key 'reference.max_speed'", "does not apply to reference.timing = \"quintic\"",
+              "--unset reference.max_speed --unset reference.profile"});
+}
+
+TEST(CliParsing, UnsetOfAKeyTheSceneDoesNotHaveIsNamed) {
+  expect_bad({"check", kScene, "--unset", "friction.static_torq"},
+             {"--unset friction.static_torq: ", "paper_slow.toml has no key 'friction.static_torq'",
+              "[friction] has: kinetic_torque, model, static_torque, viscous, zero_speed"});
+  expect_bad({"run", kScene, "--unset", "planning.grid"}, {"paper_slow.toml has no table [planning]"});
+  expect_bad({"check", kScene, "--unset", "friction..model"}, {"--unset friction..model: expected section.key"});
+  expect_bad({"check", kScene, "--unset"}, {"--unset: expected a value"});
+}
+
+TEST(CliParsing, VersionPrintsTheBuild) {
+  const Result r = cli({"--version"});
+  EXPECT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_EQ(r.out, version_text() + "\n");
+  EXPECT_EQ(r.out.rfind("pumasim ", 0), 0u) << r.out;
+}
+
+// stdout is the JSON document alone, parsed whole; with --quiet stderr is
+// empty (no "results:" line; no progress line either, which also needs a
+// terminal: tests/test_cli_process.py checks it on one).
+TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
+  const fs::path d = scratch("stdout");
+  const Result r = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string()});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);  // throws on anything but one JSON document
+  EXPECT_EQ(doc["scene"], "paper_slow");
+  EXPECT_EQ(r.err, "results: " + (d / "run").string() + "/\n");
+  const Result q = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string(), "--force", "--quiet"});
+  ASSERT_EQ(q.status, kExitOk) << q.err;
+  EXPECT_EQ(nlohmann::json::parse(q.out)["ok"], true);
+  EXPECT_TRUE(q.err.empty()) << q.err;
+  fs::remove_all(d);
+}
+
+// A run over its step budget: a reported failure (exit 1, files written)
+// naming --max-steps, the time, the last step and the state changing fastest
+// relative to its typical magnitude.
+TEST(CliOutput, AStepBudgetFailureNamesMaxStepsAndTheFastestState) {
+  const fs::path d = scratch("budget");
+  const Result r = cli({"run", kScene, "--integrator", "cvode-bdf", "--rtol", "1e-6", "--atol", "1e-9",
+                        "--max-steps", "300", "--out", (d / "run").string(), "--quiet"});
+  EXPECT_EQ(r.status, kExitInternal) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  const std::string failure = doc["failure"];
+  EXPECT_EQ(doc["ok"], false);
+  EXPECT_EQ(doc["steps"], 301);
+  for (const char* f : {"cvode-bdf: step budget of 300 steps exhausted at t = ", "(last step h = ",
+                        "fastest-changing component ", "(|f| / scale = ", "--max-steps N"}) {
+    EXPECT_NE(failure.find(f), std::string::npos) << f << " in: " << failure;
+  }
+  EXPECT_EQ(r.err, "pumasim run: " + failure + "\n");
+  EXPECT_TRUE(fs::exists(d / "run" / "stats.json"));
+  fs::remove_all(d);
+}
+
+// The measure is |f_i| / scale_i, the plant's tolerance scales: a component
+// with the larger |f| but a larger typical magnitude is not the fastest.
+TEST(CliOutput, TheFastestStateIsTheLargestRateOverItsScale) {
+  struct Two final : OdeSystem {
+    int size() const override { return 2; }
+    void rhs(double, const double*, double* f) override { f[0] = 10, f[1] = -1; }
+    std::string state_name(int i) const override { return i == 0 ? "big" : "small"; }
+    double tolerance_scale(int i) const override { return i == 0 ? 100.0 : 0.01; }
+  } sys;
+  const double x[2] = {3, 0.5};
+  EXPECT_EQ(fastest_scaled_component(sys, 0, x), "small = 0.5 (|f| / scale = 100 1/s, scale 0.01)");
+}
+
+TEST(CliOutput, ShellQuotingAndTheRobotFileHash) {
+  EXPECT_EQ(shell_quoted({"pumasim", "run", "a b.toml", "--set", "friction.model=\"tanh\"", "it's", ""}),
+            "pumasim run 'a b.toml' --set 'friction.model=\"tanh\"' 'it'\\''s' ''");
+  // FNV-1a 64 test vectors (Fowler, Noll, Vo: the reference implementation's).
+  EXPECT_EQ(fnv1a64(""), 0xcbf29ce484222325ULL);
+  EXPECT_EQ(fnv1a64("a"), 0xaf63dc4c8601ec8cULL);
+  EXPECT_EQ(fnv1a64("foobar"), 0x85944171f73967e8ULL);
+}
+
+// meta.json: the command line as given, when, where, on what, and the robot
+// file with the hash of its bytes.
+TEST(CliOutput, MetaJsonRecordsTheRunsContext) {
+  const fs::path d = scratch("meta");
+  const std::vector<std::string> args{"run", kScene, "--t-end", "0.02", "--set", "scene.output_interval=0.01",
+                                      "--out", (d / "run").string(), "--quiet"};
+  std::ostringstream out, err;
+  ASSERT_EQ(run_cli(args, out, err, "/opt/my pumasim"), kExitOk) << err.str();
+  std::ifstream f(d / "run" / "meta.json");
+  const auto meta = nlohmann::json::parse(f);
+  std::vector<std::string> argv{"/opt/my pumasim"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  EXPECT_EQ(meta["command_line"], shell_quoted(argv));
+  EXPECT_EQ(meta["working_directory"], fs::current_path().string());
+  EXPECT_TRUE(std::regex_match(meta["started_utc"].get<std::string>(),
+                               std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")))
+      << meta["started_utc"];
+  EXPECT_FALSE(meta["cpu_model"].get<std::string>().empty());
+  EXPECT_EQ(meta["cpu_model"], cpu_model());
+  for (const char* k : {"git_revision", "compiler", "flags", "build_type"}) EXPECT_TRUE(meta.contains(k)) << k;
+  const fs::path robot = fs::path(PUMASIM_SCENES_DIR) / ".." / ".." / "models" / "robots" / "puma560.toml";
+  EXPECT_TRUE(fs::equivalent(meta["robot_file"]["path"].get<std::string>(), robot)) << meta["robot_file"];
+  std::ifstream rf(robot, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(rf)), std::istreambuf_iterator<char>());
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes)));
+  EXPECT_EQ(meta["robot_file"]["fnv1a64"], hex);
+  fs::remove_all(d);
+}
+
+// Changes the working directory for one scope.
+struct InFolder {
+  explicit InFolder(const fs::path& p) : old(fs::current_path()) { fs::current_path(p); }
+  ~InFolder() { fs::current_path(old); }
+  fs::path old;
+};
+
+// A scene whose robot is a file beside it (named without a folder, and by a
+// relative path): it runs from another working directory, and its run
+// folder's scene.resolved.toml, which names the robot file by its absolute
+// path, re-runs from a third one to the same trajectory. A shipped robot's
+// name stays a name.
+TEST(CliOutput, TheResolvedSceneOfARunFolderReRunsFromAnyFolder) {
+  const fs::path d = scratch("rerun");
+  fs::create_directories(d / "scenes" / "robots");
+  fs::create_directories(d / "elsewhere");
+  fs::create_directories(d / "third");
+  const fs::path robots = fs::path(PUMASIM_SCENES_DIR) / ".." / ".." / "models" / "robots";
+  fs::copy_file(robots / "puma560.toml", d / "scenes" / "arm.toml");
+  fs::copy_file(robots / "puma560.toml", d / "scenes" / "robots" / "arm.toml");
+  std::ifstream in(kScene);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string named = "robot = \"puma560\"";
+  const auto at = text.find(named);
+  ASSERT_NE(at, std::string::npos);
+  for (const char* robot : {"arm.toml", "robots/arm.toml"}) {
+    std::string scene = text;
+    scene.replace(at, named.size(), "robot = \"" + std::string(robot) + "\"");
+    std::ofstream(d / "scenes" / "mine.toml") << scene;
+    fs::remove_all(d / "elsewhere" / "first");
+    fs::remove_all(d / "third" / "second");
+    {
+      InFolder here(d / "elsewhere");
+      const Result r = cli({"run", "../scenes/mine.toml", "--t-end", "0.3", "--out", "first", "--quiet"});
+      ASSERT_EQ(r.status, kExitOk) << robot << ": " << r.err;
+    }
+    std::ifstream rs(d / "elsewhere" / "first" / "scene.resolved.toml");
+    const std::string resolved((std::istreambuf_iterator<char>(rs)), std::istreambuf_iterator<char>());
+    EXPECT_NE(resolved.find("robot = '" + (d / "scenes").string() + "/" + robot + "'"), std::string::npos)
+        << robot << ":\n" << resolved;
+    {
+      InFolder here(d / "third");
+      const Result r = cli({"run", "../elsewhere/first/scene.resolved.toml", "--out", "second", "--quiet"});
+      ASSERT_EQ(r.status, kExitOk) << robot << ": " << r.err;
+    }
+    const auto a = lines_of(d / "elsewhere" / "first" / "trajectory.csv");
+    const auto b = lines_of(d / "third" / "second" / "trajectory.csv");
+    EXPECT_EQ(a.size(), 32u) << robot;  // the header, t = 0, 0.01, ..., 0.3
+    EXPECT_EQ(a, b) << robot;
+  }
+  const Result c = cli({"check", kScene});
+  EXPECT_NE(c.out.find("robot = 'puma560'"), std::string::npos) << c.out;
+  fs::remove_all(d);
 }
 
 TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {

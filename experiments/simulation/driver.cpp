@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,23 +15,55 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-// After a step: the failure that ends the run when a budget is exhausted
-// (wall-clock time first, then steps), or "".
+// The steady clock, read only every k-th step: k doubles while reads fall
+// less than 2.5 ms apart, and when they fall more than 10 ms apart it shrinks
+// at once in proportion (to what would have taken 5 ms), so that a fast
+// method pays a counter per step and one whose steps turn slow (Newton
+// failures, rejected steps) is looked at again within a read or two.
+class StepClock {
+ public:
+  explicit StepClock(Clock::time_point start) : start_(start), last_(start) {}
+  // Counts a step; true when the clock was read at it (elapsed() is then current).
+  bool tick() {
+    if (++count_ < every_) return false;
+    count_ = 0;
+    const Clock::time_point now = Clock::now();
+    const Clock::duration gap = now - last_;
+    if (gap < std::chrono::microseconds(2500) && every_ < kMaxEvery) {
+      every_ *= 2;
+    } else if (gap > std::chrono::milliseconds(10) && every_ > 1) {
+      every_ = std::max(1L, static_cast<long>(static_cast<double>(every_) * 5e-3 / seconds(gap)));
+    }
+    last_ = now;
+    return true;
+  }
+  double elapsed() const { return seconds(last_ - start_); }  // [s] at the last read
+
+ private:
+  static constexpr long kMaxEvery = 1L << 16;
+  Clock::time_point start_, last_;
+  long count_ = 0, every_ = 1;
+};
+
+// The failure that ends the run when a budget is exhausted, or "".
+// wall: the wall-clock time at this step, or < 0 when the clock was not read.
 std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, const double* xs, long max_steps,
-                           double max_wall, Clock::time_point start) {
-  if (max_wall > 0 && seconds_since(start) > max_wall) {
-    return std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) +
-           " s exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-           fastest_component(sys, t, xs) + " (pumasim run --max-wall S raises the budget; 0: none)";
+                           double max_wall, double wall) {
+  const auto where = [&] {
+    char h[64];
+    std::snprintf(h, sizeof h, " (last step h = %.3g s)", integrator.time() - integrator.step_start());
+    return " exhausted at t = " + std::to_string(t) + " s" + h + "; fastest-changing component " +
+           fastest_scaled_component(sys, t, xs);
+  };
+  if (max_wall > 0 && wall > max_wall) {
+    return std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) + " s" + where() +
+           "; more time: pumasim run --max-wall S (0: no limit)";
   }
   if (max_steps > 0 && integrator.stats().steps > max_steps) {
-    return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) +
-           " steps exhausted at t = " + std::to_string(t) + " s; fastest-changing component " +
-           fastest_component(sys, t, xs) + " (pumasim run --max-steps N raises the budget; 0: none)";
+    return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) + " steps" + where() +
+           "; more steps: pumasim run --max-steps N (0: no limit)";
   }
   return {};
 }
@@ -56,9 +89,29 @@ bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool t
 
 }  // namespace
 
+std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) {
+  const int n = sys.size();
+  std::vector<double> f(static_cast<std::size_t>(n));
+  sys.rhs(t, x, f.data());
+  int worst = 0;
+  double rate = -1, worst_scale = 1;
+  for (int i = 0; i < n; ++i) {
+    const double scale = sys.tolerance_scale(i) > 0 ? sys.tolerance_scale(i) : 1.0;
+    const double r = std::abs(f[static_cast<std::size_t>(i)]) / scale;
+    if (r > rate || !std::isfinite(r)) rate = r, worst = i, worst_scale = scale;
+    if (!std::isfinite(r)) break;
+  }
+  char buf[128];
+  std::snprintf(buf, sizeof buf, " = %.6g (|f| / scale = %.3g 1/s, scale %.3g)", x[worst], rate, worst_scale);
+  return sys.state_name(worst) + buf;
+}
+
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps, Stops stops, double max_wall) {
+                    const Observer& observe, long max_steps, Stops stops, double max_wall,
+                    const ProgressHook& progress) {
   const auto start = Clock::now();
+  StepClock clock(start);
+  double next_report = progress.delay;  // [s] of wall-clock time
   PlantSystem sys(plant);
   std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
@@ -93,10 +146,20 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     // The state is copied only where the plant may change it (an event) or
     // an output at this instant reads it, not after every step.
     const double* xs = integrator.state();
-    if (std::string why = budget_failure(integrator, sys, t, xs, max_steps, max_wall, start); !why.empty()) {
-      res.ok = false;
-      res.failure = std::move(why);
-      break;
+    double wall = -1;  // [s], when the clock is read at this step
+    if (clock.tick()) {
+      wall = clock.elapsed();
+      if (progress.report && wall >= next_report) {
+        progress.report(RunProgress{t, integrator.stats().steps, integrator.time() - integrator.step_start(), wall});
+        next_report = wall + progress.period;
+      }
+    }
+    if (max_steps > 0 || wall > 0) {
+      if (std::string why = budget_failure(integrator, sys, t, xs, max_steps, max_wall, wall); !why.empty()) {
+        res.ok = false;
+        res.failure = std::move(why);
+        break;
+      }
     }
     const bool output_now = !before(t, output_time(), t_end) &&
                             k_out * output_interval <= t_end + output_interval - time_tolerance(t_end);
@@ -112,7 +175,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     }
   }
   res.t_final = t;
-  res.wall_time = seconds_since(start);
+  res.wall_time = seconds(Clock::now() - start);
   return res;
 }
 

@@ -46,6 +46,34 @@ struct RunResult {
 
 using Observer = std::function<void(double t, const double* x)>;
 
+// "i_motor2 = 0.123 (|f| / scale = 4.5e+05 1/s, scale 2.1)": the state
+// component with the largest |f_i| / scale_i at (t, x), scale_i the system's
+// tolerance scale (the state's typical magnitude, which also scales the
+// adaptive methods' atol): where a step-size collapse usually comes from. The
+// driver's budget failures name it.
+std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x);
+
+// Where a run is, for a progress display.
+struct RunProgress {
+  double t = 0;       // [s] simulated time reached
+  long steps = 0;     // the integrator's steps so far (accepted)
+  double h = 0;       // [s] the last step's size
+  double wall = 0;    // [s] wall-clock time since the run started
+};
+
+// A progress report by wall-clock time, from inside the step loop, so that a
+// method crawling through tiny steps shows where it is: first after `delay`
+// seconds, then about every `period` seconds. The loop does not read the
+// clock at every step: it counts steps and reads the clock every k of them, k
+// adapted as the run goes so that reads fall about 2.5-10 ms apart (cut at
+// once when steps turn slow); a step costs a counter, and report() is called
+// only when due (it may allocate, the loop does not).
+struct ProgressHook {
+  std::function<void(const RunProgress&)> report;  // empty: no reports
+  double delay = 1.0;    // [s] before the first report
+  double period = 0.25;  // [s] between reports
+};
+
 // How the driver stops the integrator.
 enum class Stops {
   kEvents,             // at time events and roots only; outputs from the dense output (the default)
@@ -57,11 +85,15 @@ enum class Stops {
 // Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
 // every multiple of output_interval reached. An output at an event's instant
 // sees the state after the event. A run that needs more than max_steps steps
-// in all (0: no limit) ends as a reported failure; so does one still running
-// after max_wall seconds of wall-clock time (0: no limit), checked after each
-// step (one step of any method is bounded: it either succeeds or fails).
+// in all (0: no limit) ends as a reported failure, naming --max-steps and
+// the state changing fastest relative to its typical magnitude (the system's
+// tolerance scale); so does one still running after max_wall seconds of
+// wall-clock time (0: no limit), checked whenever the loop reads the clock
+// (every few ms, see ProgressHook; one step of any method is bounded: it
+// either succeeds or fails). progress.report, when set, is called as
+// ProgressHook says; neither changes a step.
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents,
-                    double max_wall = 0);
+                    double max_wall = 0, const ProgressHook& progress = {});
 
 }  // namespace pumasim

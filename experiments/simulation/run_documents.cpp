@@ -1,6 +1,15 @@
 #include "experiments/simulation/run_documents.hpp"
 
+#include <algorithm>
+#include <cctype>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include <sys/utsname.h>
@@ -95,10 +104,80 @@ std::string stats_json(const Scene& sc, const RunControls& rc, const SceneRun& r
   return js.dump(2) + "\n";
 }
 
-std::string meta_json() {
+std::uint64_t fnv1a64(std::string_view bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+std::string shell_quoted(const std::vector<std::string>& argv) {
+  std::string out;
+  for (const std::string& a : argv) {
+    if (!out.empty()) out += ' ';
+    const bool plain = !a.empty() && std::all_of(a.begin(), a.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || std::strchr("@%+=:,./_-", c) != nullptr;
+    });
+    if (plain) {
+      out += a;
+      continue;
+    }
+    out += '\'';
+    for (const char c : a) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    out += '\'';
+  }
+  return out;
+}
+
+std::string version_text() {
+  return std::string("pumasim ") + build_info::kGitRevision + " (" + build_info::kCompiler + ", " + build_info::kFlags +
+         ", " + build_info::kBuildType + ")";
+}
+
+std::string cpu_model() {
+  std::ifstream f("/proc/cpuinfo");
+  for (std::string line; std::getline(f, line);) {
+    if (line.rfind("model name", 0) != 0) continue;
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) break;
+    const auto b = line.find_first_not_of(" \t", colon + 1);
+    return b == std::string::npos ? "unknown" : line.substr(b);
+  }
+  return "unknown";
+}
+
+RunContext run_context(const std::vector<std::string>& argv, const Scene& sc) {
+  namespace fs = std::filesystem;
+  RunContext c;
+  c.command_line = shell_quoted(argv);
+  std::error_code ec;
+  c.working_directory = fs::current_path(ec).string();
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  c.started_utc = stamp;
+  c.robot_file = fs::absolute(sc.plant.robot.source, ec).lexically_normal().string();
+  if (std::ifstream f(sc.plant.robot.source, std::ios::binary); f) {
+    std::ostringstream bytes;
+    bytes << f.rdbuf();
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
+    if (!f.bad()) c.robot_fnv1a64 = hex;
+  }
+  return c;
+}
+
+std::string meta_json(const RunContext& context) {
   utsname u{};
   uname(&u);
   Json meta;
+  meta["command_line"] = context.command_line;
+  meta["working_directory"] = context.working_directory;
+  meta["started_utc"] = context.started_utc;
   meta["git_revision"] = build_info::kGitRevision;
   meta["git_dirty"] = build_info::kGitDirty;
   meta["compiler"] = build_info::kCompiler;
@@ -112,6 +191,9 @@ std::string meta_json() {
                          std::to_string(TOML_LIB_PATCH);
   meta["machine"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
   meta["cpus"] = std::thread::hardware_concurrency();
+  meta["cpu_model"] = cpu_model();
+  meta["robot_file"] = {{"path", context.robot_file},
+                        {"fnv1a64", context.robot_fnv1a64.empty() ? Json(nullptr) : Json(context.robot_fnv1a64)}};
   return meta.dump(2) + "\n";
 }
 

@@ -70,8 +70,9 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
 
 }  // namespace
 
-Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides) {
-  Scene sc = load_scene(file, overrides);
+Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides,
+                         const std::vector<std::string>& unsets) {
+  Scene sc = load_scene(file, overrides, unsets);
   try {
     find_integrator(sc.integrator.name);
   } catch (const std::invalid_argument&) {
@@ -105,7 +106,7 @@ RunControls run_controls(Scene& sc, const RunRequest& a) {
 }
 
 CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,
-                       bool force, const std::function<void(double t)>& progress, bool keep_rows) {
+                       bool force, const ProgressHook& progress, const RunContext* context, bool keep_rows) {
   check_run_size(sc, rc.max_steps);
   if (out) check_run_folder_target(*out, force);  // before the run: a refusal costs nothing
   CompletedRun done;
@@ -114,7 +115,7 @@ CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::option
   if (out) {
     write_run_folder(*out,
                      {{"trajectory.csv", done.run.trajectory_csv}, {"stats.json", done.stats},
-                      {"meta.json", meta_json()}, {"scene.resolved.toml", resolved_toml(sc)}},
+                      {"meta.json", meta_json(context ? *context : run_context({}, sc))}, {"scene.resolved.toml", resolved_toml(sc)}},
                      force);
   }
   return done;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/simulation/run_documents.hpp"
 #include "experiments/simulation/scene_run.hpp"
 #include "models/scene/scene.hpp"
 
@@ -31,10 +32,11 @@ struct RunRequest {
   bool stop_at_outputs = false;           // --stop-at-outputs
 };
 
-// load_scene(file, overrides), and the scene's integrator in the registry;
+// load_scene(file, overrides, unsets), and the scene's integrator in the registry;
 // ConfigError naming the file, line and key otherwise (what `pumasim check`
 // and `pumasim run` load).
-Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides);
+Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides,
+                         const std::vector<std::string>& unsets = {});
 
 // Applies the request to the scene (back-end, integrator, dt or rtol and
 // atol, t_end: the scene then records what is run) and returns how the run is
@@ -53,10 +55,12 @@ struct CompletedRun {
 // `out` checked before the run when given (check_run_folder_target: a
 // refusal costs nothing), the run (progress may be empty), stats.json, and
 // the folder written when `out` is given (write_run_folder; an existing run
-// folder replaced only with force). keep_rows keeps the output rows in
+// folder replaced only with force; meta.json from context, or from a context
+// made now without a command line when null). keep_rows keeps the output rows in
 // SceneRun::rows. A run that fails is a result (run.result.ok false), not an
 // exception.
 CompletedRun run_scene(const Scene& scene, const RunControls& controls, const std::optional<std::filesystem::path>& out,
-                       bool force, const std::function<void(double t)>& progress, bool keep_rows = false);
+                       bool force, const ProgressHook& progress = {}, const RunContext* context = nullptr,
+                       bool keep_rows = false);
 
 }  // namespace pumasim

@@ -39,16 +39,14 @@ void check_run_size(const Scene& sc, long max_steps) {
   check_stops("controller.setpoint_interval", sc.plant.setpoint_interval, sc.duration, max_steps);
 }
 
-SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const std::function<void(double t)>& progress,
-                        bool keep_rows) {
+SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHook& progress, bool keep_rows) {
   Plant plant(sc.plant);
   auto integ = make_integrator(sc.integrator.name, rc.options);
   RunRecorder recorder(plant, sc.duration, sc.output_interval);
   SceneRun run;
-  run.result = run_plant(plant, *integ, sc.duration, sc.output_interval, [&](double t, const double* x) {
-    recorder.observe(t, x);
-    if (progress) progress(t);
-  }, rc.max_steps, rc.stops, rc.max_wall);
+  run.result = run_plant(plant, *integ, sc.duration, sc.output_interval,
+                         [&](double t, const double* x) { recorder.observe(t, x); }, rc.max_steps, rc.stops,
+                         rc.max_wall, progress);
   run.trajectory_csv = recorder.finish();
   run.figures = recorder.figures();
   if (keep_rows) {

@@ -50,8 +50,9 @@ struct SceneRun {
 };
 
 // Runs the scene (integrator scene.integrator.name) over scene.duration;
-// progress(t) at every output, after the recorder has it (may be empty).
-SceneRun simulate_scene(const Scene& scene, const RunControls& controls,
-                        const std::function<void(double t)>& progress, bool keep_rows = false);
+// progress.report (may be empty) by wall-clock time from the step loop
+// (driver.hpp: ProgressHook). keep_rows: SceneRun::rows and the path errors.
+SceneRun simulate_scene(const Scene& scene, const RunControls& controls, const ProgressHook& progress = {},
+                        bool keep_rows = false);
 
 }  // namespace pumasim

@@ -83,11 +83,13 @@ RobotModel load_robot_file(const std::string& path) {
   return model;
 }
 
+bool is_robot_path(const std::string& name_or_path) {
+  return name_or_path.find('/') != std::string::npos ||
+         (name_or_path.size() > 5 && name_or_path.compare(name_or_path.size() - 5, 5, ".toml") == 0);
+}
+
 RobotModel load_robot(const std::string& name_or_path) {
-  const bool is_path = name_or_path.find('/') != std::string::npos ||
-                       (name_or_path.size() > 5 &&
-                        name_or_path.compare(name_or_path.size() - 5, 5, ".toml") == 0);
-  if (is_path) return load_robot_file(name_or_path);
+  if (is_robot_path(name_or_path)) return load_robot_file(name_or_path);
   const std::filesystem::path file = std::filesystem::path(robots_dir()) / (name_or_path + ".toml");
   // The non-throwing overload: a name too long for the file system (or
   // otherwise unusable as a file name) is an unknown robot, not an internal

@@ -11,9 +11,11 @@ namespace pumasim {
 // Loads and checks a robot file; ConfigError naming file, line and key otherwise.
 RobotModel load_robot_file(const std::string& path);
 
-// `name_or_path` is a path when it contains '/' or ends in ".toml"; otherwise
-// the shipped robot file <robots dir>/<name>.toml ("puma560").
+// `name_or_path` is a path when it contains '/' or ends in ".toml"
+// (is_robot_path); otherwise the shipped robot file <robots dir>/<name>.toml
+// ("puma560").
 RobotModel load_robot(const std::string& name_or_path);
+bool is_robot_path(const std::string& name_or_path);
 
 // The directory of the shipped robot files: $PUMASIM_ROBOTS_DIR if set, else
 // the source tree's models/robots.

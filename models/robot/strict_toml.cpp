@@ -1,6 +1,7 @@
 #include "models/robot/strict_toml.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -91,6 +92,44 @@ void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides
                         std::string(e.description()) + ")");
     }
     merge_into(doc, t);
+  }
+}
+
+void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const std::string& file) {
+  for (const std::string& key : keys) {
+    // The path's parts: bare TOML keys (letters, digits, '_', '-'), '.'-separated.
+    std::vector<std::string> parts;
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t dot = key.find('.', start);
+      parts.push_back(key.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+      if (dot == std::string::npos) break;
+      start = dot + 1;
+    }
+    for (const std::string& p : parts) {
+      const bool bare = !p.empty() && std::all_of(p.begin(), p.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+      });
+      if (!bare) {
+        throw ConfigError("--unset " + key +
+                          ": expected section.key (names of the scene file, e.g. friction.static_torque)");
+      }
+    }
+    toml::table* table = &doc;
+    std::string at;  // the path so far
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      at += (at.empty() ? "" : ".") + parts[i];
+      table = table->get_as<toml::table>(parts[i]);
+      if (!table) throw ConfigError("--unset " + key + ": " + file + " has no table [" + at + "]");
+    }
+    if (!table->contains(parts.back())) {
+      std::string present;
+      for (const auto& [k, v] : *table) present += (present.empty() ? "" : ", ") + std::string(k.str());
+      const std::string where = at.empty() ? std::string("its top level") : "[" + at + "]";
+      throw ConfigError("--unset " + key + ": " + file + " has no key '" + key + "'" +
+                        (present.empty() ? std::string() : "; " + where + " has: " + present));
+    }
+    table->erase(parts.back());
   }
 }
 
@@ -301,6 +340,48 @@ std::vector<std::string> StrictTable::keys() {
   return out;
 }
 
+void StrictTable::not_applicable(std::string_view key) { not_applicable_.emplace_back(key, asked_.size()); }
+
+// " (friction.static_torque does not apply to friction.model = "viscous"
+// (--set friction.model="viscous"); remove it from the file or with --unset
+// friction.static_torque --unset friction.kinetic_torque)" for a key that
+// does not apply, or "". The choices named are the string and boolean values
+// read before the key (a key's applicability depends on the keys above it);
+// the --unset list has every key of the table that does not apply.
+std::string StrictTable::why_not_applicable(const toml::key& k) const {
+  const auto find = [this](std::string_view key) {
+    return std::find_if(not_applicable_.begin(), not_applicable_.end(),
+                        [&](const auto& e) { return e.first == key; });
+  };
+  const auto it = find(k.str());
+  if (it == not_applicable_.end()) return "";
+  std::string choices;
+  for (std::size_t i = 0; i < it->second && i < asked_.size(); ++i) {
+    const auto c = table_->find(asked_[i]);
+    if (c == table_->end() || !(c->second.is_string() || c->second.is_boolean())) continue;
+    std::ostringstream value;
+    if (c->second.is_string()) {
+      value << '"' << *c->second.value<std::string_view>() << '"';
+    } else {
+      value << (*c->second.value<bool>() ? "true" : "false");
+    }
+    choices += (choices.empty() ? "" : ", ") + key_path(asked_[i]) + " = " + value.str();
+    if (const std::string o = override_of(c->first); !o.empty()) choices += " (" + o + ")";
+  }
+  if (const std::string o = override_of(k); !o.empty()) {
+    return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
+           "; drop " + o + ")";
+  }
+  std::string unsets;  // every key of the file here that does not apply
+  for (const auto& [key, v] : *table_) {
+    const bool asked = std::find(asked_.begin(), asked_.end(), key.str()) != asked_.end();
+    if (asked || find(key.str()) == not_applicable_.end() || !override_of(key).empty()) continue;
+    unsets += " --unset " + key_path(key.str());
+  }
+  return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
+         "; remove it from the file or with" + unsets + ")";
+}
+
 void StrictTable::finish() const {
   for (const auto& [k, v] : *table_) {
     if (std::find(asked_.begin(), asked_.end(), k.str()) != asked_.end()) continue;
@@ -308,7 +389,7 @@ void StrictTable::finish() const {
     for (const auto& a : asked_) known += (known.empty() ? "" : ", ") + a;
     const std::string o = override_of(k);
     throw ConfigError((o.empty() ? file_ + ":" + line_of(k.source()) : o) + ": unknown key '" +
-                      key_path(k.str()) + "'; expected one of: " + known);
+                      key_path(k.str()) + "'; expected one of: " + known + why_not_applicable(k));
   }
 }
 

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <toml++/toml.h>
@@ -33,6 +34,11 @@ toml::table parse_toml_file(const std::string& path);
 // into a parsed document before it is checked; a bad value is reported as
 // "--set section.key=value: section.key: expected ...".
 void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides);
+
+// Command-line removals "section.key" (any depth; a whole table too): each
+// must name a key of the parsed document `doc` read from `file`, or
+// ConfigError "--unset section.key: FILE has no key 'section.key' ...".
+void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const std::string& file);
 
 class StrictTable {
  public:
@@ -61,6 +67,12 @@ class StrictTable {
   // Every key of this table, for tables whose keys are names (poses, ...).
   std::vector<std::string> keys();
 
+  // A key this table knows that does not apply given the values read so far
+  // (a friction law's key under another law): still unknown to finish(),
+  // whose message then says so, naming the choices read before it and how to
+  // remove the key.
+  void not_applicable(std::string_view key);
+
   // Rejects every key that no accessor asked for.
   void finish() const;
 
@@ -86,6 +98,9 @@ class StrictTable {
   std::string file_;
   std::string path_;  // "" for the root, "joint[2]" below it
   std::vector<std::string> asked_;
+  // Keys that do not apply, each with how many keys had been asked before it.
+  std::vector<std::pair<std::string, std::size_t>> not_applicable_;
+  std::string why_not_applicable(const toml::key& k) const;
 };
 
 }  // namespace pumasim

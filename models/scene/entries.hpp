@@ -58,7 +58,10 @@ struct Entry {
 template <class T>
 void read_entries(StrictTable& t, const std::vector<Entry<T>>& entries, T& obj, int n) {
   for (const Entry<T>& e : entries) {
-    if (e.applies && !e.applies(obj)) continue;
+    if (e.applies && !e.applies(obj)) {
+      t.not_applicable(e.key);  // finish() says why, should the key be there
+      continue;
+    }
     if (e.need == Need::kRequired || t.node(e.key)) e.codec.read(t, e.key, obj, n);
     if (e.then) e.then(t, obj);
   }

@@ -48,14 +48,17 @@ void check_name(StrictTable& t, Scene& sc) {
 
 // Loads the robot file; the plant and the reference hold a pose in a 6-vector,
 // and lock held joints only on a 6-joint arm: its size is checked here, before
-// any size derived from it is used.
+// any size derived from it is used. A file path (relative to the scene's
+// folder) is resolved to an absolute one, which the resolved scene keeps, so
+// that it loads from any working directory; a shipped robot's name stays a name.
 void load_robot_of(StrictTable& t, Scene& sc) {
-  std::string robot_path = sc.robot_spec;
-  if (robot_path.find('/') != std::string::npos && !std::filesystem::path(robot_path).is_absolute()) {
-    robot_path = (std::filesystem::path(sc.file).parent_path() / robot_path).string();
+  if (is_robot_path(sc.robot_spec)) {
+    namespace fs = std::filesystem;
+    const fs::path p(sc.robot_spec);
+    sc.robot_spec = fs::absolute(p.is_absolute() ? p : fs::path(sc.file).parent_path() / p).lexically_normal().string();
   }
   try {
-    sc.plant.robot = load_robot(robot_path);
+    sc.plant.robot = load_robot(sc.robot_spec);
   } catch (const ConfigError& e) {
     throw ConfigError(t.where("robot") + e.what());
   }
@@ -595,8 +598,10 @@ void write_initial(toml::table& doc, const PlantConfig& pc) {
 
 }  // namespace
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 const std::vector<std::string>& unsets) {
   toml::table doc = parse_toml_file(path);
+  remove_keys(doc, unsets, path);
   apply_overrides(doc, overrides);
   StrictTable root(doc, path, "");
   Scene sc;

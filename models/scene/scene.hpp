@@ -50,7 +50,7 @@ struct ReferenceSettings {
 struct Scene {
   std::string name;
   std::string file;
-  std::string robot_spec;  // as written in the file
+  std::string robot_spec;  // as written in the file; a file path made absolute
   bool rotor_inertia = true;  // false: the robot's rotor inertias removed (scene.rotor_inertia)
   double duration = 0.0;         // [s]
   double output_interval = 0.01; // [s]
@@ -70,8 +70,11 @@ struct PlanningSetup {
 PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r);
 
 // Loads and checks a scene; ConfigError naming file, line and key otherwise.
-// overrides: "section.key=value" (TOML value syntax), applied before the checks.
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+// unsets: "section.key", keys of the file removed first (one that is not
+// there is an error); overrides: "section.key=value" (TOML value syntax),
+// applied next; then the checks.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
+                 const std::vector<std::string>& unsets = {});
 
 // The scene with every default filled in, as TOML.
 std::string resolved_toml(const Scene& scene);

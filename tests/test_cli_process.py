@@ -1,0 +1,95 @@
+"""`pumasim run` as a process, as a user sees it on a terminal and in a pipe:
+stdout carries the JSON document alone (`pumasim run ... | jq` works); the
+progress line appears on stderr only when stderr is a terminal (a pty here),
+refreshed by wall-clock time while the integrator steps (not only at output
+times), and never with --quiet.
+
+    PUMASIM=build/release/bin/pumasim /usr/bin/python3 -m pytest -q tests/test_cli_process.py
+"""
+import json
+import os
+import pty
+import re
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
+import pumasim_io  # noqa: E402
+
+SCENES = os.path.join(pumasim_io.ROOT, "experiments", "scenes")
+# About 2 s of RK4 steps of 2 us on 1.6 s (800,000 steps) with one output at
+# the end: the progress line must come from the step loop, as no output falls
+# in between.
+LONG_RUN = [os.path.join(SCENES, "paper_slow_viscous.toml"), "--integrator", "rk4", "--dt", "2e-6",
+            "--t-end", "1.6", "--set", "scene.output_interval=1.6"]
+
+
+def run_on_a_terminal(args):
+    """Runs pumasim with stderr on a pseudo-terminal, stdout on a pipe: (status, stdout, stderr bytes)."""
+    master, slave = pty.openpty()
+    p = subprocess.Popen([pumasim_io.PUMASIM] + args, stdout=subprocess.PIPE, stderr=slave, stdin=subprocess.DEVNULL)
+    os.close(slave)
+    err = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # EIO: the child closed the terminal
+            break
+        if not chunk:
+            break
+        err += chunk
+    os.close(master)
+    out = p.stdout.read()
+    p.wait()
+    return p.returncode, out, err
+
+
+def test_stdout_is_the_json_document_alone_through_jq(tmp_path):
+    if not shutil.which("jq"):
+        pytest.skip("jq is not installed")
+    scene = os.path.join(SCENES, "paper_slow.toml")
+    cmd = f"'{pumasim_io.PUMASIM}' run '{scene}' --t-end 0.05 --out '{tmp_path / 'run'}' | jq -e -r .scene"
+    p = subprocess.run(["bash", "-o", "pipefail", "-c", cmd], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout == "paper_slow\n"
+    assert p.stderr == f"results: {tmp_path / 'run'}/\n"
+
+
+def test_no_progress_line_when_stderr_is_not_a_terminal(tmp_path):
+    p = subprocess.run([pumasim_io.PUMASIM, "run"] + LONG_RUN + ["--out", str(tmp_path / "run")],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["ok"] is True
+    assert p.stderr == f"results: {tmp_path / 'run'}/\n"
+
+
+def test_a_progress_line_on_a_terminal_refreshed_between_outputs(tmp_path):
+    status, out, err = run_on_a_terminal(["run"] + LONG_RUN + ["--out", str(tmp_path / "run")])
+    assert status == 0, err
+    doc = json.loads(out)  # stdout untouched by the progress line
+    text = err.decode()
+    lines = [s for s in text.split("\r") if s.startswith("pumasim run paper_slow_viscous: ")]
+    assert lines, text
+    pattern = re.compile(r"pumasim run paper_slow_viscous: t = ([0-9.e+-]+) / 1\.6 s \(\d+%\), (\d+) steps, "
+                         r"h = 2e-06 s, ([0-9.]+) s elapsed *$")
+    seen = []
+    for line in lines:
+        m = pattern.match(line)
+        assert m, line
+        seen.append((float(m[1]), int(m[2]), float(m[3])))
+    assert all(0 < t < 1.6 for t, _, _ in seen), seen  # between the outputs at 0 and 1.6 s
+    assert seen[0][2] >= 1.0, "the first report after a second"
+    assert all(b[1] > a[1] and b[0] > a[0] for a, b in zip(seen, seen[1:])), seen
+    assert seen[-1][1] <= doc["steps"]
+    # The line is cleared before the last message.
+    assert text.endswith("\r" + " " * len(lines[-1].rstrip()) + f"\rresults: {tmp_path / 'run'}/\r\n"), repr(text[-300:])
+
+
+def test_quiet_has_no_progress_line_on_a_terminal(tmp_path):
+    status, out, err = run_on_a_terminal(["run"] + LONG_RUN + ["--out", str(tmp_path / "run"), "--quiet"])
+    assert status == 0, err
+    assert json.loads(out)["ok"] is True
+    assert err == b""

@@ -1,0 +1,116 @@
+"""experiments/sweep.py reuses a finished run only while everything that
+determines it is unchanged: a tiny sweep (passive_arm, 20 ms, three runs) is
+run, re-run (nothing runs), then re-run after each change -- t_end, the scene
+file, a variant's --set, a method's setting, the program -- and each change
+runs again exactly the runs it concerns; --merge refuses a stale summary.
+
+    PUMASIM=build/release/bin/pumasim /usr/bin/python3 -m pytest -q tests/test_sweep_key.py
+"""
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
+import pumasim_io  # noqa: E402
+import sweep  # noqa: E402
+
+SWEEP = """
+[sweep]
+name = "tiny"
+scene = "passive_arm"
+t_end = {t_end}
+repeats = 1
+target_mm = 1.0
+
+[reference]
+integrator = "cvode-bdf"
+options = ["--rtol", "1e-8", "--atol", "1e-10"]
+
+[check]
+integrator = "rk4"
+options = ["--dt", "5e-4"]
+
+[[variant]]
+label = "base"
+set = [{variant_set}]
+
+[[method]]
+integrator = ["rk4"]
+dt = [{dt}]
+"""
+
+
+@pytest.fixture
+def setup(tmp_path, monkeypatch):
+    """A copy of passive_arm.toml the test may edit, a counter of `pumasim run`
+    processes, and a function that loads the tiny sweep and runs what is not
+    complete, returning the ids of the runs it ran."""
+    scene = tmp_path / "passive_arm.toml"
+    shutil.copy(os.path.join(pumasim_io.ROOT, "experiments", "scenes", "passive_arm.toml"), scene)
+    monkeypatch.setattr(sweep, "scene_file", lambda s: str(scene))
+    ran = []
+    real_run = subprocess.run
+
+    def counting_run(cmd, *args, **kwargs):
+        if len(cmd) > 1 and cmd[1] == "run":
+            ran.append(cmd[cmd.index("--out") + 1])
+        return real_run(cmd, *args, **kwargs)
+
+    monkeypatch.setattr(sweep.subprocess, "run", counting_run)
+    work = str(tmp_path / "work")
+
+    def run_sweep(t_end=0.02, dt=0.002, variant_set=""):
+        path = tmp_path / "tiny.toml"
+        path.write_text(SWEEP.format(t_end=t_end, dt=dt, variant_set=variant_set))
+        sweep.resolved_scene.cache_clear()  # a sweep reads its scene once; this test edits it in between
+        s = sweep.load_sweep(str(path), reduced=False)
+        ran.clear()
+        summaries = [sweep.execute(s, work, r) for r in sweep.run_list(s)]
+        assert all(sm["stats"]["ok"] for sm in summaries), [sm["stats"]["failure"] for sm in summaries]
+        return s, sorted(os.path.relpath(d, work) for d in ran)
+
+    return scene, work, run_sweep
+
+
+ALL = ["base/check", "base/reference", "base/rk4_dt0.002"]
+
+
+def test_a_finished_run_is_reused_only_while_nothing_that_determines_it_changed(setup):
+    scene, work, run_sweep = setup
+    s, ran = run_sweep()
+    assert ran == ALL
+    assert run_sweep()[1] == [], "nothing changed: every run reused"
+    # t_end: every run again, and its trajectory ends at the new horizon.
+    assert run_sweep(t_end=0.03)[1] == ALL
+    assert pumasim_io.read_stats(os.path.join(work, "base", "reference"))["t_end"] == 0.03
+    assert run_sweep(t_end=0.03)[1] == []
+    # The scene file itself (a value the sweep does not set).
+    scene.write_text(scene.read_text().replace("output_interval = 0.01", "output_interval = 0.005"))
+    assert run_sweep(t_end=0.03)[1] == ALL
+    assert run_sweep(t_end=0.03)[1] == []
+    # A variant's --set: that variant's runs (here all of them).
+    assert run_sweep(t_end=0.03, variant_set='"friction.viscous=1e-3"')[1] == ALL
+    # A method's setting: a new run; the reference and check are reused.
+    assert run_sweep(t_end=0.03, variant_set='"friction.viscous=1e-3"', dt=0.001)[1] == ["base/rk4_dt0.001"]
+
+
+def test_another_program_reruns_and_merge_refuses_stale_runs(setup, monkeypatch):
+    scene, work, run_sweep = setup
+    s, ran = run_sweep()
+    assert ran == ALL
+    # The summaries record the program's identity: pumasim --version (its revision, compiler, flags).
+    version = subprocess.run([pumasim_io.PUMASIM, "--version"], capture_output=True, text=True, check=True).stdout
+    assert pumasim_io.read_json(os.path.join(work, "base", "reference.json"))["program"].startswith(version.strip())
+    # The scene changes after the runs: --merge refuses to mix them in.
+    scene.write_text(scene.read_text().replace("duration = 2.0", "duration = 1.5"))
+    sweep.resolved_scene.cache_clear()
+    with pytest.raises(sweep.SweepError, match="base/check .* was made from another scene, setting or program"):
+        sweep.merge(s, work, str(os.path.dirname(work) + "/out"))
+    assert run_sweep()[1] == ALL
+    # Another build of pumasim: everything again.
+    monkeypatch.setattr(sweep, "program_identity", lambda pumasim: "pumasim 0000000 (another build)")
+    assert run_sweep()[1] == ALL
+    assert run_sweep()[1] == []
