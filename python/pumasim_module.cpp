@@ -165,8 +165,8 @@ py::dict dynamics(const py::object& robot, const std::string& backend, const py:
 // A loaded scene and its plant, at the plant's initial discrete state.
 class PyScene {
  public:
-  PyScene(const std::string& path, const std::vector<std::string>& overrides)
-      : scene_(load_checked_scene(path, overrides)),
+  PyScene(const std::string& path, const std::vector<std::string>& overrides, const std::vector<std::string>& unset)
+      : scene_(load_checked_scene(path, overrides, unset)),
         discrete_(discrete_state(scene_)),
         plant_(std::make_unique<Plant>(scene_.plant)),
         system_(std::make_unique<PlantSystem>(*plant_)) {
@@ -334,12 +334,13 @@ PYBIND11_MODULE(pumasim, m) {
                       "events.")
       .def_static(
           "load",
-          [](const py::object& path, const py::object& overrides) {
-            return std::make_unique<PyScene>(path_arg(path), override_args(overrides));
+          [](const py::object& path, const py::object& overrides, const std::vector<std::string>& unset) {
+            return std::make_unique<PyScene>(path_arg(path), override_args(overrides), unset);
           },
-          py::arg("path"), py::arg("overrides") = py::none(),
+          py::arg("path"), py::arg("overrides") = py::none(), py::arg("unset") = std::vector<std::string>{},
           "Loads a scene file. overrides: {\"section.key\": value} (bool, number, str, list), or a list of\n"
-          "\"section.key=value\" strings in TOML syntax, as the command line's --set.")
+          "\"section.key=value\" strings in TOML syntax, as the command line's --set; unset: [\"section.key\"],\n"
+          "keys removed from the file first, as --unset.")
       .def_property_readonly("name", [](const PyScene& s) { return s.scene().name; })
       .def_property_readonly("file", [](const PyScene& s) { return s.scene().file; })
       .def_property_readonly("size", [](const PyScene& s) { return s.plant().size(); }, "The state's length.")

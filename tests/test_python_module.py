@@ -243,6 +243,21 @@ def test_overrides_are_the_command_lines_set():
     assert s.resolved_toml() == t.resolved_toml()
 
 
+def test_unset_is_the_command_lines_unset():
+    # Switching the controller law: the PIV keys the new law does not read are removed first.
+    piv_only = ["controller.ki", "controller.kv", "controller.kvff", "controller.kaff"]
+    sets = {"controller.law": "computed_torque", "controller.kp": 900.0, "controller.kd": 60.0}
+    s = pumasim.Scene.load(DRIVEN, overrides=sets, unset=piv_only)
+    assert 'law = "computed_torque"' in s.resolved_toml() or "law = 'computed_torque'" in s.resolved_toml()
+    assert not any(n.startswith("z_piv") for n in s.state_names)  # no PIV integrals
+    with pytest.raises(ValueError) as e:
+        pumasim.Scene.load(DRIVEN, overrides=sets)
+    assert "controller.ki" in str(e.value) or "'ki'" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        pumasim.Scene.load(DRIVEN, unset=["controller.no_such_key"])
+    assert str(e.value) == cli_error("check", DRIVEN, "--unset", "controller.no_such_key")
+
+
 def test_bad_dynamics_input_is_a_value_error():
     with pytest.raises(ValueError) as e:
         pumasim.dynamics(backend="no-such-backend", q="qz")
