@@ -292,29 +292,8 @@ std::vector<std::string> integrator_list() {
   return names;
 }
 
-}  // namespace
-}  // namespace pumasim
-
-PYBIND11_MODULE(pumasim, m) {
-  using namespace pumasim;
-  m.doc() =
-      "pumasim: the PUMA 560 as one stiff state-space ODE (README.md, \"Use it from Python\").\n\n"
-      "backends(), integrators(): the registries' names; dynamics(...): H, h, g, and tau or qdd;\n"
-      "Scene.load(path, overrides): a scene's plant as f(t, x) and its Jacobian; run(scene, ...): `pumasim run`.\n"
-      "Bad input raises ValueError with the command line's message.";
-  m.attr("__version__") = PUMASIM_VERSION;
-
-  // The library's input errors: ValueError, as std::invalid_argument already is.
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const ConfigError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    } catch (const RunFolderError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    }
-  });
-
+// The registries and the robot's dynamics.
+void bind_dynamics(py::module_& m) {
   m.def("backends", &backend_list, "The dynamics back-ends' names (pumasim backends), sorted.");
   m.def("integrators", &integrator_list, "The integrators' names (pumasim integrators), sorted.");
 
@@ -325,7 +304,10 @@ PYBIND11_MODULE(pumasim, m) {
         "rotor_inertia_included, q, qd, mass_matrix (n x n), bias, gravity; with qdd also qdd_in and tau\n"
         "(inverse dynamics), with tau also tau_in and qdd (forward dynamics). robot: a shipped robot's name\n"
         "(models/robots/<name>.toml) or a path; q: n numbers or a pose name of the robot file; qd: default 0.");
+}
 
+// Scene: a scene file's plant as f(t, x) and its Jacobian.
+void bind_scene(py::module_& m) {
   py::class_<PyScene>(m, "Scene",
                       "A scene file loaded as `pumasim check` loads it, with its plant at the initial discrete "
                       "state.\nrhs(t, x) is the continuous right-hand side f(t, x); a scene whose plant has "
@@ -374,7 +356,10 @@ PYBIND11_MODULE(pumasim, m) {
         return "<pumasim.Scene " + s.scene().name + " (" + s.scene().file + "): " + std::to_string(s.plant().size()) +
                " states>";
       });
+}
 
+// run(): `pumasim run`, and its result.
+void bind_run(py::module_& m) {
   py::class_<PyRun>(m, "Run", "The result of pumasim.run: what `pumasim run` writes, as arrays.")
       .def_readonly("t", &PyRun::t, "Output times [s].")
       .def_readonly("x", &PyRun::x, "The state at each output time, one row per time.")
@@ -421,4 +406,33 @@ PYBIND11_MODULE(pumasim, m) {
       "the command line's default), the same checks and messages, the same stats. Writes the run folder\n"
       "only when out is given (a new folder, or with force a pumasim run folder). A run that fails is a\n"
       "result (ok False, failure), as the command line's exit status 1.");
+}
+
+}  // namespace
+}  // namespace pumasim
+
+PYBIND11_MODULE(pumasim, m) {
+  using namespace pumasim;
+
+  m.doc() =
+      "pumasim: the PUMA 560 as one stiff state-space ODE (README.md, \"Use it as a library\").\n\n"
+      "backends(), integrators(): the registries' names; dynamics(...): H, h, g, and tau or qdd;\n"
+      "Scene.load(path, overrides): a scene's plant as f(t, x) and its Jacobian; run(scene, ...): `pumasim run`.\n"
+      "Bad input raises ValueError with the command line's message.";
+  m.attr("__version__") = PUMASIM_VERSION;
+
+  // The library's input errors: ValueError, as std::invalid_argument already is.
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const ConfigError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const RunFolderError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  bind_dynamics(m);
+  bind_scene(m);
+  bind_run(m);
 }
