@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -322,6 +323,12 @@ ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::
                             name.c_str(), p.t, duration, duration > 0 ? 100 * p.t / duration : 0.0, p.steps, p.h,
                             p.wall);
     len = std::clamp(len, 1, static_cast<int>(sizeof line) - 1);
+    // Within the terminal's width, so that \r rewinds the whole line (a
+    // wrapped line would leave a new row at every report).
+    winsize ws{};
+    const int columns = ioctl(STDERR_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 1 ? ws.ws_col : 80;
+    len = std::min(len, columns);  // the \r and columns - 1 characters
+    line[len] = '\0';
     const std::size_t shown = static_cast<std::size_t>(len) - 1;  // without the \r
     err << line << std::string(width > shown ? width - shown : 0, ' ') << std::flush;
     width = shown;

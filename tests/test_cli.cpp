@@ -185,6 +185,20 @@ TEST(CliParsing, AKeyLeftWithoutMeaningByASwitchSaysWhyAndHowToRemoveIt) {
               "--unset reference.max_speed --unset reference.profile"});
 }
 
+// The choice that decides is named with its value even when the file does
+// not give it (the default), and a table the command line made is named by
+// the --set that made it (it has no line in the file).
+TEST(CliParsing, TheDecidingChoiceIsNamedAtItsDefaultAndATableFromSetByItsSet) {
+  const std::string ct = std::string(PUMASIM_SCENES_DIR) + "/computed_torque.toml";
+  expect_bad({"check", ct, "--unset", "controller.law"},
+             {"computed_torque.toml:", "unknown key 'controller.kd'",
+              "does not apply to controller.law = \"piv\" (the default)", "with --unset controller.kd)"});
+  expect_bad({"check", kScene, "--set", "controller.law=\"computed_torque\"", "--set", "controller.kd=1"},
+             {"does not apply to controller.law = \"computed_torque\" (--set controller.law=\"computed_torque\")"});
+  expect_bad({"check", ct, "--unset", "controller", "--set", "controller.law=\"piv\""},
+             {"--set controller.law=\"piv\": controller: missing required key 'mode'"});
+}
+
 TEST(CliParsing, UnsetOfAKeyTheSceneDoesNotHaveIsNamed) {
   expect_bad({"check", kScene, "--unset", "friction.static_torq"},
              {"--unset friction.static_torq: ", "paper_slow.toml has no key 'friction.static_torq'",

@@ -6,13 +6,16 @@ times), and never with --quiet.
 
     PUMASIM=build/release/bin/pumasim /usr/bin/python3 -m pytest -q tests/test_cli_process.py
 """
+import fcntl
 import json
 import os
 import pty
 import re
 import shutil
+import struct
 import subprocess
 import sys
+import termios
 
 import pytest
 
@@ -27,9 +30,10 @@ LONG_RUN = [os.path.join(SCENES, "paper_slow_viscous.toml"), "--integrator", "rk
             "--t-end", "1.6", "--set", "scene.output_interval=1.6"]
 
 
-def run_on_a_terminal(args):
-    """Runs pumasim with stderr on a pseudo-terminal, stdout on a pipe: (status, stdout, stderr bytes)."""
+def run_on_a_terminal(args, columns=200):
+    """Runs pumasim with stderr on a pseudo-terminal `columns` wide, stdout on a pipe: (status, stdout, stderr bytes)."""
     master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
     p = subprocess.Popen([pumasim_io.PUMASIM] + args, stdout=subprocess.PIPE, stderr=slave, stdin=subprocess.DEVNULL)
     os.close(slave)
     err = b""
@@ -86,6 +90,15 @@ def test_a_progress_line_on_a_terminal_refreshed_between_outputs(tmp_path):
     assert seen[-1][1] <= doc["steps"]
     # The line is cleared before the last message.
     assert text.endswith("\r" + " " * len(lines[-1].rstrip()) + f"\rresults: {tmp_path / 'run'}/\r\n"), repr(text[-300:])
+
+
+def test_the_progress_line_fits_a_narrow_terminal(tmp_path):
+    # A line as wide as the terminal would wrap, and \r would rewind only its last row.
+    status, out, err = run_on_a_terminal(["run"] + LONG_RUN + ["--out", str(tmp_path / "run")], columns=60)
+    assert status == 0, err
+    lines = [s for s in err.decode().split("\r") if s.startswith("pumasim run paper_slow_viscous: ")]
+    assert lines
+    assert all(len(line) <= 59 for line in lines), [len(line) for line in lines]
 
 
 def test_quiet_has_no_progress_line_on_a_terminal(tmp_path):

@@ -271,6 +271,8 @@ def test_bad_dynamics_input_is_a_value_error():
         pumasim.dynamics(q="no-such-pose")
     with pytest.raises(ValueError, match="1-D"):
         pumasim.dynamics(q=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="^qd: expected finite numbers, got nan for joint 2$"):
+        pumasim.dynamics(q="qz", qd=[0.0, float("nan"), 0.0, 0.0, 0.0, 0.0])
     with pytest.raises(ValueError) as e:
         pumasim.dynamics(robot="no_such_robot", q="qz")
     assert str(e.value) == cli_error("dynamics", "--robot", "no_such_robot", "--backend", "crba", "--q=qz")
@@ -293,6 +295,8 @@ def test_bad_state_and_run_options_are_value_errors(tmp_path):
         pumasim.run(s, t_end=-1.0)
     with pytest.raises(ValueError, match="unknown integrator"):
         pumasim.run(s, integrator="no-such-integrator")
+    with pytest.raises(ValueError, match="^--late-events excludes --stop-at-outputs$"):
+        pumasim.run(s, late_events=True, stop_at_outputs=True)
     # a folder pumasim did not write is never replaced, as by the command line
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("keep")

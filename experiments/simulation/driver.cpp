@@ -51,14 +51,19 @@ class StepClock {
 // wall: the wall-clock time at this step, or < 0 when the clock was not read.
 std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, const double* xs, long max_steps,
                            double max_wall, double wall) {
+  const auto g = [](double x) {  // all the digits a time needs (std::to_string's %f shows 1e-7 s as 0.000000)
+    char b[32];
+    std::snprintf(b, sizeof b, "%.9g", x);
+    return std::string(b);
+  };
   const auto where = [&] {
     char h[64];
     std::snprintf(h, sizeof h, " (last step h = %.3g s)", integrator.time() - integrator.step_start());
-    return " exhausted at t = " + std::to_string(t) + " s" + h + "; fastest-changing component " +
+    return " exhausted at t = " + g(t) + " s" + h + "; fastest-changing component " +
            fastest_scaled_component(sys, t, xs);
   };
   if (max_wall > 0 && wall > max_wall) {
-    return std::string(integrator.name()) + ": wall-clock budget of " + std::to_string(max_wall) + " s" + where() +
+    return std::string(integrator.name()) + ": wall-clock budget of " + g(max_wall) + " s" + where() +
            "; more time: pumasim run --max-wall S (0: no limit)";
   }
   if (max_steps > 0 && integrator.stats().steps > max_steps) {

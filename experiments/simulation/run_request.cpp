@@ -29,6 +29,7 @@ void check_request(const RunRequest& r) {
   check_value("--max-steps", r.max_steps, "a whole number >= 0 (0: no limit)",
               r.max_steps && *r.max_steps >= 0 && *r.max_steps <= 1e18 && *r.max_steps == std::floor(*r.max_steps));
   check_value("--max-wall", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
+  if (r.late_events && r.stop_at_outputs) throw std::invalid_argument("--late-events excludes --stop-at-outputs");
 }
 
 // --backend: the scene's robot as simulated must be one the back-end can describe.
@@ -109,13 +110,14 @@ CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::option
                        bool force, const ProgressHook& progress, const RunContext* context, bool keep_rows) {
   check_run_size(sc, rc.max_steps);
   if (out) check_run_folder_target(*out, force);  // before the run: a refusal costs nothing
+  const RunContext started = context ? *context : run_context({}, sc);  // the start time, the robot file as loaded
   CompletedRun done;
   done.run = simulate_scene(sc, rc, progress, keep_rows);
   done.stats = stats_json(sc, rc, done.run);
   if (out) {
     write_run_folder(*out,
                      {{"trajectory.csv", done.run.trajectory_csv}, {"stats.json", done.stats},
-                      {"meta.json", meta_json(context ? *context : run_context({}, sc))}, {"scene.resolved.toml", resolved_toml(sc)}},
+                      {"meta.json", meta_json(started)}, {"scene.resolved.toml", resolved_toml(sc)}},
                      force);
   }
   return done;

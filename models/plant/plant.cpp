@@ -95,6 +95,8 @@ Plant::Plant(PlantConfig config)
   ds_.modes.assign(n, SlipMode::kStuck);
   ftmp_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
+  jx_.resize(layout_.size);
+  jf_.resize(layout_.size);
 }
 
 Plant::~Plant() = default;
@@ -196,7 +198,7 @@ void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = layout_.size;
   J.resize(m, m);
-  std::vector<Dual> xx(m), ff(m);
+  std::vector<Dual>&xx = jx_, &ff = jf_;
   for (int k = 0; k < m; ++k) {
     for (int i = 0; i < m; ++i) xx[i] = Dual(x[i], i == k ? 1.0 : 0.0);
     eval(t, xx.data(), ff.data(), *wj_);

@@ -206,6 +206,7 @@ class Plant {
   PlantDiscreteState ds_;
   std::vector<double> ftmp_;        // f for roots, drive_signals and settle_modes
   std::vector<double> ft_[2];        // time_derivative scratch
+  std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
   bool friction_on_ = true;          // off only inside rhs_split
 };
 

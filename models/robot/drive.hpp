@@ -43,11 +43,11 @@ struct FrictionModel {
 
 struct FrictionParams {
   FrictionModel model;          // none by default
-  double viscous = 0.0;         // B [N m s/rad], added in every model but kNone
+  double viscous = 0.0;         // B [N m s/rad], added in every model but none
   double static_torque = 0.0;   // Fs [N m] (paper: 0.146)
   double kinetic_torque = 0.0;  // Fk [N m] (paper: 0.124)
-  double zero_speed = 1e-6;     // [rad/s]: "zero" for kPaper, band for kKarnopp
-  double speed_scale = 1e-2;    // [rad/s]: tanh scale for kTanh
+  double zero_speed = 1e-6;     // [rad/s]: "zero" for the paper's rule, band for Karnopp's
+  double speed_scale = 1e-2;    // [rad/s]: tanh's scale
 };
 
 // Slip state of a joint under the hybrid model.

@@ -1,5 +1,6 @@
 #include "models/robot/dynamics_query.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "models/robot/robot_file.hpp"
@@ -11,6 +12,12 @@ void check_size(const Eigen::VectorXd& v, int n, const char* what) {
   if (v.size() != n) {
     throw std::invalid_argument(std::string(what) + ": expected " + std::to_string(n) + " values (one per joint), got " +
                                 std::to_string(v.size()));
+  }
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      throw std::invalid_argument(std::string(what) + ": expected finite numbers, got " + std::to_string(v[i]) +
+                                  " for joint " + std::to_string(i + 1));
+    }
   }
 }
 

@@ -156,12 +156,23 @@ std::string StrictTable::where(std::string_view key) const {
   }
   const toml::node* node = table_->get(key);
   const auto& src = node ? node->source() : table_->source();
+  if (src.begin.line == 0) return table_origin() + ": " + key_path(key) + ": ";
   return file_ + ":" + line_of(src) + ": " + key_path(key) + ": ";
 }
 
 std::string StrictTable::where() const {
+  if (table_->source().begin.line == 0) return table_origin() + ": " + (path_.empty() ? "(top level)" : path_) + ": ";
   return file_ + ":" + line_of(table_->source()) + ": " + (path_.empty() ? "(top level)" : path_) +
          ": ";
+}
+
+// A table with no line of the file made it from the command line: the
+// override that did ("--set a.b=1"), else the file alone.
+std::string StrictTable::table_origin() const {
+  for (const auto& [k, v] : *table_) {
+    if (const std::string o = override_of(k); !o.empty()) return o;
+  }
+  return file_;
 }
 
 void StrictTable::fail(std::string_view key, const std::string& expected,
@@ -340,7 +351,9 @@ std::vector<std::string> StrictTable::keys() {
   return out;
 }
 
-void StrictTable::not_applicable(std::string_view key) { not_applicable_.emplace_back(key, asked_.size()); }
+void StrictTable::not_applicable(std::string_view key, std::string decider) {
+  not_applicable_.push_back({std::string(key), asked_.size(), std::move(decider)});
+}
 
 // " (friction.static_torque does not apply to friction.model = "viscous"
 // (--set friction.model="viscous"); remove it from the file or with --unset
@@ -351,12 +364,19 @@ void StrictTable::not_applicable(std::string_view key) { not_applicable_.emplace
 std::string StrictTable::why_not_applicable(const toml::key& k) const {
   const auto find = [this](std::string_view key) {
     return std::find_if(not_applicable_.begin(), not_applicable_.end(),
-                        [&](const auto& e) { return e.first == key; });
+                        [&](const auto& e) { return e.key == key; });
   };
   const auto it = find(k.str());
   if (it == not_applicable_.end()) return "";
   std::string choices;
-  for (std::size_t i = 0; i < it->second && i < asked_.size(); ++i) {
+  if (!it->decider.empty()) {  // the key above it that decides, and its value
+    const std::string d = it->decider.substr(0, it->decider.find(" = "));
+    choices = key_path(d) + it->decider.substr(d.size());
+    if (const auto c = table_->find(d); c != table_->end()) {
+      if (const std::string o = override_of(c->first); !o.empty()) choices += " (" + o + ")";
+    }
+  }
+  for (std::size_t i = 0; it->decider.empty() && i < it->asked_before && i < asked_.size(); ++i) {
     const auto c = table_->find(asked_[i]);
     if (c == table_->end() || !(c->second.is_string() || c->second.is_boolean())) continue;
     std::ostringstream value;

@@ -71,7 +71,9 @@ class StrictTable {
   // (a friction law's key under another law): still unknown to finish(),
   // whose message then says so, naming the choices read before it and how to
   // remove the key.
-  void not_applicable(std::string_view key);
+  // The key does not apply here because of `decider` ('law = "piv"', the
+  // key above it that decides, with its value; may be empty).
+  void not_applicable(std::string_view key, std::string decider = {});
 
   // Rejects every key that no accessor asked for.
   void finish() const;
@@ -92,6 +94,7 @@ class StrictTable {
   const toml::node* lookup(std::string_view key);
   const toml::node& require(std::string_view key);
   std::string key_path(std::string_view key) const;
+  std::string table_origin() const;
   static std::string describe(const toml::node& node);
 
   const toml::table* table_;
@@ -99,7 +102,12 @@ class StrictTable {
   std::string path_;  // "" for the root, "joint[2]" below it
   std::vector<std::string> asked_;
   // Keys that do not apply, each with how many keys had been asked before it.
-  std::vector<std::pair<std::string, std::size_t>> not_applicable_;
+  struct NotApplicable {
+    std::string key;
+    std::size_t asked_before;  // asked_.size() when it was skipped
+    std::string decider;
+  };
+  std::vector<NotApplicable> not_applicable_;
   std::string why_not_applicable(const toml::key& k) const;
 };
 

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -47,19 +48,49 @@ struct Entry {
   Codec<T> codec;             // type, bounds or allowed values, member
   std::string_view meaning;   // one line: unit and role
   Need need = Need::kOptional;
-  // Whether the key means something, from the entries above it (null: always);
-  // a key that does not is not read (finish() calls it unknown) nor written.
-  bool (*applies)(const T&) = nullptr;
+  // Whether the key means something, from the entry above it named
+  // decided_by (null: always); a key that does not is not read (finish()
+  // calls it unknown, naming decided_by's value) nor written.
+  struct Applies {
+    bool (*fn)(const T&) = nullptr;
+    std::string_view decided_by;
+  } applies;
   // After the entry is read (its value or its default): checks and derived values.
   void (*then)(StrictTable&, T&) = nullptr;
 };
+
+// 'law = "piv"', or 'law = "piv" (the default)' when the file does not give
+// it: the entry `key` with its value as read into obj ("" if no entry has it).
+template <class T>
+std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, std::string_view key,
+                          const T& obj, int n) {
+  for (const Entry<T>& d : entries) {
+    if (d.key != key) continue;
+    toml::table tmp;
+    d.codec.write(tmp, key, obj, n);
+    const toml::node* v = tmp.get(key);
+    if (!v) return "";
+    std::ostringstream out;
+    if (const auto str = v->value<std::string>()) {
+      out << '"' << *str << '"';
+    } else if (v->is_boolean()) {
+      out << (*v->value<bool>() ? "true" : "false");
+    } else if (const auto x = v->value<double>()) {
+      out << *x;
+    } else {
+      return "";  // an array or a table: named by the entries above it instead
+    }
+    return std::string(key) + " = " + out.str() + (t.node(key) ? "" : " (the default)");
+  }
+  return "";
+}
 
 // Reads every entry that applies, in table order, then rejects unknown keys.
 template <class T>
 void read_entries(StrictTable& t, const std::vector<Entry<T>>& entries, T& obj, int n) {
   for (const Entry<T>& e : entries) {
-    if (e.applies && !e.applies(obj)) {
-      t.not_applicable(e.key);  // finish() says why, should the key be there
+    if (e.applies.fn && !e.applies.fn(obj)) {
+      t.not_applicable(e.key, decider_value(t, entries, e.applies.decided_by, obj, n));  // finish() says why
       continue;
     }
     if (e.need == Need::kRequired || t.node(e.key)) e.codec.read(t, e.key, obj, n);
@@ -73,7 +104,7 @@ template <class T>
 toml::table write_entries(const std::vector<Entry<T>>& entries, const T& obj, int n) {
   toml::table out;
   for (const Entry<T>& e : entries) {
-    if (e.applies && !e.applies(obj)) continue;
+    if (e.applies.fn && !e.applies.fn(obj)) continue;
     if (e.need == Need::kIfSet && e.codec.unset && e.codec.unset(obj)) continue;
     e.codec.write(out, e.key, obj, n);
   }

@@ -116,17 +116,17 @@ void check_backend(StrictTable& t, Scene& sc) {
 
 const std::vector<Entry<Scene>> kSceneEntries = {
     {"name", scene_io::text(PUMASIM_AT(s.name)), "the run's name, also its folder runs/<name>/", Need::kRequired,
-     nullptr, check_name},
+     {}, check_name},
     {"robot", scene_io::text(PUMASIM_AT(s.robot_spec)), "a shipped robot name, or a file relative to the scene",
-     Need::kRequired, nullptr, load_robot_of},
+     Need::kRequired, {}, load_robot_of},
     {"rotor_inertia", scene_io::flag(PUMASIM_AT(s.rotor_inertia)), "false: the robot's rotor inertias removed",
-     Need::kOptional, nullptr, apply_rotor_inertia},
+     Need::kOptional, {}, apply_rotor_inertia},
     {"energy_ledger", scene_io::flag(PUMASIM_AT(s.plant.energy_ledger)),
      "true: states e_in, e_copper, e_friction [J] and the energy balance"},
     {"joints", joints_codec(), "the first n joints move, the others are held", Need::kRequired},
     {"held", scene_io::numbers(held_count, kJointAngle, get_held, set_held), "[rad] angles of the held joints"},
     {"backend", scene_io::text(PUMASIM_AT(s.plant.backend)), "dynamics back-end (pumasim backends)",
-     Need::kOptional, nullptr, check_backend},
+     Need::kOptional, {}, check_backend},
     {"duration", scene_io::number(kPositive, PUMASIM_AT(s.duration)), "[s]; absent: the reference's duration"},
     {"output_interval", scene_io::number(kPositive, PUMASIM_AT(s.output_interval)), "[s] between output rows"},
 };
@@ -145,7 +145,7 @@ void note_name_where(StrictTable& t, IntegratorSettings& it) {
 
 const std::vector<Entry<IntegratorSettings>> kIntegratorEntries = {
     {"name", scene_io::text(PUMASIM_AT(s.name)), "integrator (pumasim integrators; checked by the command line)",
-     Need::kOptional, nullptr, note_name_where},
+     Need::kOptional, {}, note_name_where},
     {"dt", scene_io::number(kPositive, PUMASIM_AT(s.dt)), "[s] step of the fixed-step methods"},
     {"rtol", scene_io::number(kPositive, PUMASIM_AT(s.rtol)), "relative tolerance of the adaptive methods"},
     {"atol", scene_io::number(kPositive, PUMASIM_AT(s.atol)), "absolute tolerance (times each state's scale)"},
@@ -228,17 +228,17 @@ const std::string& friction_model_names() {
 // Keys that mean nothing for the model are unknown keys.
 const std::vector<Entry<PlantConfig>> kFrictionEntries = {
     {"model", scene_io::shared_choice(friction_model_choices(), PUMASIM_AT(s.friction[j].model)),
-     friction_model_names(), Need::kRequired, nullptr, default_band},
+     friction_model_names(), Need::kRequired, {}, default_band},
     {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
-     "B [N m s/rad] (every model but none)", Need::kOptional, dissipative},
+     "B [N m s/rad] (every model but none)", Need::kOptional, {dissipative, "model"}},
     {"static_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
-     "Fs [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, coulomb},
+     "Fs [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, {coulomb, "model"}},
     {"kinetic_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, coulomb},
+     "Fk [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, {coulomb, "model"}},
     {"zero_speed", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].zero_speed)),
-     "[rad/s] \"zero\" speed (paper), band (karnopp)", Need::kOptional, banded},
+     "[rad/s] \"zero\" speed (paper), band (karnopp)", Need::kOptional, {banded, "model"}},
     {"speed_scale", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
-     "[rad/s] tanh(w / speed_scale) (tanh)", Need::kOptional, smooth},
+     "[rad/s] tanh(w / speed_scale) (tanh)", Need::kOptional, {smooth, "model"}},
 };
 
 // Without [friction]: the model "none" on every joint.
@@ -280,7 +280,7 @@ const std::vector<Entry<PlantConfig>>& controller_entries() {
              PUMASIM_AT(s.controller)),
          "continuous (the law's memory is a state) | sampled (zero-order hold)", Need::kRequired},
         {"servo_period", scene_io::number(kPositive, PUMASIM_AT(s.servo_period)), "[s] (sampled)", Need::kRequired,
-         sampled},
+         {sampled, "mode"}},
         {"setpoint_interval", scene_io::number(kNonNegative, PUMASIM_AT(s.setpoint_interval)),
          "[s] reference held between updates; 0: continuous"},
     };
@@ -292,7 +292,7 @@ const std::vector<Entry<PlantConfig>>& controller_entries() {
           return std::get<LawParams<Law>>(s.controller_params).joints[static_cast<std::size_t>(j)].*member;
         };
         e.push_back({k.key, scene_io::per_joint(k.bounds, at), k.meaning,
-                     k.required ? Need::kRequired : Need::kOptional, &law_is<Law>});
+                     k.required ? Need::kRequired : Need::kOptional, {&law_is<Law>, "law"}});
       }
     });
     return e;
@@ -450,21 +450,21 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired},
     {"timing", scene_io::text(PUMASIM_AT(s.timing), {"table", "trapezoid", "scurve", "quintic", "time-optimal"}),
      "the timing law s(t)"},
-    {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, table_timing},
+    {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, {table_timing, "timing"}},
     {"max_speed", scene_io::number(kPositive, PUMASIM_AT(s.max_speed)), "table: [m/s] peak path speed",
-     Need::kIfSet, table_timing},
+     Need::kIfSet, {table_timing, "timing"}},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)),
-     "table: [s] the duration instead of max_speed", Need::kIfSet, table_timing, one_table_duration},
+     "table: [s] the duration instead of max_speed", Need::kIfSet, {table_timing, "timing"}, one_table_duration},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)), "[s] the duration",
-     Need::kRequired, shaped_timing},
+     Need::kRequired, {shaped_timing, "timing"}},
     {"blend", scene_io::number(kRampShare, PUMASIM_AT(s.blend)), "each acceleration phase's share of T",
-     Need::kOptional, ramped_timing},
+     Need::kOptional, {ramped_timing, "timing"}},
     {"jerk_fraction", scene_io::number(kRampShare, PUMASIM_AT(s.jerk_fraction)),
-     "share of an acceleration phase spent ramping it", Need::kOptional, scurve_timing},
+     "share of an acceleration phase spent ramping it", Need::kOptional, {scurve_timing, "timing"}},
     {"interpolation", scene_io::choice(interpolations(), PUMASIM_AT(s.interpolation)),
      "cartesian | joint-cubic | joint-quintic"},
     {"via_segments", scene_io::whole({1.0, 1e5}, "a whole number >= 1", PUMASIM_AT(s.via_segments)),
-     "joint space: the via-points cut the path into this many pieces", Need::kOptional, joint_space},
+     "joint space: the via-points cut the path into this many pieces", Need::kOptional, {joint_space, "interpolation"}},
     {"arm", scene_io::choice<bool>({{"right", true}, {"left", false}}, PUMASIM_AT(s.config.right_arm)),
      "inverse kinematics branch: shoulder"},
     {"elbow", scene_io::choice<bool>({{"up", true}, {"down", false}}, PUMASIM_AT(s.config.elbow_up)),
@@ -573,7 +573,7 @@ const std::vector<Entry<InitialPose>> kInitialEntries = {
     {"q", scene_io::numbers([](const InitialPose&, int n) { return n; }, kJointAngle,
                             [](const InitialPose& p, int) { return p.q; },
                             [](InitialPose& p, const std::vector<double>& v) { p.q = v; }),
-     "[rad] the simulated joints' angles", Need::kRequired, no_pose},
+     "[rad] the simulated joints' angles", Need::kRequired, {no_pose, "pose"}},
 };
 
 void read_initial(StrictTable& root, PlantConfig& pc) {
