@@ -3,8 +3,9 @@
 
 Every def (functions, methods, nested functions; async too) in the repository's
 *.py files counts, from its first line (decorators included) to its last; files
-under build/, .git/ and any folder named generated/ are skipped. Prints each
-function over the limit as path:line name (lines), longest first.
+under build/ (and build-*/), .git/, __pycache__/ and any folder named
+generated/ are skipped. Prints each function over the limit as
+path:line name (lines), longest first.
 
   /usr/bin/python3 scripts/check_function_size.py [--limit N] [PATH ...]
 
@@ -27,7 +28,7 @@ def python_files(paths):
             found.append(path)
             continue
         for folder, dirs, files in os.walk(path):
-            dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build")]
+            dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build-")]
             found += [os.path.join(folder, f) for f in files if f.endswith(".py")]
     return sorted(found)
 
