@@ -153,18 +153,20 @@ def read_csv(path):
     return pumasim_io.read_table(path).rows
 
 
-def main():
+def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=None)
     ap.add_argument("--work", default=None)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--paper-t-end", type=float, default=24.0)
     ap.add_argument("--reduced", action="store_true")
-    a = ap.parse_args()
-    out = a.out or os.path.join(ROOT, "results", "observed_order")
-    work = a.work or os.path.join(ROOT, "build", "observed_order-reduced" if a.reduced else "observed_order")
-    private_copy(work)
-    summaries = integrators()
+    return ap.parse_args()
+
+
+def ladders(a, summaries):
+    """(scenes {label: t_end}, fixed-step methods, their dt ladder, adaptive
+    methods, their rtol ladder) of a full or --reduced run; summaries: `pumasim
+    integrators` ({name: summary})."""
     if a.reduced:
         scenes = {"smooth_line_quintic": 1.0, "paper_slow_viscous": 2.5}  # 2.5 s: past the first breakpoint
         fixed, dts = ["rk4", "ab2"], [5e-4, 2.5e-4, 1.25e-4]
@@ -174,7 +176,13 @@ def main():
         fixed, dts = FIXED, [2e-3 / 2 ** k for k in range(5)]
         adaptive = [m for m in sorted(summaries) if m not in FIXED]
         rtols = [10.0 ** -k for k in range(3, 10)]
-    for m in fixed + adaptive:
+    return scenes, fixed, dts, adaptive, rtols
+
+
+def check_theory(methods, summaries):
+    """Exits unless every method is registered and has its theoretical order
+    in THEORY, agreeing with the order its summary states (if it states one)."""
+    for m in methods:
         if m not in summaries:
             sys.exit(f"{m}: not in `pumasim integrators`")
         if m not in THEORY:
@@ -183,8 +191,11 @@ def main():
         if stated and m in THEORY and stated.group(1) not in THEORY[m].split("-"):
             sys.exit(f"{m}: summary says order {stated.group(1)}, THEORY says {THEORY[m]}")
 
-    start = time.time()
-    jobs = []  # (scene, role, integrator, kind, setting value, options)
+
+def job_list(scenes, fixed, dts, adaptive, rtols):
+    """Every run: (scene, role, integrator, kind, setting value, options); per
+    scene the reference, the check, then each method's ladder, coarse to fine."""
+    jobs = []
     for scene in scenes:
         jobs.append((scene, "reference", REFERENCE[0], "reference", math.nan, REFERENCE[1]))
         jobs.append((scene, "check", CHECK[0], "check", math.nan, CHECK[1]))
@@ -193,66 +204,76 @@ def main():
         for m in adaptive:
             jobs += [(scene, "run", m, "adaptive", r, ["--rtol", repr(r), "--atol", repr(r * 1e-3)])
                      for r in rtols]
-    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        done = list(pool.map(lambda j: execute(work, j[0], scenes[j[0]], j[2], j[5]), jobs))
-    run_time = time.time() - start
+    return jobs
 
-    os.makedirs(out, exist_ok=True)
-    ladder, refs = [], []
-    for scene in scenes:
-        mine = [(j, d) for j, d in zip(jobs, done) if j[0] == scene]
-        (ref_dir, ref_st), = [d for j, d in mine if j[1] == "reference"]
-        (chk_dir, chk_st), = [d for j, d in mine if j[1] == "check"]
-        if not (ref_st["ok"] and chk_st["ok"]):
-            sys.exit(f"{scene}: reference or check failed: {ref_st['failure']} {chk_st['failure']}")
-        ref = trajectory(ref_dir)
-        diff, diff_q = errors(ref, trajectory(chk_dir))
-        refs.append({"scene": scene, "t_end_s": scenes[scene],
-                     "reference": f"{REFERENCE[0]} {' '.join(REFERENCE[1])}",
-                     "check": f"{CHECK[0]} {' '.join(CHECK[1])}",
-                     "difference": diff, "difference_joint_rad": diff_q,
-                     "reference_rhs_evaluations": ref_st["rhs_evaluations"],
-                     "time_events": ref_st.get("time_events", "")})
-        for j, (d, st) in mine:
-            if j[1] != "run":
-                continue
-            e, dq = errors(ref, trajectory(d)) if st["ok"] else (math.nan, math.nan)
-            if not st["ok"]:
-                status = "failed"
-            elif not (e < UNSTABLE):
-                status = "unstable"
-            else:
-                status = "ok"
-            used = status == "ok" and ASYMPTOTIC_FACTOR * diff < e < ASYMPTOTIC_MAX
-            used_q = status == "ok" and ASYMPTOTIC_FACTOR * diff_q < dq < ASYMPTOTIC_MAX
-            ladder.append({"scene": scene, "integrator": j[2], "kind": j[3],
-                           "setting": ("dt=" if j[3] == "fixed" else "rtol=") + f"{j[4]:g}",
-                           "value": j[4], "ok": st["ok"], "status": status, "error": e,
-                           "max_joint_error_rad": dq, "steps": st["steps"],
-                           "rhs_evaluations": st["rhs_evaluations"], "used_in_fit": used, "used_in_joint_fit": used_q,
-                           "failure": st["failure"]})
 
-    rows = []
-    for scene in scenes:
-        for m in fixed + adaptive:
-            runs = [r for r in ladder if r["scene"] == scene and r["integrator"] == m]
-            use = [r for r in runs if r["used_in_fit"]]
-            use_q = [r for r in runs if r["used_in_joint_fit"]]
-            kind = runs[0]["kind"]
-            # x: dt (slope of log e), or RHS evaluations (slope of -log e);
-            # the ladders run from coarse to fine, so use[-2:] is the finest pair.
-            x, sign = (("value", 1), ("rhs_evaluations", -1))[kind != "fixed"]
-            slope = sign * fit([r[x] for r in use], [r["error"] for r in use])
-            finest = sign * fit([r[x] for r in use[-2:]], [r["error"] for r in use[-2:]])
-            slope_q = sign * fit([r[x] for r in use_q], [r["max_joint_error_rad"] for r in use_q])
-            dropped = [f"{r['setting']} {r['status']}" for r in runs if r["status"] != "ok"]
-            rows.append({"scene": scene, "integrator": m, "kind": kind, "theoretical_order": THEORY[m],
-                         "observed_slope": slope, "runs_used": len(use), "runs": len(runs),
-                         "error_min": min((r["error"] for r in use), default=math.nan),
-                         "error_max": max((r["error"] for r in use), default=math.nan),
-                         "slope_finest_pair": finest, "observed_slope_joint": slope_q,
-                         "joint_runs_used": len(use_q), "dropped": "; ".join(dropped)})
+def ladder_row(scene, j, st, e, dq, diff, diff_q):
+    """ladder.csv's row of run j (stats st; errors e, dq against the reference,
+    nan if it failed), judged against the reference-vs-check differences."""
+    if not st["ok"]:
+        status = "failed"
+    elif not (e < UNSTABLE):
+        status = "unstable"
+    else:
+        status = "ok"
+    used = status == "ok" and ASYMPTOTIC_FACTOR * diff < e < ASYMPTOTIC_MAX
+    used_q = status == "ok" and ASYMPTOTIC_FACTOR * diff_q < dq < ASYMPTOTIC_MAX
+    return {"scene": scene, "integrator": j[2], "kind": j[3],
+            "setting": ("dt=" if j[3] == "fixed" else "rtol=") + f"{j[4]:g}",
+            "value": j[4], "ok": st["ok"], "status": status, "error": e,
+            "max_joint_error_rad": dq, "steps": st["steps"],
+            "rhs_evaluations": st["rhs_evaluations"], "used_in_fit": used, "used_in_joint_fit": used_q,
+            "failure": st["failure"]}
 
+
+def scene_errors(scene, t_end, mine):
+    """(references.csv's row, ladder.csv's rows) of one scene from its runs
+    mine = [(job, (folder, stats))]; exits if its reference or check failed."""
+    (ref_dir, ref_st), = [d for j, d in mine if j[1] == "reference"]
+    (chk_dir, chk_st), = [d for j, d in mine if j[1] == "check"]
+    if not (ref_st["ok"] and chk_st["ok"]):
+        sys.exit(f"{scene}: reference or check failed: {ref_st['failure']} {chk_st['failure']}")
+    ref = trajectory(ref_dir)
+    diff, diff_q = errors(ref, trajectory(chk_dir))
+    ref_row = {"scene": scene, "t_end_s": t_end,
+               "reference": f"{REFERENCE[0]} {' '.join(REFERENCE[1])}",
+               "check": f"{CHECK[0]} {' '.join(CHECK[1])}",
+               "difference": diff, "difference_joint_rad": diff_q,
+               "reference_rhs_evaluations": ref_st["rhs_evaluations"],
+               "time_events": ref_st.get("time_events", "")}
+    ladder = []
+    for j, (d, st) in mine:
+        if j[1] != "run":
+            continue
+        e, dq = errors(ref, trajectory(d)) if st["ok"] else (math.nan, math.nan)
+        ladder.append(ladder_row(scene, j, st, e, dq, diff, diff_q))
+    return ref_row, ladder
+
+
+def order_row(scene, m, ladder):
+    """observed_order.csv's row of method m on a scene: the slopes fitted over
+    its ladder's runs that enter the fit, and the runs dropped."""
+    runs = [r for r in ladder if r["scene"] == scene and r["integrator"] == m]
+    use = [r for r in runs if r["used_in_fit"]]
+    use_q = [r for r in runs if r["used_in_joint_fit"]]
+    kind = runs[0]["kind"]
+    # x: dt (slope of log e), or RHS evaluations (slope of -log e);
+    # the ladders run from coarse to fine, so use[-2:] is the finest pair.
+    x, sign = (("value", 1), ("rhs_evaluations", -1))[kind != "fixed"]
+    slope = sign * fit([r[x] for r in use], [r["error"] for r in use])
+    finest = sign * fit([r[x] for r in use[-2:]], [r["error"] for r in use[-2:]])
+    slope_q = sign * fit([r[x] for r in use_q], [r["max_joint_error_rad"] for r in use_q])
+    dropped = [f"{r['setting']} {r['status']}" for r in runs if r["status"] != "ok"]
+    return {"scene": scene, "integrator": m, "kind": kind, "theoretical_order": THEORY[m],
+            "observed_slope": slope, "runs_used": len(use), "runs": len(runs),
+            "error_min": min((r["error"] for r in use), default=math.nan),
+            "error_max": max((r["error"] for r in use), default=math.nan),
+            "slope_finest_pair": finest, "observed_slope_joint": slope_q,
+            "joint_runs_used": len(use_q), "dropped": "; ".join(dropped)}
+
+
+def write_tables(out, rows, ladder, refs):
+    """observed_order.csv, ladder.csv and references.csv in out (floats as repr)."""
     def write(name, table, cols):
         pumasim_io.write_table(os.path.join(out, name), table, columns=cols,
                                fmt=lambda v: repr(v) if isinstance(v, float) else v)
@@ -264,6 +285,32 @@ def main():
                                  "max_joint_error_rad", "steps", "rhs_evaluations", "used_in_fit",
                                  "used_in_joint_fit", "failure"])
     write("references.csv", refs, list(refs[0]))
+
+
+def main():
+    a = parse_args()
+    out = a.out or os.path.join(ROOT, "results", "observed_order")
+    work = a.work or os.path.join(ROOT, "build", "observed_order-reduced" if a.reduced else "observed_order")
+    private_copy(work)
+    summaries = integrators()
+    scenes, fixed, dts, adaptive, rtols = ladders(a, summaries)
+    check_theory(fixed + adaptive, summaries)
+
+    start = time.time()
+    jobs = job_list(scenes, fixed, dts, adaptive, rtols)
+    with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        done = list(pool.map(lambda j: execute(work, j[0], scenes[j[0]], j[2], j[5]), jobs))
+    run_time = time.time() - start
+
+    os.makedirs(out, exist_ok=True)
+    ladder, refs = [], []
+    for scene in scenes:
+        mine = [(j, d) for j, d in zip(jobs, done) if j[0] == scene]
+        ref_row, scene_ladder = scene_errors(scene, scenes[scene], mine)
+        refs.append(ref_row)
+        ladder += scene_ladder
+    rows = [order_row(scene, m, ladder) for scene in scenes for m in fixed + adaptive]
+    write_tables(out, rows, ladder, refs)
     plots(out, scenes)
     readme(out, run_time, a)
     print(f"observed order: {len(jobs)} runs in {run_time:.1f} s; {out}/observed_order.csv")
@@ -308,6 +355,46 @@ def reaches(slope, theory):
     return abs(slope - float(theory)) <= ORDER_TOLERANCE
 
 
+def verdict(scene, rows):
+    """The README's verdict line on the fixed-step methods of one scene (rows:
+    observed_order.csv's): who reaches its order, who does not, who cannot be
+    measured, slopes short in the joint angles, runs dropped."""
+    num = lambda r, k: float(r[k])
+    fx = [r for r in rows if r["scene"] == scene and r["kind"] == "fixed"]
+    fitted = [r for r in fx if not math.isnan(num(r, "observed_slope"))]
+    good = [r for r in fitted if reaches(num(r, "observed_slope"), r["theoretical_order"])]
+    bad = [r for r in fitted if r not in good]
+    unfit = [r for r in fx if r not in fitted]
+    parts = []
+    if good:
+        parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f})" for r in good)
+                     + (" reaches its order" if len(good) == 1 else " reach their orders"))
+    if bad:
+        parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f} for order {r['theoretical_order']}"
+                               + (f"; {num(r, 'slope_finest_pair'):.2f} over its finest pair"
+                                  if r["runs_used"] != "2" else "") + ")" for r in bad)
+                     + (" does not" if len(bad) == 1 else " do not"))
+    if unfit:
+        parts.append(", ".join(f"{r['integrator']} ({r['runs_used']} run{'s' * (r['runs_used'] != '1')} "
+                               "in the fit range)" for r in unfit)
+                     + (" cannot be measured: fewer than two of " + ("its" if len(unfit) == 1 else "their")
+                        + " stable runs lie between 100 × the reference-vs-check difference and 1e-2"))
+    short = [r for r in fx if r["joint_runs_used"] not in ("0", "1")
+             and num(r, "observed_slope_joint") < float(r["theoretical_order"]) - ORDER_TOLERANCE]
+    if short:
+        parts.append("in the joint angles alone " + ", ".join(
+            f"{r['integrator']} {num(r, 'observed_slope_joint'):.2f}" for r in short)
+            + " (below " + ("its order" if len(short) == 1 else "their orders") + ")")
+    dropped = []
+    for r in fx:
+        ds = [d.split(" ") for d in r["dropped"].split("; ") if d]
+        for status in dict.fromkeys(st for _, st in ds):
+            dropped.append(f"{r['integrator']} at " + ", ".join(v for v, st in ds if st == status) + f" ({status})")
+    if dropped:
+        parts.append("dropped: " + ", ".join(dropped))
+    return f"- {scene}: " + "; ".join(parts) + "."
+
+
 def readme(out, run_time, a):
     rows = read_csv(os.path.join(out, "observed_order.csv"))
     refs = read_csv(os.path.join(out, "references.csv"))
@@ -348,39 +435,7 @@ def readme(out, run_time, a):
     L += ["", f"Verdicts: a fixed-step method reaches its order p when its observed slope is within "
               f"{ORDER_TOLERANCE} of p.", ""]
     for scene in dict.fromkeys(r["scene"] for r in rows):
-        fx = [r for r in rows if r["scene"] == scene and r["kind"] == "fixed"]
-        fitted = [r for r in fx if not math.isnan(num(r, "observed_slope"))]
-        good = [r for r in fitted if reaches(num(r, "observed_slope"), r["theoretical_order"])]
-        bad = [r for r in fitted if r not in good]
-        unfit = [r for r in fx if r not in fitted]
-        parts = []
-        if good:
-            parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f})" for r in good)
-                         + (" reaches its order" if len(good) == 1 else " reach their orders"))
-        if bad:
-            parts.append(", ".join(f"{r['integrator']} ({num(r, 'observed_slope'):.2f} for order {r['theoretical_order']}"
-                                   + (f"; {num(r, 'slope_finest_pair'):.2f} over its finest pair"
-                                      if r["runs_used"] != "2" else "") + ")" for r in bad)
-                         + (" does not" if len(bad) == 1 else " do not"))
-        if unfit:
-            parts.append(", ".join(f"{r['integrator']} ({r['runs_used']} run{'s' * (r['runs_used'] != '1')} "
-                                   "in the fit range)" for r in unfit)
-                         + (" cannot be measured: fewer than two of " + ("its" if len(unfit) == 1 else "their")
-                            + " stable runs lie between 100 × the reference-vs-check difference and 1e-2"))
-        short = [r for r in fx if r["joint_runs_used"] not in ("0", "1")
-                 and num(r, "observed_slope_joint") < float(r["theoretical_order"]) - ORDER_TOLERANCE]
-        if short:
-            parts.append("in the joint angles alone " + ", ".join(
-                f"{r['integrator']} {num(r, 'observed_slope_joint'):.2f}" for r in short)
-                + " (below " + ("its order" if len(short) == 1 else "their orders") + ")")
-        dropped = []
-        for r in fx:
-            ds = [d.split(" ") for d in r["dropped"].split("; ") if d]
-            for status in dict.fromkeys(st for _, st in ds):
-                dropped.append(f"{r['integrator']} at " + ", ".join(v for v, st in ds if st == status) + f" ({status})")
-        if dropped:
-            parts.append("dropped: " + ", ".join(dropped))
-        L.append(f"- {scene}: " + "; ".join(parts) + ".")
+        L.append(verdict(scene, rows))
     pumasim_io.write_text_atomic(os.path.join(out, "README.md"), "\n".join(L) + "\n")
 
 

@@ -35,6 +35,19 @@ VIA = 16
 FINDINGS = """At the paper's T = 24 s every Cartesian law tracks the path to about half a millimetre with the drives far from their limits: the planning method hardly matters when the arm is slow. The joint-space splines through 16 via-points are the exception, and their error does not shrink with T: between via-points the flange leaves the path by millimetres with cubic pieces and by about a millimetre with quintic ones (which also match the path's rates at the via-points), whatever the tracking. As T falls the errors grow slowly until a drive saturates; the law with the highest peak speed for a given T saturates first (the quintic, at 3 s), the others follow near the time-optimal T. The time-optimal timing traverses the path in T_opt with the voltages within the 80 % planned plus what feedback adds, no saturation, and an error near a millimetre; every other law run in the same time saturates for about half the outputs and leaves the path by centimetres. Planned with the whole voltage range it is faster still, but then saturates almost throughout and loses the path: the margin for feedback is part of the plan."""
 
 
+# The methods run at every traversal time: their --set values.
+METHODS = {
+    "table (paper)": ['reference.timing="table"', f"reference.profile={PAPER_PROFILE}"],
+    "trapezoid": ['reference.timing="trapezoid"', "reference.blend=0.2"],
+    "S-curve": ['reference.timing="scurve"', "reference.blend=0.25", "reference.jerk_fraction=0.25"],
+    "quintic": ['reference.timing="quintic"'],
+    "joint cubic": ['reference.timing="trapezoid"', "reference.blend=0.2", 'reference.interpolation="joint-cubic"',
+                    f"reference.via_segments={VIA}"],
+    "joint quintic": ['reference.timing="trapezoid"', "reference.blend=0.2",
+                      'reference.interpolation="joint-quintic"', f"reference.via_segments={VIA}"],
+}
+
+
 def run(runs_dir, label, sets, t_end=None):
     path = os.path.join(runs_dir, label)
     cmd = [PUMASIM, "run", SCENE, "--out", path, "--force", "--set", "scene.output_interval=0.002"]
@@ -56,6 +69,85 @@ def along_path(run_dir):
     return tr["t"].tolist(), tr["path_deviation"].tolist()
 
 
+def table_row(method, T, stats, note=""):
+    """planning.csv's row of one run (its stats.json: stats)."""
+    n = len(stats["peak_voltage_V"])
+    return {
+        "method": method, "traversal_time_s": T, "ok": stats["ok"], "failure": stats["failure"],
+        "max_tracking_error_mm": stats["max_path_error_mm"], "rms_tracking_error_mm": stats["rms_path_error_mm"],
+        "max_path_deviation_mm": stats["max_path_deviation_mm"],
+        "rms_path_deviation_mm": stats["rms_path_deviation_mm"],
+        **{f"peak_voltage_V_j{j + 1}": stats["peak_voltage_V"][j] for j in range(n)},
+        **{f"peak_current_A_j{j + 1}": stats["peak_current_A"][j] for j in range(n)},
+        **{f"saturated_share_j{j + 1}": stats["saturated_fraction"][j] for j in range(n)},
+        "saturates": any(s > 0 for s in stats["saturated_fraction"]),
+        "wall_time_s": stats["wall_time_s"], "note": note,
+    }
+
+
+def run_all(runs, reduced):
+    """Runs the time-optimal timing, then every method at every traversal
+    time; returns (rows, {(method, T): run folder}, T_opt, the times)."""
+    rows, traces = [], {}
+
+    def record(method, T, stats, path, note=""):
+        rows.append(table_row(method, T, stats, note))
+        traces[(method, T)] = path
+
+    stats, path = run(runs, "time-optimal_80pct", [], 1.0 if reduced else None)
+    t_opt = stats["reference_duration_s"]
+    record("time-optimal", t_opt, stats, path, "80 % of the voltage range planned")
+    if not reduced:
+        stats, path = run(runs, "time-optimal_100pct", ["planning.voltage_fraction=1.0"])
+        record("time-optimal (100 %)", stats["reference_duration_s"], stats, path, "the whole voltage range planned")
+    times = [t_opt] if reduced else [24.0, 12.0, 6.0, 3.0, t_opt]
+    for m, sets in METHODS.items():
+        for T in times:
+            label = f"{m.split(' (')[0].replace(' ', '-')}_T{T:.4g}"
+            stats, path = run(runs, label, sets + [f"reference.traversal_time={T!r}"], 1.0 if reduced else None)
+            record(m, T, stats, path)
+        print(f"planning: {m} done", flush=True)
+    return rows, traces, t_opt, times
+
+
+def plot_errors(plt, rows, colors, t_opt, path):
+    """planning.png: max tracking error and max distance to the path against
+    the traversal time, one line per method (colors: {method: color})."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, key, lab in ((axes[0], "max_tracking_error_mm", "max tracking error [mm]"),
+                         (axes[1], "max_path_deviation_mm", "max distance to the path [mm]")):
+        for m in colors:
+            pts = sorted((r["traversal_time_s"], r[key]) for r in rows if r["method"] == m and r["ok"])
+            if pts:
+                ax.plot(*zip(*pts), "o-" if len(pts) > 1 else "*", ms=5 if len(pts) > 1 else 12, lw=1,
+                        color=colors[m], label=m)
+        ax.set(xscale="log", yscale="log", xlabel="traversal time T [s]", ylabel=lab)
+        ax.axvline(t_opt, color="k", lw=0.6, ls=":")
+        ax.grid(True, which="major", lw=0.3)
+    axes[1].legend(fontsize=7)
+    fig.suptitle("Planning methods on the paper's path (3 joints, RK4 0.5 ms); dotted: the time-optimal T", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+def plot_along_path(plt, traces, colors, shown, path):
+    """planning_along_path.png: the distance to the path along it, one panel
+    per traversal time in shown, one line per method (colors: {method: color})."""
+    fig, axes = plt.subplots(len(shown), 1, figsize=(10, 3.4 * len(shown)), squeeze=False)
+    for ax, T in zip(axes[:, 0], shown):
+        for m in colors:
+            if (m, T) in traces:
+                t, d = along_path(traces[(m, T)])
+                ax.plot([x / T for x in t], [max(y, 1e-6) for y in d], lw=0.8, color=colors[m], label=m)
+        ax.set(yscale="log", xlabel="t / T", ylabel="distance to the path [mm]", title=f"T = {T:.3g} s")
+        ax.grid(True, which="major", lw=0.3)
+    axes[0, 0].legend(fontsize=7, ncol=4)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=None)
@@ -68,83 +160,15 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows, traces = [], {}
-    stats, path = run(runs, "time-optimal_80pct", [], 1.0 if a.reduced else None)
-    t_opt = stats["reference_duration_s"]
-
-    def record(method, T, stats, path, note=""):
-        n = len(stats["peak_voltage_V"])
-        rows.append({
-            "method": method, "traversal_time_s": T, "ok": stats["ok"], "failure": stats["failure"],
-            "max_tracking_error_mm": stats["max_path_error_mm"], "rms_tracking_error_mm": stats["rms_path_error_mm"],
-            "max_path_deviation_mm": stats["max_path_deviation_mm"],
-            "rms_path_deviation_mm": stats["rms_path_deviation_mm"],
-            **{f"peak_voltage_V_j{j + 1}": stats["peak_voltage_V"][j] for j in range(n)},
-            **{f"peak_current_A_j{j + 1}": stats["peak_current_A"][j] for j in range(n)},
-            **{f"saturated_share_j{j + 1}": stats["saturated_fraction"][j] for j in range(n)},
-            "saturates": any(s > 0 for s in stats["saturated_fraction"]),
-            "wall_time_s": stats["wall_time_s"], "note": note,
-        })
-        traces[(method, T)] = path
-
-    record("time-optimal", t_opt, stats, path, "80 % of the voltage range planned")
-    if not a.reduced:
-        stats, path = run(runs, "time-optimal_100pct", ["planning.voltage_fraction=1.0"])
-        record("time-optimal (100 %)", stats["reference_duration_s"], stats, path, "the whole voltage range planned")
-    times = [t_opt] if a.reduced else [24.0, 12.0, 6.0, 3.0, t_opt]
-    methods = {
-        "table (paper)": ['reference.timing="table"', f"reference.profile={PAPER_PROFILE}"],
-        "trapezoid": ['reference.timing="trapezoid"', "reference.blend=0.2"],
-        "S-curve": ['reference.timing="scurve"', "reference.blend=0.25", "reference.jerk_fraction=0.25"],
-        "quintic": ['reference.timing="quintic"'],
-        "joint cubic": ['reference.timing="trapezoid"', "reference.blend=0.2", 'reference.interpolation="joint-cubic"',
-                        f"reference.via_segments={VIA}"],
-        "joint quintic": ['reference.timing="trapezoid"', "reference.blend=0.2",
-                          'reference.interpolation="joint-quintic"', f"reference.via_segments={VIA}"],
-    }
-    for m, sets in methods.items():
-        for T in times:
-            label = f"{m.split(' (')[0].replace(' ', '-')}_T{T:.4g}"
-            stats, path = run(runs, label, sets + [f"reference.traversal_time={T!r}"], 1.0 if a.reduced else None)
-            record(m, T, stats, path)
-        print(f"planning: {m} done", flush=True)
-
+    rows, traces, t_opt, times = run_all(runs, a.reduced)
     pumasim_io.write_table(os.path.join(out, "planning.csv"), rows, columns=list(rows[0].keys()),
                            comments=[f"experiments/planning.py on experiments/scenes/planning.toml; "
                                      f"time-optimal T_opt = {t_opt:.6g} s"], fmt=pumasim_io.fmt_6g)
-
-    names = list(methods) + ["time-optimal"]
-    colors = {m: plt.cm.tab10(k) for k, m in enumerate(names)}
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, key, lab in ((axes[0], "max_tracking_error_mm", "max tracking error [mm]"),
-                         (axes[1], "max_path_deviation_mm", "max distance to the path [mm]")):
-        for m in names:
-            pts = sorted((r["traversal_time_s"], r[key]) for r in rows if r["method"] == m and r["ok"])
-            if pts:
-                ax.plot(*zip(*pts), "o-" if len(pts) > 1 else "*", ms=5 if len(pts) > 1 else 12, lw=1,
-                        color=colors[m], label=m)
-        ax.set(xscale="log", yscale="log", xlabel="traversal time T [s]", ylabel=lab)
-        ax.axvline(t_opt, color="k", lw=0.6, ls=":")
-        ax.grid(True, which="major", lw=0.3)
-    axes[1].legend(fontsize=7)
-    fig.suptitle("Planning methods on the paper's path (3 joints, RK4 0.5 ms); dotted: the time-optimal T", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "planning.png"), dpi=80)
-    plt.close(fig)
-
+    # The methods plotted (the 100 % time-optimal run is in the table only), each with its color.
+    colors = {m: plt.cm.tab10(k) for k, m in enumerate(list(METHODS) + ["time-optimal"])}
+    plot_errors(plt, rows, colors, t_opt, os.path.join(out, "planning.png"))
     shown = [T for T in ([6.0, t_opt] if not a.reduced else [t_opt])]
-    fig, axes = plt.subplots(len(shown), 1, figsize=(10, 3.4 * len(shown)), squeeze=False)
-    for ax, T in zip(axes[:, 0], shown):
-        for m in names:
-            if (m, T) in traces:
-                t, d = along_path(traces[(m, T)])
-                ax.plot([x / T for x in t], [max(y, 1e-6) for y in d], lw=0.8, color=colors[m], label=m)
-        ax.set(yscale="log", xlabel="t / T", ylabel="distance to the path [mm]", title=f"T = {T:.3g} s")
-        ax.grid(True, which="major", lw=0.3)
-    axes[0, 0].legend(fontsize=7, ncol=4)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "planning_along_path.png"), dpi=80)
-    plt.close(fig)
+    plot_along_path(plt, traces, colors, shown, os.path.join(out, "planning_along_path.png"))
     pumasim_io.write_json_atomic(os.path.join(out, "summary.json"),
                                  {"t_opt_s": t_opt, "findings": FINDINGS, "via_segments": VIA, "times_s": times},
                                  indent=1)

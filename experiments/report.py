@@ -43,32 +43,18 @@ def fmt_wall_ms(r):
     return f"{ms(med)} [{ms(lo)}–{ms(hi)}] ms"
 
 
-def sweep_section(summary, folder, rel):
-    name = summary["name"]
-    if "rank_by" not in summary:
-        raise SystemExit(f"report: {folder}/{name}_summary.json predates the error measures (no rank_by): "
-                         f"re-run `experiments/sweep.py {summary['file']} --merge`")
-    rows = read_csv(os.path.join(folder, name + ".csv"))
-    rank = summary["rank_by"]
-    rcol, runit, rlabel, target = rank["column"], rank["unit"], rank["label"], rank["target"]
-    measures = summary["measures"]
-    below, weak_factor = summary["below_reference_factor"], summary["weak_reference_factor"]
-    out = [f"### {summary['title']}", "",
-           f"Sweep `{summary['file']}` on scene `experiments/scenes/{summary['scene']}.toml`; "
-           f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason). "
-           f"Runs are ranked by the {rlabel} [{runit}] against the variant's reference, target {target:g} {runit}.",
-           ""]
-    if summary.get("findings"):
-        out += [summary["findings"], ""]
-    agree = summary["agreement"]
+def references_table(summary):
+    """Lines: each variant's reference against its cross-check in every
+    measure, with the verdict, and the too-weak warning if any."""
+    measures, agree = summary["measures"], summary["agreement"]
     judged = [spec for spec in measures.values() if spec["target"] is not None]
     targets = ", ".join(f"{spec['target']:g} {spec['unit']} for the {spec['label']}" for spec in judged)
-    out += [f"References: per variant, the reference against a cross-check by a different method, in every error "
-            f"measure; a reference is too weak where the difference exceeds 1/{weak_factor} of the target "
-            f"({targets}).", "",
-            "| variant | " + " | ".join(f"{spec['label']} [{spec['unit']}]" for spec in measures.values())
-            + " | final state | tracking [mm] | reference |",
-            "|---|" + "---:|" * (len(measures) + 2) + "---|"]
+    out = [f"References: per variant, the reference against a cross-check by a different method, in every error "
+           f"measure; a reference is too weak where the difference exceeds 1/{summary['weak_reference_factor']} of "
+           f"the target ({targets}).", "",
+           "| variant | " + " | ".join(f"{spec['label']} [{spec['unit']}]" for spec in measures.values())
+           + " | final state | tracking [mm] | reference |",
+           "|---|" + "---:|" * (len(measures) + 2) + "---|"]
     for lab, a in agree.items():
         verdict = ("**too weak** for " + ", ".join(measures[m]["label"] for m in a["reference_too_weak"])
                    if a["reference_too_weak"] else "ok")
@@ -81,6 +67,13 @@ def sweep_section(summary, folder, rel):
                           for lab, ws in summary["reference_too_weak"].items())
         out += [f"**Reference too weak** ({cells}): errors near the target are not resolved by it; "
                 "the comparisons with the target below are not conclusive for these variants.", ""]
+    return out
+
+
+def limit_and_creep(summary):
+    """Lines: each variant's reference against the limit variant's, and the
+    creep table (sweeps without a limit or a stuck variant: nothing)."""
+    out = []
     if summary.get("distance_to_limit"):
         lim = summary["limit_variant"]
         cells = ", ".join(f"{lab} {d['max_tool_position_error_mm']:.3g} mm"
@@ -101,18 +94,26 @@ def sweep_section(summary, folder, rel):
             out.append(f"| {lab} | {c['rad']:.3g} | {c['joint'] or '–'} | "
                        + (f"{c['from_s']:.2f}–{c['to_s']:.2f}" if c["joint"] else "–") + " |")
         out.append("")
+    return out
+
+
+def cheapest_runs(summary, rows):
+    """(lines: per integrator and variant the cheapest run within the target
+    in the ranking measure, the runs chosen)."""
+    rank = summary["rank_by"]
+    rcol, runit, rlabel, target = rank["column"], rank["unit"], rank["label"], rank["target"]
     variants = [v["label"] for v in summary["variants"]]
-    integrators = sorted({r["integrator"] for r in rows})
-    weak_rank = {lab for lab, a in agree.items() if rank["measure"] in a["reference_too_weak"]}
-    out += [f"Cheapest run per integrator and variant whose {rlabel} stays within {target:g} {runit} of the "
-            "reference (ranked by that measure): RHS evaluations (setting; wall time median [min–max] of the "
-            f"repeats); `fail` if every setting failed, `–` if none was accurate enough; † its error is within "
-            f"{below}× of the reference-vs-check difference (below the reference's accuracy)"
-            + ("; (weak ref.) the variant's reference is too weak in this measure." if weak_rank else "."), "",
-            "| integrator | " + " | ".join(v + (" (weak ref.)" if v in weak_rank else "") for v in variants) + " |",
-            "|---|" + "---:|" * len(variants)]
+    weak_rank = {lab for lab, a in summary["agreement"].items() if rank["measure"] in a["reference_too_weak"]}
+    out = [f"Cheapest run per integrator and variant whose {rlabel} stays within {target:g} {runit} of the "
+           "reference (ranked by that measure): RHS evaluations (setting; wall time median [min–max] of the "
+           f"repeats); `fail` if every setting failed, `–` if none was accurate enough; † its error is within "
+           f"{summary['below_reference_factor']}× of the reference-vs-check difference (below the reference's "
+           "accuracy)" + ("; (weak ref.) the variant's reference is too weak in this measure." if weak_rank else "."),
+           "",
+           "| integrator | " + " | ".join(v + (" (weak ref.)" if v in weak_rank else "") for v in variants) + " |",
+           "|---|" + "---:|" * len(variants)]
     chosen = []
-    for n in integrators:
+    for n in sorted({r["integrator"] for r in rows}):
         cells = []
         for v in variants:
             rs = [r for r in rows if r["integrator"] == n and r["variant"] == v]
@@ -127,28 +128,69 @@ def sweep_section(summary, folder, rel):
             else:
                 cells.append("–")
         out.append(f"| {n} | " + " | ".join(cells) + " |")
-    if chosen:
-        out += ["", f"Those runs (ranked by {rlabel}) in every error measure against the reference; † below the "
-                f"reference's accuracy in the ranking measure (within {below}× of reference vs check):", "",
-                "| integrator | variant | setting | " + " | ".join(f"{spec['label']} [{spec['unit']}]"
-                                                            for spec in measures.values())
-                + " | RMS tool position [mm] | final state |", "|---|---|---|" + "---:|" * (len(measures) + 2)]
-        for r in chosen:
-            out.append(f"| {r['integrator']} | {r['variant']} | {r['setting']}"
-                       + (" †" if r["below_reference_accuracy"] == "True" else "") + " | "
-                       + " | ".join(fmt_num(r[spec["column"]]) for spec in measures.values())
-                       + f" | {fmt_num(r['rms_tool_position_error_mm'])} | {fmt_num(r['final_state_error'])} |")
+    return out, chosen
+
+
+def chosen_runs_table(summary, chosen):
+    """Lines: the cheapest runs (chosen) in every error measure (nothing if none)."""
+    if not chosen:
+        return []
+    measures = summary["measures"]
+    out = ["", f"Those runs (ranked by {summary['rank_by']['label']}) in every error measure against the reference; "
+           f"† below the reference's accuracy in the ranking measure (within {summary['below_reference_factor']}× "
+           "of reference vs check):", "",
+           "| integrator | variant | setting | " + " | ".join(f"{spec['label']} [{spec['unit']}]"
+                                                       for spec in measures.values())
+           + " | RMS tool position [mm] | final state |", "|---|---|---|" + "---:|" * (len(measures) + 2)]
+    for r in chosen:
+        out.append(f"| {r['integrator']} | {r['variant']} | {r['setting']}"
+                   + (" †" if r["below_reference_accuracy"] == "True" else "") + " | "
+                   + " | ".join(fmt_num(r[spec["column"]]) for spec in measures.values())
+                   + f" | {fmt_num(r['rms_tool_position_error_mm'])} | {fmt_num(r['final_state_error'])} |")
+    return out
+
+
+def ledger_table(rows):
+    """Lines: the energy ledger's residual per successful run (sweeps whose
+    scene has the ledger; else nothing)."""
+    if not (rows and "max_ledger_residual_J" in rows[0]):
+        return []
+    out = ["", "Energy ledger: largest residual of the balance (mechanical + magnetic energy change = input − "
+           "copper − friction) over the run, against the largest energy term [J]:", "",
+           "| integrator | setting | residual [J] | scale [J] |", "|---|---|---:|---:|"]
+    for r in rows:
+        if r["ok"] == "True" and r.get("max_ledger_residual_J"):
+            out.append(f"| {r['integrator']} | {r['setting']} | {float(r['max_ledger_residual_J']):.3g} | "
+                       f"{float(r['ledger_energy_scale_J']):.3g} |")
+    return out
+
+
+def sweep_section(summary, folder, rel):
+    """The report's section on one sweep (its summary, its CSV in folder; rel:
+    folder relative to the report, for links)."""
+    name = summary["name"]
+    if "rank_by" not in summary:
+        raise SystemExit(f"report: {folder}/{name}_summary.json predates the error measures (no rank_by): "
+                         f"re-run `experiments/sweep.py {summary['file']} --merge`")
+    rows = read_csv(os.path.join(folder, name + ".csv"))
+    rank = summary["rank_by"]
+    runit, rlabel, target = rank["unit"], rank["label"], rank["target"]
+    out = [f"### {summary['title']}", "",
+           f"Sweep `{summary['file']}` on scene `experiments/scenes/{summary['scene']}.toml`; "
+           f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason). "
+           f"Runs are ranked by the {rlabel} [{runit}] against the variant's reference, target {target:g} {runit}.",
+           ""]
+    if summary.get("findings"):
+        out += [summary["findings"], ""]
+    out += references_table(summary)
+    out += limit_and_creep(summary)
+    cheapest, chosen = cheapest_runs(summary, rows)
+    out += cheapest
+    out += chosen_runs_table(summary, chosen)
     pin = summary["pinning"]
     out += ["", f"Wall times: {pin['pinned_runs']} of {pin['runs']} runs pinned to one CPU"
             + (f" ({', '.join(pin['methods'])})" if pin["methods"] else "") + "; each repeat's time is in the CSV."]
-    if rows and "max_ledger_residual_J" in rows[0]:
-        out += ["", "Energy ledger: largest residual of the balance (mechanical + magnetic energy change = input − "
-                "copper − friction) over the run, against the largest energy term [J]:", "",
-                "| integrator | setting | residual [J] | scale [J] |", "|---|---|---:|---:|"]
-        for r in rows:
-            if r["ok"] == "True" and r.get("max_ledger_residual_J"):
-                out.append(f"| {r['integrator']} | {r['setting']} | {float(r['max_ledger_residual_J']):.3g} | "
-                           f"{float(r['ledger_energy_scale_J']):.3g} |")
+    out += ledger_table(rows)
     out += ["", f"![{name}: {rlabel} against cost; hollow markers below the reference's accuracy]({rel}/{name}.png)",
             ""]
     if summary.get("has_cost_plot"):

@@ -88,35 +88,45 @@ DEFAULT_RANK = "tool_position"
 BELOW_REFERENCE_FACTOR = 10  # a run's ranking error within this factor of reference vs check: flagged
 WEAK_REFERENCE_FACTOR = 100  # reference vs check must be this far below the target, or the reference is too weak
 
+# The keys a [sweep] table may have.
+SWEEP_KEYS = {"name", "title", "scene", "folder", "t_end", "reduced_t_end", "repeats", "x", "target_mm",
+              "findings", "set", "max_steps", "limit_variant", "stuck_variant", "rank_by",
+              *(m[2] for m in MEASURES.values())}
 
-def load_sweep(path, reduced):
+
+def _need(path, table, key, kind, where):
+    """table[key], which must exist and be a `kind`; else a SweepError naming path and where."""
+    if key not in table:
+        raise SweepError(f"{path}: {where}: missing required key '{key}'")
+    if not isinstance(table[key], kind):
+        raise SweepError(f"{path}: {where}.{key}: expected {kind.__name__}, got {type(table[key]).__name__}")
+    return table[key]
+
+
+def _read_toml(path):
+    """The sweep file's TOML document."""
     with open(path, "rb") as f:
         try:
-            doc = tomllib.load(f)
+            return tomllib.load(f)
         except tomllib.TOMLDecodeError as e:
             raise SweepError(f"{path}: TOML syntax error: {e}")
 
-    def need(table, key, kind, where):
-        if key not in table:
-            raise SweepError(f"{path}: {where}: missing required key '{key}'")
-        if not isinstance(table[key], kind):
-            raise SweepError(f"{path}: {where}.{key}: expected {kind.__name__}, got {type(table[key]).__name__}")
-        return table[key]
 
+def _sweep_table(path, doc):
+    """The [sweep] table's settings (unknown keys refused, defaults filled in),
+    with the accuracy targets per measure; and the table itself."""
     known = {"sweep", "reference", "check", "variant", "method"}
     for k in doc:
         if k not in known:
             raise SweepError(f"{path}: unknown table '{k}'; expected one of: {', '.join(sorted(known))}")
-    sw = need(doc, "sweep", dict, "(top level)")
+    sw = _need(path, doc, "sweep", dict, "(top level)")
     for k in sw:
-        if k not in {"name", "title", "scene", "folder", "t_end", "reduced_t_end", "repeats", "x", "target_mm",
-                     "findings", "set", "max_steps", "limit_variant", "stuck_variant", "rank_by",
-                     *(m[2] for m in MEASURES.values())}:
+        if k not in SWEEP_KEYS:
             raise SweepError(f"{path}: unknown key 'sweep.{k}'")
     s = {
-        "name": need(sw, "name", str, "sweep"),
+        "name": _need(path, sw, "name", str, "sweep"),
         "title": sw.get("title", sw["name"]),
-        "scene": need(sw, "scene", str, "sweep"),
+        "scene": _need(path, sw, "scene", str, "sweep"),
         "t_end": float(sw["t_end"]) if "t_end" in sw else None,
         "repeats": int(sw.get("repeats", 3)),
         "x": sw.get("x", "variant"),
@@ -138,32 +148,39 @@ def load_sweep(path, reduced):
     if MEASURES[s["rank_by"]][0] not in s["targets"]:
         raise SweepError(f"{path}: sweep.rank_by = \"{s['rank_by']}\" needs its target "
                          f"sweep.{MEASURES[s['rank_by']][2]}")
+    return s, sw
 
-    def method_of(t, where):
-        for k in t:
-            if k not in ("integrator", "options"):
-                raise SweepError(f"{path}: unknown key '{where}.{k}'; expected integrator, options")
-        return (need(t, "integrator", str, where), [str(o) for o in t.get("options", [])])
 
-    for key in ("reference", "check"):
-        s[key] = method_of(need(doc, key, dict, "(top level)"), key)
-    variants = doc.get("variant", [{"label": "base", "set": []}])
-    s["variants"] = []
-    for k, v in enumerate(variants):
+def _method_of(path, t, where):
+    """(integrator, options) of a [reference] or [check] table."""
+    for k in t:
+        if k not in ("integrator", "options"):
+            raise SweepError(f"{path}: unknown key '{where}.{k}'; expected integrator, options")
+    return (_need(path, t, "integrator", str, where), [str(o) for o in t.get("options", [])])
+
+
+def _variants(path, doc, s):
+    """The [[variant]] tables (default: one variant, 'base'), each with its
+    reference and cross-check (default: the sweep's)."""
+    variants = []
+    for k, v in enumerate(doc.get("variant", [{"label": "base", "set": []}])):
         for key in v:
             if key not in ("label", "value", "set", "reference", "check"):
                 raise SweepError(f"{path}: unknown key 'variant[{k}].{key}'")
-        lab = need(v, "label", str, f"variant[{k}]")
-        s["variants"].append({"label": lab, "value": v.get("value", k), "set": list(v.get("set", [])),
-                              "reference": method_of(v["reference"], f"variant[{k}].reference")
-                              if "reference" in v else s["reference"],
-                              "check": method_of(v["check"], f"variant[{k}].check") if "check" in v else s["check"]})
-    for key in ("limit_variant", "stuck_variant"):
-        if s[key] and s[key] not in [v["label"] for v in s["variants"]]:
-            raise SweepError(f"{path}: sweep.{key}: expected one of the variants' labels")
+        lab = _need(path, v, "label", str, f"variant[{k}]")
+        variants.append({"label": lab, "value": v.get("value", k), "set": list(v.get("set", [])),
+                         "reference": _method_of(path, v["reference"], f"variant[{k}].reference")
+                         if "reference" in v else s["reference"],
+                         "check": _method_of(path, v["check"], f"variant[{k}].check") if "check" in v else s["check"]})
+    return variants
+
+
+def _methods(path, doc):
+    """(integrator, settings, extra options) per integrator of the [[method]]
+    tables; a setting is (kind, value, pumasim options), kind 'dt' or 'rtol'."""
     methods = []
-    for k, m in enumerate(need(doc, "method", list, "(top level)")):
-        names = need(m, "integrator", list, f"method[{k}]")
+    for k, m in enumerate(_need(path, doc, "method", list, "(top level)")):
+        names = _need(path, m, "integrator", list, f"method[{k}]")
         if "dt" in m:
             settings = [("dt", float(d), ["--dt", repr(float(d))]) for d in m["dt"]]
         elif "rtol" in m:
@@ -175,17 +192,37 @@ def load_sweep(path, reduced):
         extra = [str(o) for o in m.get("options", [])]
         for name in names:
             methods.append((name, settings, extra))
-    s["methods"] = methods
+    return methods
+
+
+def _reduce(s, sw):
+    """--reduced, in place: the first and last variants, two settings per
+    method, one repeat, the reduced horizon if the sweep names one."""
+    s["variants"] = [s["variants"][0]] + ([s["variants"][-1]] if len(s["variants"]) > 1 else [])
+    s["methods"] = [(n, st[:2], ex) for n, st, ex in s["methods"]]
+    s["repeats"] = 1
+    labels = [v["label"] for v in s["variants"]]
+    for key in ("limit_variant", "stuck_variant"):
+        if s[key] not in labels:
+            s[key] = None
+    if "reduced_t_end" in sw:
+        s["t_end"] = float(sw["reduced_t_end"])
+
+
+def load_sweep(path, reduced):
+    """The sweep file at path as a dict (experiments/sweeps/README.md has the
+    format); SweepError naming the key if it is malformed."""
+    doc = _read_toml(path)
+    s, sw = _sweep_table(path, doc)
+    for key in ("reference", "check"):
+        s[key] = _method_of(path, _need(path, doc, key, dict, "(top level)"), key)
+    s["variants"] = _variants(path, doc, s)
+    for key in ("limit_variant", "stuck_variant"):
+        if s[key] and s[key] not in [v["label"] for v in s["variants"]]:
+            raise SweepError(f"{path}: sweep.{key}: expected one of the variants' labels")
+    s["methods"] = _methods(path, doc)
     if reduced:
-        s["variants"] = [s["variants"][0]] + ([s["variants"][-1]] if len(s["variants"]) > 1 else [])
-        s["methods"] = [(n, st[:2], ex) for n, st, ex in methods]
-        s["repeats"] = 1
-        labels = [v["label"] for v in s["variants"]]
-        for key in ("limit_variant", "stuck_variant"):
-            if s[key] not in labels:
-                s[key] = None
-        if "reduced_t_end" in sw:
-            s["t_end"] = float(sw["reduced_t_end"])
+        _reduce(s, sw)
     return s
 
 
@@ -503,16 +540,28 @@ def measures_text(a):
                      for col, unit, _, label in MEASURES.values()) + f", final state {a['final_state_error']:.3g}"
 
 
-def merge(s, work, out_dir):
+def _pyplot():
+    """matplotlib.pyplot on the Agg back-end (files only, no display)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
+    return plt
 
-    os.makedirs(out_dir, exist_ok=True)
+
+def _ranking(s):
+    """(CSV column, unit, label, target) of the sweep's ranking measure (sweep.rank_by)."""
     rcol, runit, _, rlabel = MEASURES[s["rank_by"]]
-    rtarget = s["targets"][rcol]
-    rows, agreement, weak = [], {}, {}
+    return rcol, runit, rlabel, s["targets"][rcol]
+
+
+def _usable(x):
+    """True for a number that a log axis can show (finite, positive)."""
+    return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
+
+
+def _complete_summaries(s, work):
+    """{run id: summary} of every run of the sweep; SweepError if a run has no
+    summary yet or one made with another key."""
     summaries = {}
     for run in run_list(s):
         p = os.path.join(work, run[0] + ".json")
@@ -522,71 +571,121 @@ def merge(s, work, out_dir):
         if summaries[run[0]] is None:
             raise SweepError(f"merge: run {run[0]} ({p}) was made from another scene, setting or program than "
                              "the sweep's now; run the sweep (or its shards) again")
-    for v in s["variants"]:
-        vdir = slug(v["label"])
-        ref_sum, chk_sum = summaries[f"{vdir}/reference"], summaries[f"{vdir}/check"]
-        for which, sm in (("reference", ref_sum), ("check", chk_sum)):
-            if not sm["stats"]["ok"]:
-                raise SweepError(f"variant {v['label']}: the {which} run failed: {sm['stats']['failure']}")
-        ref = trajectory(os.path.join(work, vdir, "reference"))
-        c = compare(ref, trajectory(os.path.join(work, vdir, "check")))
-        a = {col: c[col] for col, *_ in MEASURES.values()}
-        a["final_state_error"] = c["final_state_error"]
-        too_weak = reference_too_weak(a, s["targets"])
-        a["reference_too_weak"] = [m for m, spec in MEASURES.items() if spec[0] in too_weak]
-        a["reference_steps"] = ref_sum["stats"]["steps"]
-        a["tracking_mm"] = ref_sum["stats"]["max_path_error_mm"]
-        agreement[v["label"]] = a
-        if too_weak:
-            weak[v["label"]] = {col: {"difference": a[col], "limit": s["targets"][col] / WEAK_REFERENCE_FACTOR}
-                                for col in too_weak}
-        for run in run_list(s):
-            if run[1] is not v or run[2] in ("reference", "check"):
-                continue
-            sm = summaries[run[0]]
-            st = sm["stats"]
-            if st["ok"]:
-                e = compare(ref, trajectory(os.path.join(work, run[0])))
-            else:
-                e = dict.fromkeys(c, math.nan)
-            flag = below_reference_accuracy(e[rcol], a[rcol])
-            rows.append({
-                "variant": v["label"], "value": v["value"], "integrator": sm["integrator"],
-                "setting": re.sub(r"^(dt|rtol)", r"\1=", run[2][len(sm["integrator"]) + 1:]),
-                "ok": st["ok"], "failure": st["failure"],
-                **e,
-                "below_reference_accuracy": "" if flag is None else flag,
-                "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
-                **wall_spread(sm["wall_times_s"]),
-                "wall_times_s": " ".join(f"{w:.6g}" for w in sm["wall_times_s"]),
-                "repeats": len(sm["wall_times_s"]),
-                "pinned_cpu": "" if sm.get("pinned_cpu") is None else sm["pinned_cpu"],
-                "rhs_evaluations": st["rhs_evaluations"], "jacobian_evaluations": st["jacobian_evaluations"],
-                "steps": st["steps"], "rejected_steps": st["rejected_steps"], "restarts": st["restarts"],
-                "time_events": st["time_events"], "root_events": st["root_events"],
-            })
-            rows[-1]["_pinning"] = sm.get("pinning")
-            if "max_ledger_residual_J" in st:  # scenes with the energy ledger
-                rows[-1]["max_ledger_residual_J"] = st["max_ledger_residual_J"]
-                rows[-1]["ledger_energy_scale_J"] = st["ledger_energy_scale_J"]
+    return summaries
+
+
+def _reference_vs_check(work, v, summaries):
+    """(the variant's reference trajectory, compare() of its cross-check
+    against it); SweepError if either of the two runs failed."""
+    vdir = slug(v["label"])
+    ref_sum, chk_sum = summaries[f"{vdir}/reference"], summaries[f"{vdir}/check"]
+    for which, sm in (("reference", ref_sum), ("check", chk_sum)):
+        if not sm["stats"]["ok"]:
+            raise SweepError(f"variant {v['label']}: the {which} run failed: {sm['stats']['failure']}")
+    ref = trajectory(os.path.join(work, vdir, "reference"))
+    return ref, compare(ref, trajectory(os.path.join(work, vdir, "check")))
+
+
+def _agreement_entry(s, c, ref_stats):
+    """A variant's agreement entry from compare()'s result c of its reference
+    and cross-check (every measure, the final state, the measures in which the
+    reference is too weak, the reference's steps and tracking error), and the
+    CSV columns in which it is too weak."""
+    a = {col: c[col] for col, *_ in MEASURES.values()}
+    a["final_state_error"] = c["final_state_error"]
+    too_weak = reference_too_weak(a, s["targets"])
+    a["reference_too_weak"] = [m for m, spec in MEASURES.items() if spec[0] in too_weak]
+    a["reference_steps"] = ref_stats["steps"]
+    a["tracking_mm"] = ref_stats["max_path_error_mm"]
+    return a, too_weak
+
+
+def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
+    """One run's CSV row: its error measures against its variant's reference
+    trajectory ref (nan in every one of `columns` if it failed), whether it is
+    below the reference's accuracy (agreement_rank: reference vs check in the
+    ranking measure rcol), wall-time spread, pinning, counters. The key
+    '_pinning' (the pinning method) is for the summary, not the table."""
+    st = sm["stats"]
+    if st["ok"]:
+        e = compare(ref, trajectory(os.path.join(work, run[0])))
+    else:
+        e = dict.fromkeys(columns, math.nan)
+    flag = below_reference_accuracy(e[rcol], agreement_rank)
+    row = {
+        "variant": run[1]["label"], "value": run[1]["value"], "integrator": sm["integrator"],
+        "setting": re.sub(r"^(dt|rtol)", r"\1=", run[2][len(sm["integrator"]) + 1:]),
+        "ok": st["ok"], "failure": st["failure"],
+        **e,
+        "below_reference_accuracy": "" if flag is None else flag,
+        "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
+        **wall_spread(sm["wall_times_s"]),
+        "wall_times_s": " ".join(f"{w:.6g}" for w in sm["wall_times_s"]),
+        "repeats": len(sm["wall_times_s"]),
+        "pinned_cpu": "" if sm.get("pinned_cpu") is None else sm["pinned_cpu"],
+        "rhs_evaluations": st["rhs_evaluations"], "jacobian_evaluations": st["jacobian_evaluations"],
+        "steps": st["steps"], "rejected_steps": st["rejected_steps"], "restarts": st["restarts"],
+        "time_events": st["time_events"], "root_events": st["root_events"],
+    }
+    row["_pinning"] = sm.get("pinning")
+    if "max_ledger_residual_J" in st:  # scenes with the energy ledger
+        row["max_ledger_residual_J"] = st["max_ledger_residual_J"]
+        row["ledger_energy_scale_J"] = st["ledger_energy_scale_J"]
+    return row
+
+
+def _variant_rows(s, work, v, summaries, ref, c, a):
+    """The CSV rows of a variant's runs (not its reference and cross-check),
+    sorted by run id; ref, c, a: the variant's reference trajectory, compare()
+    of its cross-check and its agreement entry."""
+    rcol = MEASURES[s["rank_by"]][0]
+    rows = []
+    for run in run_list(s):
+        if run[1] is not v or run[2] in ("reference", "check"):
+            continue
+        rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol]))
+    return rows
+
+
+def _pinning(rows):
+    """How many runs were pinned to a CPU, how, and to which CPUs; removes the
+    rows' '_pinning' keys."""
     pinned = [r for r in rows if r["pinned_cpu"] != ""]
     pinning = {"pinned_runs": len(pinned), "runs": len(rows),
                "methods": sorted({r["_pinning"] for r in pinned if r["_pinning"]}),
                "cpus": sorted({r["pinned_cpu"] for r in pinned})}
     for r in rows:
         del r["_pinning"]
+    return pinning
+
+
+def _distance_to_limit(s, work):
+    """{variant: its reference against sweep.limit_variant's, every measure}
+    ({} without a limit variant)."""
     limit = {}
     if s["limit_variant"]:
         lim = trajectory(os.path.join(work, slug(s["limit_variant"]), "reference"))
         for v in s["variants"]:
             d = compare(lim, trajectory(os.path.join(work, slug(v["label"]), "reference")))
             limit[v["label"]] = {col: d[col] for col, *_ in MEASURES.values()}
+    return limit
+
+
+def _creep_by_variant(s, work):
+    """{variant: creep() of its reference where sweep.stuck_variant's reference
+    holds a joint stuck} ({} without a stuck variant)."""
     held_creep = {}
     if s["stuck_variant"]:
         held = stuck_intervals(trajectory(os.path.join(work, slug(s["stuck_variant"]), "reference")))
         for v in s["variants"]:
             held_creep[v["label"]] = creep(trajectory(os.path.join(work, slug(v["label"]), "reference")), held)
-    name = s["name"]
+    return held_creep
+
+
+def _table_comments(s, agreement, weak, limit, held_creep, pinning):
+    """The CSV's comment lines: the sweep, its ranking and targets, the flags'
+    and wall times' definitions, and per variant its reference vs cross-check."""
+    rcol, runit, rlabel, rtarget = _ranking(s)
     targets_text = ", ".join(f"{t:g} {next(m[1] for m in MEASURES.values() if m[0] == col)} ({col})"
                              for col, t in s["targets"].items())
     comments = [
@@ -598,7 +697,7 @@ def merge(s, work, out_dir):
         f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
         f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}",
         f"wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
-        f"(nan below 4 repeats); {len(pinned)} of {len(rows)} runs pinned to one CPU "
+        f"(nan below 4 repeats); {pinning['pinned_runs']} of {pinning['runs']} runs pinned to one CPU "
         f"({', '.join(pinning['methods']) or 'none'}; pinned_cpu, empty: not pinned)"]
     for v in s["variants"]:
         lab, a = v["label"], agreement[v["label"]]
@@ -610,13 +709,26 @@ def merge(s, work, out_dir):
                            f"{limit[lab]['max_tool_position_error_mm']:.3g} mm" if limit else "")
                         + (f"; creep where {s['stuck_variant']} holds a joint stuck: {held_creep[lab]['rad']:.3g} rad"
                            if held_creep else ""))
-    pumasim_io.write_table(os.path.join(out_dir, name + ".csv"), rows, comments=comments, fmt=pumasim_io.fmt_6g)
+    return comments
 
-    def usable(x):
-        return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
 
-    integrators = sorted({r["integrator"] for r in rows})
-    colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
+def _plot_lines(ax, pts, color, label):
+    """One integrator's line through pts = [(x, y, hollow)], its markers
+    hollow where hollow is True."""
+    ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", lw=1, color=color, label=label)
+    for hollow in (False, True):
+        sel = [p for p in pts if p[2] == hollow]
+        if sel:
+            ax.plot([p[0] for p in sel], [p[1] for p in sel], "o", ms=4, color=color,
+                    mfc="none" if hollow else color)
+
+
+def _plot_work_precision(plt, s, rows, agreement, colors, path):
+    """<sweep>.png: the ranking error against wall time and against RHS
+    evaluations, one line per integrator (colors: {integrator: color}, sorted
+    by name), a panel row per variant."""
+    from matplotlib.lines import Line2D
+    rcol, runit, rlabel, rtarget = _ranking(s)
     nv = len(s["variants"])
     fig, axes = plt.subplots(nv, 2, figsize=(11, 3.6 * nv), squeeze=False)
     for i, v in enumerate(s["variants"]):
@@ -624,18 +736,12 @@ def merge(s, work, out_dir):
         for j, (key, label) in enumerate((("wall_time_median_s", "wall time [s] (median of the repeats)"),
                                           ("rhs_evaluations", "right-hand-side evaluations"))):
             ax = axes[i][j]
-            for n in integrators:
+            for n in colors:
                 pts = sorted((r[key], r[rcol], r["below_reference_accuracy"] is True) for r in rows
                              if r["variant"] == v["label"] and r["integrator"] == n and r["ok"] and
-                             usable(r[rcol]) and usable(r[key]))
-                if not pts:
-                    continue
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", lw=1, color=colors[n], label=n)
-                for hollow in (False, True):
-                    sel = [p for p in pts if p[2] == hollow]
-                    if sel:
-                        ax.plot([p[0] for p in sel], [p[1] for p in sel], "o", ms=4, color=colors[n],
-                                mfc="none" if hollow else colors[n])
+                             _usable(r[rcol]) and _usable(r[key]))
+                if pts:
+                    _plot_lines(ax, pts, colors[n], n)
             if math.isfinite(a[rcol]):
                 ax.axhline(max(a[rcol], 1e-300), color="k", lw=0.8, ls=":", label="reference vs check")
             ax.axhline(rtarget, color="0.5", lw=0.8, ls="--", label=f"target {rtarget:g} {runit}")
@@ -650,8 +756,14 @@ def merge(s, work, out_dir):
     axes[0][1].legend(handles, labels, fontsize=6, ncol=2)
     fig.suptitle(f"{s['title']} — ranked by {rlabel}", fontsize=10)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, name + ".png"), dpi=80)
+    fig.savefig(path, dpi=80)
     plt.close(fig)
+
+
+def _cost_to_target(s, rows, agreement, integrators):
+    """{integrator: per variant, its cheapest run (fewest RHS evaluations)
+    within the target in the ranking measure} (variants without one left out)."""
+    rcol, _, _, rtarget = _ranking(s)
     cost = {}
     for n in integrators:
         for v in s["variants"]:
@@ -665,42 +777,83 @@ def merge(s, work, out_dir):
                     "wall_min_s": best["wall_time_min_s"], "wall_max_s": best["wall_time_max_s"],
                     "error": best[rcol], "below_reference_accuracy": best["below_reference_accuracy"],
                     "reference_too_weak": s["rank_by"] in agreement[v["label"]]["reference_too_weak"]})
-    plottable = {n: [p for p in pts if usable(p["value"])] for n, pts in cost.items()}
-    has_cost_plot = nv > 1 and any(len(p) > 1 for p in plottable.values())
+    return cost
+
+
+def _plot_cost(plt, s, plottable, colors, path):
+    """<sweep>_cost.png: the RHS evaluations of each integrator's cheapest run
+    within the target, against the variant value."""
+    _, runit, rlabel, rtarget = _ranking(s)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for n, pts in sorted(plottable.items()):
+        if pts:
+            _plot_lines(ax, [(p["value"], p["rhs"], p["below_reference_accuracy"] is True) for p in pts],
+                        colors[n], n)
+    ax.plot([], [], ls="none", marker="o", ms=4, color="k", mfc="none",
+            label=f"hollow: error within {BELOW_REFERENCE_FACTOR}× of reference vs check")
+    ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)")
+    ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)", fontsize=8)
+    ax.grid(True, which="major", lw=0.3)
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+def _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot):
+    """<sweep>_summary.json's content, for the report."""
+    rcol, runit, rlabel, rtarget = _ranking(s)
+    return {"name": s["name"], "title": s["title"], "file": s["file"], "scene": s["scene"], "x": s["x"],
+            "target_mm": s["target_mm"], "findings": s["findings"],
+            "rank_by": {"measure": s["rank_by"], "column": rcol, "label": rlabel, "unit": runit,
+                        "target": rtarget},
+            "measures": {m: {"column": col, "unit": unit, "label": label, "target": s["targets"].get(col)}
+                         for m, (col, unit, _, label) in MEASURES.items()},
+            "below_reference_factor": BELOW_REFERENCE_FACTOR, "weak_reference_factor": WEAK_REFERENCE_FACTOR,
+            "agreement": agreement, "reference_too_weak": weak,
+            "limit_variant": s["limit_variant"], "distance_to_limit": limit,
+            "stuck_variant": s["stuck_variant"], "creep": held_creep,
+            "variants": [{"label": v["label"], "value": v["value"]} for v in s["variants"]],
+            "runs": len(rows), "failed": sum(1 for r in rows if not r["ok"]),
+            "below_reference_accuracy": sum(1 for r in rows if r["below_reference_accuracy"] is True),
+            "pinning": pinning,
+            "cost_to_target": cost, "has_cost_plot": has_cost_plot}
+
+
+def merge(s, work, out_dir):
+    """Compares every run with its variant's reference, and each reference
+    with its cross-check, and writes out_dir/<sweep>.csv, <sweep>.png,
+    <sweep>_cost.png (several variants only) and <sweep>_summary.json (the
+    module's docstring describes them); returns the summary. SweepError if a
+    run is missing, stale (another key) or a reference or check failed."""
+    plt = _pyplot()
+    os.makedirs(out_dir, exist_ok=True)
+    rows, agreement, weak = [], {}, {}
+    summaries = _complete_summaries(s, work)
+    for v in s["variants"]:
+        ref, c = _reference_vs_check(work, v, summaries)
+        a, too_weak = _agreement_entry(s, c, summaries[f"{slug(v['label'])}/reference"]["stats"])
+        agreement[v["label"]] = a
+        if too_weak:
+            weak[v["label"]] = {col: {"difference": a[col], "limit": s["targets"][col] / WEAK_REFERENCE_FACTOR}
+                                for col in too_weak}
+        rows += _variant_rows(s, work, v, summaries, ref, c, a)
+    pinning = _pinning(rows)
+    limit = _distance_to_limit(s, work)
+    held_creep = _creep_by_variant(s, work)
+    name = s["name"]
+    pumasim_io.write_table(os.path.join(out_dir, name + ".csv"), rows,
+                           comments=_table_comments(s, agreement, weak, limit, held_creep, pinning),
+                           fmt=pumasim_io.fmt_6g)
+    integrators = sorted({r["integrator"] for r in rows})
+    colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
+    _plot_work_precision(plt, s, rows, agreement, colors, os.path.join(out_dir, name + ".png"))
+    cost = _cost_to_target(s, rows, agreement, integrators)
+    plottable = {n: [p for p in pts if _usable(p["value"])] for n, pts in cost.items()}
+    has_cost_plot = len(s["variants"]) > 1 and any(len(p) > 1 for p in plottable.values())
     if has_cost_plot:
-        fig, ax = plt.subplots(figsize=(7, 4.5))
-        for n, pts in sorted(plottable.items()):
-            if pts:
-                ax.plot([p["value"] for p in pts], [p["rhs"] for p in pts], "-", lw=1, color=colors[n], label=n)
-                for hollow in (False, True):
-                    sel = [p for p in pts if (p["below_reference_accuracy"] is True) == hollow]
-                    if sel:
-                        ax.plot([p["value"] for p in sel], [p["rhs"] for p in sel], "o", ms=4, color=colors[n],
-                                mfc="none" if hollow else colors[n])
-        ax.plot([], [], ls="none", marker="o", ms=4, color="k", mfc="none",
-                label=f"hollow: error within {BELOW_REFERENCE_FACTOR}× of reference vs check")
-        ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)")
-        ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)", fontsize=8)
-        ax.grid(True, which="major", lw=0.3)
-        ax.legend(fontsize=6, ncol=2)
-        fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, name + "_cost.png"), dpi=80)
-        plt.close(fig)
-    summary = {"name": name, "title": s["title"], "file": s["file"], "scene": s["scene"], "x": s["x"],
-               "target_mm": s["target_mm"], "findings": s["findings"],
-               "rank_by": {"measure": s["rank_by"], "column": rcol, "label": rlabel, "unit": runit,
-                           "target": rtarget},
-               "measures": {m: {"column": col, "unit": unit, "label": label, "target": s["targets"].get(col)}
-                            for m, (col, unit, _, label) in MEASURES.items()},
-               "below_reference_factor": BELOW_REFERENCE_FACTOR, "weak_reference_factor": WEAK_REFERENCE_FACTOR,
-               "agreement": agreement, "reference_too_weak": weak,
-               "limit_variant": s["limit_variant"], "distance_to_limit": limit,
-               "stuck_variant": s["stuck_variant"], "creep": held_creep,
-               "variants": [{"label": v["label"], "value": v["value"]} for v in s["variants"]],
-               "runs": len(rows), "failed": sum(1 for r in rows if not r["ok"]),
-               "below_reference_accuracy": sum(1 for r in rows if r["below_reference_accuracy"] is True),
-               "pinning": pinning,
-               "cost_to_target": cost, "has_cost_plot": has_cost_plot}
+        _plot_cost(plt, s, plottable, colors, os.path.join(out_dir, name + "_cost.png"))
+    summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
     pumasim_io.write_json_atomic(os.path.join(out_dir, name + "_summary.json"), summary, indent=1)
     return summary
 

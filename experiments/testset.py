@@ -181,7 +181,9 @@ def failed_label(name, runs):
     return f"{name} ({len(bad)} of {len(runs)})"
 
 
-def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
+def header(rows, problems, cmd, elapsed, reduced):
+    """The README's lines up to and with the problems table: the run counts,
+    the error and slope definitions, one row per problem."""
     total_wall = sum(fnum(r["wall_time_s"]) for r in rows if not math.isnan(fnum(r["wall_time_s"])))
     n_ok = sum(r["ok"] == "1" for r in rows)
     n_skip = sum(r["message"].startswith("not run") for r in rows)
@@ -206,8 +208,13 @@ def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
                  f"{fmt(p['t_end'], 7)} | {fmt(p['atol_per_rtol'])} | "
                  f"{', '.join(fmt(d) for d in p['fixed_steps'].split())} | {p['reference_source']} |")
     L.append("")
+    return L
 
-    # The findings: error not falling with the tolerance, breaks in monotonicity, failures.
+
+def findings(analysis):
+    """The findings, one line each: (error not falling with the tolerance,
+    breaks in monotonicity, both at the rounding floor, runs that did not
+    reach the end point, runs that reached it with an error of MAX_ERROR or more)."""
     not_falling, rising, floor, failing, diverged = [], [], [], [], []
     for (prob, name), a in analysis.items():
         ok, runs = a["ok"], a["runs"]
@@ -232,8 +239,14 @@ def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
             failing.append(f"`{name}` on `{prob}`: {len(bad) + skipped} of {len(runs)} runs "
                            f"({'failed at ' + settings}{f', {skipped} not run after it' if skipped else ''}); "
                            f"first reason: {short(bad[0]['message'], 160)}")
-    L += ["## Methods whose error does not fall with their tolerance", "",
-          "Error at the tightest setting that succeeded not below the error at the loosest one:", ""]
+    return not_falling, rising, floor, failing, diverged
+
+
+def findings_section(analysis):
+    """The README's lines on the methods whose error does not fall with their tolerance."""
+    not_falling, rising, floor, failing, diverged = findings(analysis)
+    L = ["## Methods whose error does not fall with their tolerance", "",
+         "Error at the tightest setting that succeeded not below the error at the loosest one:", ""]
     L += [f"- {x}" for x in not_falling] or ["- none"]
     L += ["", f"Error rising by more than a factor {RISE_FACTOR:g} from one setting to the next tighter one "
           "(monotonicity broken):", ""]
@@ -247,10 +260,41 @@ def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
     L += ["", "Runs that did not reach the end point (each with its reason in `testset.csv`):", ""]
     L += [f"- {x}" for x in failing] or ["- none"]
     L.append("")
+    return L
 
+
+def method_row(name, a):
+    """A problem table's row of one integrator (a: its analysis)."""
+    runs, ok = a["runs"], a["ok"]
+    kind = runs[0]["kind"]
+    ladder = f"{fmt(runs[0]['setting'])} … {fmt(runs[-1]['setting'])} ({len(runs)})"
+
+    def span(col, f):
+        if not ok:
+            return "–"
+        return f(ok[0][col]) if len(ok) == 1 else f"{f(ok[0][col])} → {f(ok[-1][col])}"
+    if ok:
+        best = max(ok, key=lambda r: fnum(r["scd"]))
+        best_s = f"{fmt(best['scd'])} ({fmt_int(best['rhs_evaluations'])})"
+    else:
+        best_s = "–"
+    wall = sum(fnum(r["wall_time_s"]) for r in runs if not math.isnan(fnum(r["wall_time_s"])))
+    bad = [r for r in runs if r["ok"] != "1"]
+    why = f"{fmt(bad[0]['setting'])}: {short(bad[0]['message'], 90)}" if bad else ""
+    if not why and len(ok) < len(runs):
+        why = "error ≥ 1 at " + ", ".join(fmt(r["setting"]) for r in runs if not succeeded(r))
+    s = "–" if a["slope"] is None else f"{a['slope']:.2f}"
+    return (f"| `{name}` | {kind} | {len(ok)} / {len(runs)} | {ladder} | {span('setting', fmt)} | "
+            f"{span('scd', fmt)} | {span('rhs_evaluations', fmt_int)} | {best_s} | {s} | {wall:.3g} "
+            f"| {why.replace('|', '/')} |")
+
+
+def problem_sections(problems, analysis):
+    """The README's section per problem: its description and a row per integrator."""
     by_problem = defaultdict(list)
     for (prob, name), a in analysis.items():
         by_problem[prob].append((name, a))
+    L = []
     for p in problems:
         prob = p["problem"]
         L += [f"## `{prob}`", "", f"{p['description']}. Reference: {p['reference_source']}. "
@@ -259,30 +303,40 @@ def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
               "| RHS evaluations there | best scd (RHS) | slope | wall time, s (all runs) | first failure |",
               "|---|---|---:|---|---|---|---|---|---:|---:|---|"]
         for name, a in by_problem.get(prob, []):
-            runs, ok = a["runs"], a["ok"]
-            kind = runs[0]["kind"]
-            ladder = f"{fmt(runs[0]['setting'])} … {fmt(runs[-1]['setting'])} ({len(runs)})"
-
-            def span(col, f):
-                if not ok:
-                    return "–"
-                return f(ok[0][col]) if len(ok) == 1 else f"{f(ok[0][col])} → {f(ok[-1][col])}"
-            if ok:
-                best = max(ok, key=lambda r: fnum(r["scd"]))
-                best_s = f"{fmt(best['scd'])} ({fmt_int(best['rhs_evaluations'])})"
-            else:
-                best_s = "–"
-            wall = sum(fnum(r["wall_time_s"]) for r in runs if not math.isnan(fnum(r["wall_time_s"])))
-            bad = [r for r in runs if r["ok"] != "1"]
-            why = f"{fmt(bad[0]['setting'])}: {short(bad[0]['message'], 90)}" if bad else ""
-            if not why and len(ok) < len(runs):
-                why = "error ≥ 1 at " + ", ".join(fmt(r["setting"]) for r in runs if not succeeded(r))
-            s = "–" if a["slope"] is None else f"{a['slope']:.2f}"
-            L.append(f"| `{name}` | {kind} | {len(ok)} / {len(runs)} | {ladder} | {span('setting', fmt)} | "
-                     f"{span('scd', fmt)} | {span('rhs_evaluations', fmt_int)} | {best_s} | {s} | {wall:.3g} "
-                     f"| {why.replace('|', '/')} |")
+            L.append(method_row(name, a))
         L.append("")
+    return L
+
+
+def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
+    """results/testset/README.md's text (without the final newline)."""
+    L = header(rows, problems, cmd, elapsed, reduced)
+    # The findings: error not falling with the tolerance, breaks in monotonicity, failures.
+    L += findings_section(analysis)
+    L += problem_sections(problems, analysis)
     return "\n".join(L)
+
+
+def write_slopes(path, analysis):
+    """observed_slopes.csv: per problem x integrator its runs, those that
+    succeeded, and the slope."""
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(["problem", "integrator", "kind", "runs", "runs_ok", "slope_log_error_per_log_rhs"])
+    for (prob, name), a in analysis.items():
+        w.writerow([prob, name, a["runs"][0]["kind"], len(a["runs"]), len(a["ok"]),
+                    "" if a["slope"] is None else f"{a['slope']:.4f}"])
+    write_atomic(path, out.getvalue())
+
+
+def plot_problems(problems, analysis, out_dir, title_extra):
+    """<problem>.png in out_dir for every problem."""
+    for p in problems:
+        prob = p["problem"]
+        info = {name: a for (pr, name), a in analysis.items() if pr == prob}
+        kinds = {name: a["runs"][0]["kind"] for name, a in info.items()}
+        failed = [lab for name in sorted(info) if (lab := failed_label(name, info[name]["runs"]))]
+        plot(prob, info, kinds, failed, os.path.join(out_dir, prob + ".png"), title_extra)
 
 
 def main():
@@ -317,21 +371,8 @@ def main():
         groups.setdefault((r["problem"], r["integrator"]), []).append(r)
     analysis = analyse(groups)
 
-    out = io.StringIO()
-    w = csv.writer(out, lineterminator="\n")
-    w.writerow(["problem", "integrator", "kind", "runs", "runs_ok", "slope_log_error_per_log_rhs"])
-    for (prob, name), a in analysis.items():
-        w.writerow([prob, name, a["runs"][0]["kind"], len(a["runs"]), len(a["ok"]),
-                    "" if a["slope"] is None else f"{a['slope']:.4f}"])
-    write_atomic(os.path.join(args.out, "observed_slopes.csv"), out.getvalue())
-
-    for p in problems:
-        prob = p["problem"]
-        info = {name: a for (pr, name), a in analysis.items() if pr == prob}
-        kinds = {name: a["runs"][0]["kind"] for name, a in info.items()}
-        failed = [lab for name in sorted(info) if (lab := failed_label(name, info[name]["runs"]))]
-        plot(prob, info, kinds, failed, os.path.join(args.out, prob + ".png"),
-             " (reduced set)" if args.reduced else "")
+    write_slopes(os.path.join(args.out, "observed_slopes.csv"), analysis)
+    plot_problems(problems, analysis, args.out, " (reduced set)" if args.reduced else "")
 
     cmd = " ".join([os.path.relpath(args.bin, ROOT)] + extra)
     if args.csv:

@@ -371,20 +371,28 @@ def cited_files(raw, fids, doc_fid):
     return [tuple(sorted(names.get(sec, set()) - {doc_fid})) for sec in section]
 
 
-def main():
+class Sources:
+    """What a figure is looked up in: the results files' values (corpus; the
+    files' ids, paths relative to the root, in fids) and the input files'
+    (inputs; in_ids)."""
+
+    def __init__(self, corpus, fids, inputs, in_ids):
+        self.corpus, self.fids, self.inputs, self.in_ids = corpus, fids, inputs, in_ids
+
+
+def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("docs", nargs="*", help="documents to check (default: README.md, results/README.md and hand-written results/**/*.md)")
     ap.add_argument("--root", default=ROOT)
     ap.add_argument("--allow", default=None, help=f"allow file (default {DEFAULT_ALLOW})")
     ap.add_argument("--list", action="store_true", help="print every figure with its class")
     ap.add_argument("--strict", action="store_true", help="weakly backed figures fail too")
-    args = ap.parse_args()
+    return ap.parse_args()
 
-    root = os.path.abspath(args.root)
-    allow_path = args.allow or os.path.join(root, DEFAULT_ALLOW)
-    with open(allow_path, "rb") as f:
-        cfg = tomllib.load(f)
 
+def results_files(root, cfg):
+    """The results files (under root/results, with a CORPUS_EXT extension, not
+    excluded by the allow file's [corpus]), sorted."""
     results_dir = os.path.join(root, "results")
     excl = [e["glob"] for e in cfg.get("corpus", {}).get("exclude", [])]
     files = []
@@ -395,21 +403,33 @@ def main():
             if name.lower().endswith(CORPUS_EXT) and not any(fnmatch.fnmatch(r, g) for g in excl):
                 files.append(p)
     files.sort()
+    return files
 
-    if args.docs:
-        docs = [os.path.abspath(d) for d in args.docs]
-    else:
-        docs = [os.path.join(root, d) for d in cfg.get("documents", DEFAULT_DOCS)]
-        for p in files:
-            if p.lower().endswith(".md") and p not in docs and not is_generated(p):
-                docs.append(p)
 
-    fids = [rel(p, root) for p in files]
+def documents(args_docs, root, cfg, files):
+    """The documents to check: those given, else the allow file's and every
+    hand-written (not generated) .md among the results files."""
+    if args_docs:
+        return [os.path.abspath(d) for d in args_docs]
+    docs = [os.path.join(root, d) for d in cfg.get("documents", DEFAULT_DOCS)]
+    for p in files:
+        if p.lower().endswith(".md") and p not in docs and not is_generated(p):
+            docs.append(p)
+    return docs
+
+
+def results_corpus(files):
+    """The values of the results files, file ids their places in files."""
     corpus = Corpus()
     for i, p in enumerate(files):
         load_file(p, i, corpus)
     corpus.freeze()
+    return corpus
 
+
+def input_corpus(root, cfg):
+    """(the values of the input files the allow file's [inputs] globs name,
+    without the prose keys it skips; their paths relative to root)."""
     inp = cfg.get("inputs", {})
     in_globs = inp.get("globs", ["experiments/scenes/*.toml", "experiments/sweeps/*.toml", "models/robots/*.toml"])
     skip_keys = set(inp.get("skip_keys", ["findings", "title", "x", "description", "note"]))
@@ -425,91 +445,110 @@ def main():
     for i, p in enumerate(in_files):
         load_file(p, i, inputs, skip_keys)
     inputs.freeze()
+    return inputs, in_ids
 
-    allows = cfg.get("allow", [])
-    allow_res = []
-    for a in allows:
-        pat = r"\s+".join(re.escape(w) for w in a["text"].split())
-        allow_res.append(re.compile(pat))
-    allow_used = [0] * len(allows)
 
-    figures = []   # (doc, line, figure, class, detail, context)
-    for doc in docs:
-        drel = rel(doc, root)
-        with open(doc, encoding="utf-8") as f:
-            raw = f.read()
-        text = strip_markup(raw)
-        line_starts = [0] + [i + 1 for i, c in enumerate(raw) if c == "\n"]
-        for m in DATE_RE.finditer(text):
-            figures.append((drel, bisect.bisect_right(line_starts, m.start()), m.group(0), "rule", "date", ""))
-            text = blank(text, m.start(), m.end())
-        doc_fid = fids.index(drel) if drel in fids else None
-        cited_by_line = cited_files(raw, fids, doc_fid)
-        allow_spans = []
-        for k, (a, rx) in enumerate(zip(allows, allow_res)):
-            if a.get("file") and a["file"] != drel:
-                continue
-            for am in rx.finditer(raw):
-                allow_spans.append((am.start(), am.end(), k))
-        for m in NUM_RE.finditer(text):
-            start, end = m.start(), m.end()
-            line = bisect.bisect_right(line_starts, start)
-            le = raw.find("\n", start)
-            context = raw[line_starts[line - 1]:le if le >= 0 else len(raw)].strip()
-            unit = UNIT_RE.match(text, end)
-            if not unit:  # "1.79 [1.76–1.79] ms", "1.76–1.79] ms": the unit after a range or a bracket
-                tail = RANGE_TAIL_RE.match(text, end)
-                if tail:
-                    unit = UNIT_RE.match(text, tail.end())
-            unit_s = unit.group(1) if unit else ""
-            fig = m.group(0) + (" " + unit_s if unit_s else "")
-            rule = rule_for(text, m)
-            if rule:
-                figures.append((drel, line, fig, "rule", rule, context))
-                continue
-            value, half, sig = figure_value(m)
-            cands = [(value, half)]
-            scale = UNIT_SCALE.get(unit_s) if unit else None
-            if scale:
-                cands.append((value * scale, half * scale))
-            k = next((k for s_, e_, k in allow_spans if s_ <= start and end <= e_), None)
-            if k is not None:
-                allow_used[k] += 1
-                figures.append((drel, line, fig, "allowed", allows[k]["reason"], context))
-                continue
-            cited = cited_by_line[line - 1]
-            cited_hit = next((h for h in (corpus.find_in(v, hf, cited) for v, hf in cands) if h), None)
-            if cited_hit and sig > 2:
-                figures.append((drel, line, fig, "backed", f"{fids[cited_hit[1]]} ({cited_hit[0]:.6g}; cited)", context))
-                continue
-            if cited and sig > 2 and not cited_hit:
-                # A figure of three or more digits in a section that names its
-                # results files must be in one of them: a match elsewhere is
-                # most likely a coincidence (a wrong 0.520 for 0.502 is found
-                # somewhere among 10^5 stored values).
-                ihit = next((h for h in (inputs.find(v, exact_half(v)) for v, hf in cands) if h), None)
-                if ihit:
-                    figures.append((drel, line, fig, "input", f"{in_ids[ihit[1]]} ({ihit[0]:.6g})", context))
-                else:
-                    figures.append((drel, line, fig, "UNBACKED", "not in the files its section names", context))
-                continue
-            hit = next((h for h in (corpus.find(v, exact_half(v), exclude=doc_fid) for v, hf in cands) if h), None)
-            if hit:
-                figures.append((drel, line, fig, "backed", f"{fids[hit[1]]} ({hit[0]:.6g}; same value)", context))
-                continue
-            ihit = next((h for h in (inputs.find(v, exact_half(v)) for v, hf in cands) if h), None)
-            if ihit:
-                figures.append((drel, line, fig, "input", f"{in_ids[ihit[1]]} ({ihit[0]:.6g})", context))
-                continue
-            hit = cited_hit or next((h for h in (corpus.find(v, hf, exclude=doc_fid) for v, hf in cands) if h), None)
-            if hit:
-                why = (f"{sig} significant digit{'s' if sig > 1 else ''}" if cited_hit
-                       else "in a file its section does not name")
-                figures.append((drel, line, fig, "backed~", f"{fids[hit[1]]} ({hit[0]:.6g}; weak: "
-                                f"by rounding only, {why})", context))
-                continue
-            figures.append((drel, line, fig, "UNBACKED", "", context))
+def allow_spans_in(raw, drel, allows, allow_res):
+    """(start, end, entry index) of every passage of the document raw (path
+    drel) that an allow entry for it (or for every document) covers."""
+    spans = []
+    for k, (a, rx) in enumerate(zip(allows, allow_res)):
+        if a.get("file") and a["file"] != drel:
+            continue
+        for am in rx.finditer(raw):
+            spans.append((am.start(), am.end(), k))
+    return spans
 
+
+def unit_after(text, end):
+    """The UNIT_RE match of the unit after a number ending at end, also after
+    a range or a bracket ("1.79 [1.76–1.79] ms", "1.76–1.79] ms"); None if none."""
+    unit = UNIT_RE.match(text, end)
+    if not unit:
+        tail = RANGE_TAIL_RE.match(text, end)
+        if tail:
+            unit = UNIT_RE.match(text, tail.end())
+    return unit
+
+
+def evidence(cands, sig, cited, doc_fid, src):
+    """(class, detail) of a figure that is neither a rule's nor allowed, from
+    where its candidate values cands [(value, half unit of its last digit)]
+    are found (sig: its significant digits; cited: the ids of the results
+    files its section names; doc_fid: the document's own id, or None)."""
+    fids, in_ids = src.fids, src.in_ids
+    cited_hit = next((h for h in (src.corpus.find_in(v, hf, cited) for v, hf in cands) if h), None)
+    if cited_hit and sig > 2:
+        return "backed", f"{fids[cited_hit[1]]} ({cited_hit[0]:.6g}; cited)"
+    if cited and sig > 2 and not cited_hit:
+        # A figure of three or more digits in a section that names its
+        # results files must be in one of them: a match elsewhere is
+        # most likely a coincidence (a wrong 0.520 for 0.502 is found
+        # somewhere among 10^5 stored values).
+        ihit = next((h for h in (src.inputs.find(v, exact_half(v)) for v, hf in cands) if h), None)
+        if ihit:
+            return "input", f"{in_ids[ihit[1]]} ({ihit[0]:.6g})"
+        return "UNBACKED", "not in the files its section names"
+    hit = next((h for h in (src.corpus.find(v, exact_half(v), exclude=doc_fid) for v, hf in cands) if h), None)
+    if hit:
+        return "backed", f"{fids[hit[1]]} ({hit[0]:.6g}; same value)"
+    ihit = next((h for h in (src.inputs.find(v, exact_half(v)) for v, hf in cands) if h), None)
+    if ihit:
+        return "input", f"{in_ids[ihit[1]]} ({ihit[0]:.6g})"
+    hit = cited_hit or next((h for h in (src.corpus.find(v, hf, exclude=doc_fid) for v, hf in cands) if h), None)
+    if hit:
+        why = (f"{sig} significant digit{'s' if sig > 1 else ''}" if cited_hit
+               else "in a file its section does not name")
+        return "backed~", f"{fids[hit[1]]} ({hit[0]:.6g}; weak: by rounding only, {why})"
+    return "UNBACKED", ""
+
+
+def document_figures(doc, root, src, allows, allow_res, allow_used):
+    """(doc, line, figure, class, detail, context) of every number in the
+    document at path doc; counts in allow_used the figures each allow entry
+    covers."""
+    drel = rel(doc, root)
+    with open(doc, encoding="utf-8") as f:
+        raw = f.read()
+    text = strip_markup(raw)
+    line_starts = [0] + [i + 1 for i, c in enumerate(raw) if c == "\n"]
+    figures = []
+    for m in DATE_RE.finditer(text):
+        figures.append((drel, bisect.bisect_right(line_starts, m.start()), m.group(0), "rule", "date", ""))
+        text = blank(text, m.start(), m.end())
+    doc_fid = src.fids.index(drel) if drel in src.fids else None
+    cited_by_line = cited_files(raw, src.fids, doc_fid)
+    allow_spans = allow_spans_in(raw, drel, allows, allow_res)
+    for m in NUM_RE.finditer(text):
+        start, end = m.start(), m.end()
+        line = bisect.bisect_right(line_starts, start)
+        le = raw.find("\n", start)
+        context = raw[line_starts[line - 1]:le if le >= 0 else len(raw)].strip()
+        unit = unit_after(text, end)
+        unit_s = unit.group(1) if unit else ""
+        fig = m.group(0) + (" " + unit_s if unit_s else "")
+        rule = rule_for(text, m)
+        if rule:
+            figures.append((drel, line, fig, "rule", rule, context))
+            continue
+        value, half, sig = figure_value(m)
+        cands = [(value, half)]
+        scale = UNIT_SCALE.get(unit_s) if unit else None
+        if scale:
+            cands.append((value * scale, half * scale))
+        k = next((k for s_, e_, k in allow_spans if s_ <= start and end <= e_), None)
+        if k is not None:
+            allow_used[k] += 1
+            figures.append((drel, line, fig, "allowed", allows[k]["reason"], context))
+            continue
+        cls, detail = evidence(cands, sig, cited_by_line[line - 1], doc_fid, src)
+        figures.append((drel, line, fig, cls, detail, context))
+    return figures
+
+
+def report(figures, docs, allows, allow_used, args):
+    """Prints the figures (--list), the failing ones, the stale allow entries
+    and the summary line; returns the exit status."""
     failing = {"UNBACKED", "backed~"} if args.strict else {"UNBACKED"}
     counts = {}
     for f in figures:
@@ -532,6 +571,26 @@ def main():
           f"{counts.get('rule', 0)} not figures by rule, {counts.get('allowed', 0)} allow-listed, "
           f"{counts.get('UNBACKED', 0)} unbacked")
     return 1 if bad else 0
+
+
+def main():
+    args = parse_args()
+    root = os.path.abspath(args.root)
+    allow_path = args.allow or os.path.join(root, DEFAULT_ALLOW)
+    with open(allow_path, "rb") as f:
+        cfg = tomllib.load(f)
+    files = results_files(root, cfg)
+    docs = documents(args.docs, root, cfg, files)
+    fids = [rel(p, root) for p in files]
+    corpus = results_corpus(files)
+    src = Sources(corpus, fids, *input_corpus(root, cfg))
+    allows = cfg.get("allow", [])
+    allow_res = [re.compile(r"\s+".join(re.escape(w) for w in a["text"].split())) for a in allows]
+    allow_used = [0] * len(allows)
+    figures = []   # (doc, line, figure, class, detail, context)
+    for doc in docs:
+        figures += document_figures(doc, root, src, allows, allow_res, allow_used)
+    return report(figures, docs, allows, allow_used, args)
 
 
 if __name__ == "__main__":

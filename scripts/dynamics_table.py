@@ -43,13 +43,8 @@ def git_revision():
         return "unknown"
 
 
-def main(src, dst):
-    ctx, rows = load(src)
-    backends = sorted({b for r in rows.values() for b in r})
-    robots = []
-    for (_, robot) in rows:
-        if robot not in robots:
-            robots.append(robot)
+def header(ctx):
+    """The document's title and the description of the run (the benchmark's context ctx) and columns."""
     out = []
     w = out.append
     w("# Dynamics back-ends: time per call and operation counts\n")
@@ -73,58 +68,86 @@ def main(src, dst):
     w("`fd` = forward dynamics qdd = H⁻¹(tau − h) with the rotor inertia Z²Im in H; "
       "`H` = mass matrix; `id` = inverse dynamics (the RNEA for every back-end but "
       "`lagrange-euler`, whose inverse dynamics is its own D qdd + h + c).\n")
+    return out
 
-    for robot in robots:
-        fd, H, idr = rows.get(("fd", robot), {}), rows.get(("H", robot), {}), rows.get(("id", robot), {})
-        if not fd:
+
+def robot_section(robot, rows, backends):
+    """One robot's section: per back-end (fastest forward dynamics first) the
+    times, ratios and operation counts; nothing without forward-dynamics rows."""
+    out = []
+    w = out.append
+    fd, H, idr = rows.get(("fd", robot), {}), rows.get(("H", robot), {}), rows.get(("id", robot), {})
+    if not fd:
+        return out
+    n = next(iter(fd.values()))["n"]
+    w(f"## {robot} (n = {n})\n")
+    w("| back-end | fd [ns] | fd ratio | H [ns] | H ratio | id [ns] | fd mul | fd add | fd div | fd sqrt | fd trig | H mul | H add |")
+    w("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for b in sorted(backends, key=lambda b: fd.get(b, {}).get("ns", float("inf"))):
+        if b not in fd:
             continue
-        n = next(iter(fd.values()))["n"]
-        w(f"## {robot} (n = {n})\n")
-        w("| back-end | fd [ns] | fd ratio | H [ns] | H ratio | id [ns] | fd mul | fd add | fd div | fd sqrt | fd trig | H mul | H add |")
-        w("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-        for b in sorted(backends, key=lambda b: fd.get(b, {}).get("ns", float("inf"))):
-            if b not in fd:
-                continue
-            f, h, i = fd[b], H.get(b), idr.get(b)
-            ratio_f = f["ns"] / fd[REFERENCE]["ns"] if REFERENCE in fd else float("nan")
-            ratio_h = h["ns"] / H[REFERENCE]["ns"] if h and REFERENCE in H else float("nan")
-            w(f"| `{b}` | {fmt_ns(f['ns'])} | {ratio_f:.2f} | {fmt_ns(h['ns']) if h else '–'} | "
-              f"{ratio_h:.2f} | {fmt_ns(i['ns']) if i else '–'} | {f['mul']:,} | {f['add']:,} | "
-              f"{f['div']} | {f['sqrt']} | {f['trig']} | {h['mul'] if h else 0:,} | {h['add'] if h else 0:,} |")
-        if REFERENCE in fd and REFERENCE in idr:
-            calls = n + 2
-            honest = fd[REFERENCE]["ns"] / (calls * idr[REFERENCE]["ns"])
-            w(f"\n`{REFERENCE}` forward dynamics = {honest:.2f} × the time of {calls} (n + 2) RNEA calls "
-              f"({fmt_ns(fd[REFERENCE]['ns'])} ns against {calls} × {fmt_ns(idr[REFERENCE]['ns'])} ns); "
-              f"the rest is the Cholesky solve and the subtractions.")
-        if n == 6:
-            w(f"\nThe paper (sec. 5) quotes **{PAPER_MUL} multiplies and {PAPER_ADD} additions** for one "
-              f"step of its Lagrange computation at n = 6. Per forward-dynamics call we count: " +
-              "; ".join(f"`{b}` {fd[b]['mul']:,} mul / {fd[b]['add']:,} add" for b in sorted(fd)) + ".")
-        w("")
+        f, h, i = fd[b], H.get(b), idr.get(b)
+        ratio_f = f["ns"] / fd[REFERENCE]["ns"] if REFERENCE in fd else float("nan")
+        ratio_h = h["ns"] / H[REFERENCE]["ns"] if h and REFERENCE in H else float("nan")
+        w(f"| `{b}` | {fmt_ns(f['ns'])} | {ratio_f:.2f} | {fmt_ns(h['ns']) if h else '–'} | "
+          f"{ratio_h:.2f} | {fmt_ns(i['ns']) if i else '–'} | {f['mul']:,} | {f['add']:,} | "
+          f"{f['div']} | {f['sqrt']} | {f['trig']} | {h['mul'] if h else 0:,} | {h['add'] if h else 0:,} |")
+    if REFERENCE in fd and REFERENCE in idr:
+        calls = n + 2
+        honest = fd[REFERENCE]["ns"] / (calls * idr[REFERENCE]["ns"])
+        w(f"\n`{REFERENCE}` forward dynamics = {honest:.2f} × the time of {calls} (n + 2) RNEA calls "
+          f"({fmt_ns(fd[REFERENCE]['ns'])} ns against {calls} × {fmt_ns(idr[REFERENCE]['ns'])} ns); "
+          f"the rest is the Cholesky solve and the subtractions.")
+    if n == 6:
+        w(f"\nThe paper (sec. 5) quotes **{PAPER_MUL} multiplies and {PAPER_ADD} additions** for one "
+          f"step of its Lagrange computation at n = 6. Per forward-dynamics call we count: " +
+          "; ".join(f"`{b}` {fd[b]['mul']:,} mul / {fd[b]['add']:,} add" for b in sorted(fd)) + ".")
+    w("")
+    return out
 
-    # Cost against n on the random chains.
+
+def cost_against_n(rows, robots, backends):
+    """The forward dynamics' time, multiplies and ratio to REFERENCE against n
+    on the random chains (nothing without random chains)."""
+    out = []
+    w = out.append
     rand = sorted((r for r in robots if r.startswith("random")), key=lambda r: int(r[6:]))
-    if rand:
-        w("## Cost against n (random chains), forward dynamics\n")
-        w("| back-end | " + " | ".join(f"n = {r[6:]} [ns]" for r in rand) + " | " +
-          " | ".join(f"mul n = {r[6:]}" for r in rand) + " |")
-        w("|---|" + "---:|" * (2 * len(rand)))
-        for b in backends:
-            cells = [fmt_ns(rows[("fd", r)][b]["ns"]) if b in rows[("fd", r)] else "–" for r in rand]
-            muls = [f"{rows[('fd', r)][b]['mul']:,}" if b in rows[("fd", r)] else "–" for r in rand]
-            w(f"| `{b}` | " + " | ".join(cells) + " | " + " | ".join(muls) + " |")
-        w("")
-        w(f"Ratio to `{REFERENCE}`, forward dynamics:\n")
-        w("| back-end | " + " | ".join(f"n = {r[6:]}" for r in rand) + " |")
-        w("|---|" + "---:|" * len(rand))
-        for b in backends:
-            cells = []
-            for r in rand:
-                row = rows[("fd", r)]
-                cells.append(f"{row[b]['ns'] / row[REFERENCE]['ns']:.2f}" if b in row and REFERENCE in row else "–")
-            w(f"| `{b}` | " + " | ".join(cells) + " |")
-        w("")
+    if not rand:
+        return out
+    w("## Cost against n (random chains), forward dynamics\n")
+    w("| back-end | " + " | ".join(f"n = {r[6:]} [ns]" for r in rand) + " | " +
+      " | ".join(f"mul n = {r[6:]}" for r in rand) + " |")
+    w("|---|" + "---:|" * (2 * len(rand)))
+    for b in backends:
+        cells = [fmt_ns(rows[("fd", r)][b]["ns"]) if b in rows[("fd", r)] else "–" for r in rand]
+        muls = [f"{rows[('fd', r)][b]['mul']:,}" if b in rows[("fd", r)] else "–" for r in rand]
+        w(f"| `{b}` | " + " | ".join(cells) + " | " + " | ".join(muls) + " |")
+    w("")
+    w(f"Ratio to `{REFERENCE}`, forward dynamics:\n")
+    w("| back-end | " + " | ".join(f"n = {r[6:]}" for r in rand) + " |")
+    w("|---|" + "---:|" * len(rand))
+    for b in backends:
+        cells = []
+        for r in rand:
+            row = rows[("fd", r)]
+            cells.append(f"{row[b]['ns'] / row[REFERENCE]['ns']:.2f}" if b in row and REFERENCE in row else "–")
+        w(f"| `{b}` | " + " | ".join(cells) + " |")
+    w("")
+    return out
+
+
+def main(src, dst):
+    ctx, rows = load(src)
+    backends = sorted({b for r in rows.values() for b in r})
+    robots = []  # in the order of the JSON
+    for (_, robot) in rows:
+        if robot not in robots:
+            robots.append(robot)
+    out = header(ctx)
+    for robot in robots:
+        out += robot_section(robot, rows, backends)
+    # Cost against n on the random chains.
+    out += cost_against_n(rows, robots, backends)
     with open(dst, "w") as f:
         f.write("\n".join(out))
 
