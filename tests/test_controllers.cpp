@@ -16,14 +16,12 @@
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
 
-#ifndef PUMASIM_SCENES_DIR
-#error "PUMASIM_SCENES_DIR must be defined by the build"
-#endif
+#include "tests/scene_paths.hpp"
 
 namespace pumasim {
 namespace {
 
-std::string scene_path(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
+using test::scene_path;
 
 TEST(ControllerRegistry, EveryLawHasAUniqueNameAndUniqueKeys) {
   std::set<std::string> names;

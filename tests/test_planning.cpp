@@ -15,14 +15,12 @@
 #include "models/reference/timing.hpp"
 #include "models/reference/trajectory.hpp"
 
-#ifndef PUMASIM_SCENES_DIR
-#error "PUMASIM_SCENES_DIR must be defined by the build"
-#endif
+#include "tests/scene_paths.hpp"
 
 namespace pumasim {
 namespace {
 
-std::string scene_path(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
+using test::scene_path;
 
 // s(0) = 0, s(T) = L, at rest at both ends; s and sd continuous; sd and sdd
 // the derivatives of s and sd (central differences, away from the pieces'

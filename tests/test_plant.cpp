@@ -18,9 +18,7 @@
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
 
-#ifndef PUMASIM_SCENES_DIR
-#error "PUMASIM_SCENES_DIR must be defined by the build"
-#endif
+#include "tests/scene_paths.hpp"
 
 namespace pumasim {
 namespace {
@@ -35,9 +33,7 @@ RunResult run_rk4(Plant& plant, double t_end, double dt, double output_interval,
   return r;
 }
 
-std::string scene_path(const std::string& name) {
-  return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml";
-}
+using test::scene_path;
 
 // One joint about a vertical axis (gravity along it: no gravity torque), driven
 // by a constant voltage: a PIV with zero gains and an offset u0.

@@ -14,13 +14,14 @@
 #include <vector>
 
 #include "models/scene/scene.hpp"
+#include "tests/scene_paths.hpp"
 
 namespace pumasim {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string scene_path(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
+using test::scene_path;
 
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> out;
