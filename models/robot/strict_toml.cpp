@@ -351,16 +351,16 @@ std::vector<std::string> StrictTable::keys() {
   return out;
 }
 
-void StrictTable::not_applicable(std::string_view key, std::string decider) {
-  not_applicable_.push_back({std::string(key), asked_.size(), std::move(decider)});
+void StrictTable::not_applicable(std::string_view key, std::string_view decider, std::string decider_value) {
+  not_applicable_.push_back({std::string(key), std::string(decider), std::move(decider_value)});
 }
 
 // " (friction.static_torque does not apply to friction.model = "viscous"
 // (--set friction.model="viscous"); remove it from the file or with --unset
 // friction.static_torque --unset friction.kinetic_torque)" for a key that
-// does not apply, or "". The choices named are the string and boolean values
-// read before the key (a key's applicability depends on the keys above it);
-// the --unset list has every key of the table that does not apply.
+// does not apply, or "". The choice named is the key above it that decides
+// (with "(the default)" when the file does not give it); the --unset list has
+// every key of the table that does not apply.
 std::string StrictTable::why_not_applicable(const toml::key& k) const {
   const auto find = [this](std::string_view key) {
     return std::find_if(not_applicable_.begin(), not_applicable_.end(),
@@ -369,24 +369,11 @@ std::string StrictTable::why_not_applicable(const toml::key& k) const {
   const auto it = find(k.str());
   if (it == not_applicable_.end()) return "";
   std::string choices;
-  if (!it->decider.empty()) {  // the key above it that decides, and its value
-    const std::string d = it->decider.substr(0, it->decider.find(" = "));
-    choices = key_path(d) + it->decider.substr(d.size());
-    if (const auto c = table_->find(d); c != table_->end()) {
+  if (!it->decider.empty() && !it->decider_value.empty()) {
+    choices = key_path(it->decider) + " = " + it->decider_value;
+    if (const auto c = table_->find(it->decider); c != table_->end()) {
       if (const std::string o = override_of(c->first); !o.empty()) choices += " (" + o + ")";
     }
-  }
-  for (std::size_t i = 0; it->decider.empty() && i < it->asked_before && i < asked_.size(); ++i) {
-    const auto c = table_->find(asked_[i]);
-    if (c == table_->end() || !(c->second.is_string() || c->second.is_boolean())) continue;
-    std::ostringstream value;
-    if (c->second.is_string()) {
-      value << '"' << *c->second.value<std::string_view>() << '"';
-    } else {
-      value << (*c->second.value<bool>() ? "true" : "false");
-    }
-    choices += (choices.empty() ? "" : ", ") + key_path(asked_[i]) + " = " + value.str();
-    if (const std::string o = override_of(c->first); !o.empty()) choices += " (" + o + ")";
   }
   if (const std::string o = override_of(k); !o.empty()) {
     return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +

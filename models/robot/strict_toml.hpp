@@ -71,9 +71,9 @@ class StrictTable {
   // (a friction law's key under another law): still unknown to finish(),
   // whose message then says so, naming the choices read before it and how to
   // remove the key.
-  // The key does not apply here because of `decider` ('law = "piv"', the
-  // key above it that decides, with its value; may be empty).
-  void not_applicable(std::string_view key, std::string decider = {});
+  // The key does not apply here because of the key above it, `decider`, whose
+  // value (as a message shows it) is decider_value; either may be empty.
+  void not_applicable(std::string_view key, std::string_view decider = {}, std::string decider_value = {});
 
   // Rejects every key that no accessor asked for.
   void finish() const;
@@ -103,9 +103,7 @@ class StrictTable {
   std::vector<std::string> asked_;
   // Keys that do not apply, each with how many keys had been asked before it.
   struct NotApplicable {
-    std::string key;
-    std::size_t asked_before;  // asked_.size() when it was skipped
-    std::string decider;
+    std::string key, decider, decider_value;
   };
   std::vector<NotApplicable> not_applicable_;
   std::string why_not_applicable(const toml::key& k) const;

@@ -59,8 +59,9 @@ struct Entry {
   void (*then)(StrictTable&, T&) = nullptr;
 };
 
-// 'law = "piv"', or 'law = "piv" (the default)' when the file does not give
-// it: the entry `key` with its value as read into obj ("" if no entry has it).
+// '"piv"', or '"piv" (the default)' when the file does not give it: the value
+// of the entry `key` as read into obj ("" if no entry has it, or it is an
+// array or a table).
 template <class T>
 std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, std::string_view key,
                           const T& obj, int n) {
@@ -80,7 +81,7 @@ std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, 
     } else {
       return "";  // an array or a table: named by the entries above it instead
     }
-    return std::string(key) + " = " + out.str() + (t.node(key) ? "" : " (the default)");
+    return out.str() + (t.node(key) ? "" : " (the default)");
   }
   return "";
 }
@@ -90,7 +91,8 @@ template <class T>
 void read_entries(StrictTable& t, const std::vector<Entry<T>>& entries, T& obj, int n) {
   for (const Entry<T>& e : entries) {
     if (e.applies.fn && !e.applies.fn(obj)) {
-      t.not_applicable(e.key, decider_value(t, entries, e.applies.decided_by, obj, n));  // finish() says why
+      // finish() says why, should the key be there
+      t.not_applicable(e.key, e.applies.decided_by, decider_value(t, entries, e.applies.decided_by, obj, n));
       continue;
     }
     if (e.need == Need::kRequired || t.node(e.key)) e.codec.read(t, e.key, obj, n);
