@@ -155,6 +155,127 @@ TEST_F(RobotFile, WrongArrayLengthAndSyntaxError) {
   expect_error(std::string(kHead) + "[[joint]\n", {"TOML syntax error"});
 }
 
+// Physical consistency (issue 18): a link's mass, centre of mass and inertia
+// must be a rigid body's. Line 9 is mass, 10 com, 11 inertia, 12 rotor_inertia.
+std::string link(const std::string& mass, const std::string& com, const std::string& inertia,
+                 const std::string& rotor = "1e-4", const std::string& extra = "") {
+  return "[[joint]]\na = 0.1\nalpha = 0.0\nd = 0.0\nmass = " + mass + "\ncom = " + com + "\ninertia = " + inertia +
+         "\nrotor_inertia = " + rotor + "\ngear_ratio = 50\n" + extra;
+}
+
+TEST_F(RobotFile, AMasslessLinkHasNoInertiaAndNoCentreOfMass) {
+  expect_error(std::string(kHead) + link("0.0", "[0, 0, 0]", "[0.1, 0.1, 0.1, 0, 0, 0]"),
+               {":11: joint[1].inertia: expected zero inertia on a link of mass 0", "got a non-zero inertia"});
+  expect_error(std::string(kHead) + link("0.0", "[0.0, 0.2, 0.0]", "[0, 0, 0, 0, 0, 0]"),
+               {":10: joint[1].com: expected [0, 0, 0] on a link of mass 0", "got [0, 0.2, 0]"});
+  // Massless and without inertia, with a rotor: a drive on a weightless link.
+  EXPECT_EQ(load_robot_file(write(std::string(kHead) + link("0.0", "[0, 0, 0]", "[0, 0, 0, 0, 0, 0]"))).dof(), 1);
+}
+
+// Principal moments 0.1, 0.1, 0.3 (a PSD matrix): no rigid body has them,
+// since 0.3 > 0.1 + 0.1; a thin rod's 0.1, 0.1, 0 and a flat plate's
+// 0.1, 0.2, 0.3 are at the bound and load.
+TEST_F(RobotFile, PrincipalMomentsObeyTheTriangleInequalities) {
+  expect_error(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.1, 0.3, 0, 0, 0]"),
+               {":11: joint[1].inertia: expected principal moments about the centre of mass that obey the "
+                "triangle inequalities",
+                "got 0.3 > 0.2"});
+  // Rotated: the same moments with products of inertia (a rotation about z by 45 degrees of diag(0.1, 0.3, 0.1)).
+  expect_error(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.2, 0.2, 0.1, 0.1, 0, 0]") + "",
+               {"joint[1].inertia: expected principal moments"});
+  EXPECT_EQ(load_robot_file(write(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.1, 0.0, 0, 0, 0]"))).dof(),
+            1);
+  EXPECT_EQ(load_robot_file(write(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.2, 0.3, 0, 0, 0]"))).dof(),
+            1);
+}
+
+// A published set kept as published says why; the excuse on a consistent link
+// is refused, so that none outlives the reason for it.
+TEST_F(RobotFile, AnInconsistentLinkLoadsOnlyWithItsReasonGiven) {
+  const std::string why = "inconsistent_inertia = \"as published\"\n";
+  const RobotModel m =
+      load_robot_file(write(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.1, 0.3, 0, 0, 0]", "1e-4", why)));
+  EXPECT_DOUBLE_EQ(m.joints[0].inertia(2, 2), 0.3);
+  expect_error(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.1, 0.1, 0, 0, 0]", "1e-4", why),
+               {":14: joint[1].inconsistent_inertia: expected no such key on a link whose mass and inertia are a "
+                "rigid body's"});
+}
+
+// H(q) singular: a joint that moves no mass and has no rotor. A point mass on
+// the joint's axis (standard DH: link 1's frame sits a = 0.1 m out along x, so
+// com = [-0.1, 0, 0] is on the axis) is refused; 0.1 m off the axis it loads.
+TEST_F(RobotFile, AJointThatMovesNoMassAndHasNoRotorIsRefused) {
+  expect_error(std::string(kHead) + link("0.0", "[0, 0, 0]", "[0, 0, 0, 0, 0, 0]", "0.0"),
+               {":12: joint[1].rotor_inertia: expected a rotor inertia > 0", "joint 1 moves no mass",
+                "H(q) is singular"});
+  expect_error(std::string(kHead) + link("1.0", "[-0.1, 0, 0]", "[0, 0, 0, 0, 0, 0]", "0.0"),
+               {":12: joint[1].rotor_inertia:", "at pose zero (q = 0) joint 1 moves no mass"});
+  const RobotModel m = load_robot_file(write(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0, 0, 0, 0, 0, 0]", "0.0")));
+  EXPECT_EQ(joint_without_inertia(m, Eigen::VectorXd::Zero(1)), -1);
+  // The second of two joints, each with a rotor but the second: its link a point on its axis.
+  expect_error(std::string(kHead) + link("1.0", "[0, 0, 0]", "[0.1, 0.1, 0.1, 0, 0, 0]") +
+                   link("1.0", "[-0.1, 0, 0]", "[0, 0, 0, 0, 0, 0]", "0.0"),
+               {":21: joint[2].rotor_inertia:", "joint 2 moves no mass"});
+}
+
+// A scene without rotor inertia on a robot whose last link is massless: H is
+// singular at the start pose, refused at scene.rotor_inertia naming joint 6
+// (the robot file, with its rotors, is valid).
+TEST(SceneNumbers, ASceneWithoutRotorInertiaOnAMasslessLinkIsRefused) {
+  std::ifstream in(std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/puma560.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string robot = text.str();
+  for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
+           {"mass = 0.09 ", "mass = 0.0 "},
+           {"com = [0.0, 0.0, 0.032]", "com = [0.0, 0.0, 0.0]"},
+           {"inertia = [0.15e-3, 0.15e-3, 0.04e-3, 0.0, 0.0, 0.0]", "inertia = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]"}}) {
+    const std::size_t at = robot.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    robot.replace(at, from.size(), to);
+  }
+  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_test_massless_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "arm.toml") << robot;
+  ASSERT_EQ(load_robot_file((dir / "arm.toml").string()).joints[5].mass, 0.0);
+  std::ifstream sin(std::string(PUMASIM_SCENES_DIR) + "/paper_slow_6dof.toml");
+  std::stringstream scene;
+  scene << sin.rdbuf();
+  std::string sc = scene.str();
+  const std::string robot_line = "robot = \"puma560\"";
+  const std::size_t at = sc.find(robot_line);
+  ASSERT_NE(at, std::string::npos);
+  sc.replace(at, robot_line.size(), "robot = \"" + (dir / "arm.toml").string() + "\"\nrotor_inertia = false");
+  std::ofstream(dir / "scene.toml") << sc;
+  EXPECT_NO_THROW(load_scene((dir / "scene.toml").string(), {"scene.rotor_inertia=true"}));
+  const Result r = cli({"check", (dir / "scene.toml").string()});
+  EXPECT_EQ(r.status, kExitBadInput);
+  const std::string line = std::to_string(std::count(sc.begin(), sc.begin() + static_cast<long>(at), '\n') + 2);
+  EXPECT_NE(r.err.find("scene.toml:" + line + ": scene.rotor_inertia: expected a joint-space inertia H(q) that is "
+                       "positive definite at the start pose, got joint 6 moving no mass"),
+            std::string::npos)
+      << r.err;
+  std::filesystem::remove_all(dir);
+}
+
+// Non-finite numbers in the rows of a table (the speed profile, the flange
+// orientation) are refused naming the key; a NaN in the orientation passed
+// the orthonormality test before (every comparison with NaN is false).
+TEST(SceneNumbers, NonFiniteNumbersInRowsAreRefused) {
+  const std::string six = std::string(PUMASIM_SCENES_DIR) + "/paper_slow_6dof.toml";
+  Result r = cli({"check", six, "--set", "reference.orientation=[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, nan]]"});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("reference.orientation: expected an array of [a, b, c] rows of numbers, each finite"),
+            std::string::npos)
+      << r.err;
+  const std::string slow = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+  r = cli({"check", slow, "--set", "reference.profile=[[0.0, 0.0], [0.5, inf], [1.0, 0.0]]"});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("reference.profile: expected an array of [a, b] rows of numbers, each finite"),
+            std::string::npos)
+      << r.err;
+}
+
 // Integers a double cannot hold exactly (beyond +-2^53) are refused, naming
 // the key, instead of being read through toml++'s empty value<double>()
 // (which printed another key's memory, or rtol = 4.66e-310).

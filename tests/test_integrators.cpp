@@ -506,6 +506,33 @@ TEST(Imex, AgreesWithBdfOnThePlant) {
   for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-8) << i;
 }
 
+// The hybrid stick/slip law with no friction levels (Fs = Fk = 0) is its
+// viscous part alone: the same run as the viscous law with the same B, with
+// every root-finding integrator. Before, its events chattered from t = 0 (a
+// joint released at zero speed re-stuck at once): CVODE took 1e-23 s steps at
+// t = 1e-20 s until a budget ended the run (tests/check_extreme_runs.py).
+TEST(HybridFriction, WithoutFrictionLevelsIsTheViscousLaw) {
+  Scene hybrid = load_scene(std::string(PUMASIM_SCENES_DIR) + "/paper_slow_6dof_hybrid.toml",
+                            {"friction.static_torque=0", "friction.kinetic_torque=0"});
+  Scene viscous = hybrid;
+  for (auto& f : viscous.plant.friction) f.model = friction_model<ViscousFriction>();
+  for (const char* name : {"cvode-bdf", "cvode-adams", "arkode-dirk", "odeint-rodas4p"}) {
+    std::vector<double> a, b;
+    for (const Scene* sc : {&hybrid, &viscous}) {
+      Plant plant(sc->plant);
+      auto integ = make_integrator(name, tol(1e-8, 1e-10));
+      std::vector<double>& out = sc == &hybrid ? a : b;
+      const RunResult r = run_plant(
+          plant, *integ, 0.05, 0.05, [&](double, const double* x) { out.assign(x, x + plant.size()); }, 200000,
+          Stops::kEvents, 20.0);
+      ASSERT_TRUE(r.ok) << name << ": " << r.failure;
+      EXPECT_EQ(r.root_events, 0) << name;
+    }
+    // The same ODE: the two runs agree to within 100 rtol of each state.
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 100 * 1e-8 * (1 + std::abs(b[i]))) << name << " " << i;
+  }
+}
+
 // pumasim run: the four files, with the named columns; bad options exit 2 and
 // write nothing.
 // Every run ends within its budgets: a servo period whose samples alone

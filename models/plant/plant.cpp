@@ -325,7 +325,10 @@ void Plant::start_discrete_state(const Eigen::VectorXd& q) {
   ds_.ref_segment = 0;
   std::fill(ds_.controller.u_held.begin(), ds_.controller.u_held.end(), 0.0);
   std::fill(ds_.controller.memory.begin(), ds_.controller.memory.end(), 0.0);
-  std::fill(ds_.modes.begin(), ds_.modes.end(), SlipMode::kStuck);
+  // Joints with stick/slip events start stuck; the others slip (a law
+  // without modes ignores them; the hybrid law without friction levels has
+  // no events, and slipping its torque is B w_m).
+  for (int j = 0; j < layout_.n; ++j) ds_.modes[j] = friction_.has_events(j) ? SlipMode::kStuck : SlipMode::kPositive;
   if (cfg_.reference) return;
   ds_.ref_held.q.setZero();
   ds_.ref_held.qd.setZero();

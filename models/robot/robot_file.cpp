@@ -1,9 +1,14 @@
 #include "models/robot/robot_file.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
 #include <Eigen/Eigenvalues>
+
+#include "models/dynamics/backend.hpp"
 
 #ifndef PUMASIM_ROBOTS_DIR
 #error "PUMASIM_ROBOTS_DIR must be defined by the build"
@@ -14,6 +19,80 @@ namespace {
 
 Eigen::Vector3d vec3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
 
+std::string str(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
+// What a link's mass, centre of mass and inertia lack to be a rigid body's:
+// the key at fault, what it should be and what it is (key empty: nothing).
+// A body of no mass has no inertia and no centre of mass (a density >= 0
+// whose integral is zero is zero). With mass, the principal moments about the
+// centre of mass obey the triangle inequalities, each at most the sum of the
+// other two: with m >= 0 that is the pseudo-inertia matrix being positive
+// semi-definite (its 3 x 3 block about the centre of mass has eigenvalues
+// (I_j + I_k - I_i) / 2), the physical-consistency condition of Wensing, Kim
+// & Slotine, "Linear matrix inequalities for physically consistent inertial
+// parameter identification", IEEE RA-L 3(1), 2017. It implies a positive
+// semi-definite inertia (checked first, with its own message).
+struct Inconsistency {
+  std::string key, expected, got;
+};
+
+Inconsistency inertia_inconsistency(const JointParams& J, const Eigen::Vector3d& principal) {
+  if (J.mass == 0) {
+    if (!J.inertia.isZero(0)) {
+      return {"inertia", "zero inertia on a link of mass 0 (a body without mass has none)", "a non-zero inertia"};
+    }
+    if (!J.com.isZero(0)) {
+      return {"com", "[0, 0, 0] on a link of mass 0 (a body without mass has no centre of mass)",
+              "[" + str(J.com.x()) + ", " + str(J.com.y()) + ", " + str(J.com.z()) + "]"};
+    }
+    return {};
+  }
+  const double tol = 1e-12 * std::max(1.0, principal.sum());
+  for (int i = 0; i < 3; ++i) {
+    const double others = principal.sum() - principal[i];
+    if (principal[i] > others + tol) {
+      return {"inertia",
+              "principal moments about the centre of mass that obey the triangle inequalities, each at most the "
+              "sum of the other two (a rigid body's; Wensing, Kim & Slotine 2017)",
+              str(principal[i]) + " > " + str(others) + " (principal moments " + str(principal[0]) + ", " +
+                  str(principal[1]) + ", " + str(principal[2]) + " kg m^2)"};
+    }
+  }
+  return {};
+}
+
+// The inertia [Ixx, Iyy, Izz, Ixy, Iyz, Ixz] about the centre of mass:
+// positive semi-definite, and with the mass and centre of mass a rigid
+// body's (inertia_inconsistency) unless the joint says why it is not
+// (inconsistent_inertia = "why": a published set kept as published).
+void read_inertia(StrictTable& t, JointParams& J) {
+  const auto I = t.numbers("inertia", 6);
+  J.inertia << I[0], I[3], I[5],  //
+      I[3], I[1], I[4],           //
+      I[5], I[4], I[2];
+  const Eigen::Vector3d principal =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(J.inertia, Eigen::EigenvaluesOnly).eigenvalues();
+  const double min_eig = principal.minCoeff();
+  if (min_eig < -1e-12 * std::max(1.0, J.inertia.norm())) {
+    t.fail("inertia", "a positive semi-definite inertia [Ixx, Iyy, Izz, Ixy, Iyz, Ixz]",
+           "a matrix with eigenvalue " + std::to_string(min_eig));
+  }
+  const Inconsistency why = inertia_inconsistency(J, principal);
+  const std::string excuse = t.string_or("inconsistent_inertia", "");
+  if (!why.key.empty() && excuse.empty()) {
+    t.fail(why.key, why.expected + ", or inconsistent_inertia = \"why\" to keep a published set as published",
+           why.got);
+  }
+  if (why.key.empty() && t.has("inconsistent_inertia")) {
+    t.fail("inconsistent_inertia", "no such key on a link whose mass and inertia are a rigid body's",
+           "\"" + excuse + "\"");
+  }
+}
+
 JointParams read_joint(StrictTable& t) {
   JointParams J;
   J.a = t.number("a");
@@ -22,18 +101,7 @@ JointParams read_joint(StrictTable& t) {
   J.offset = t.number_or("offset", 0.0, {-2 * M_PI, 2 * M_PI});
   J.mass = t.number("mass", Bounds::non_negative());
   J.com = vec3(t.numbers("com", 3));
-  const auto I = t.numbers("inertia", 6);  // Ixx Iyy Izz Ixy Iyz Ixz
-  J.inertia << I[0], I[3], I[5],  //
-      I[3], I[1], I[4],           //
-      I[5], I[4], I[2];
-  const double min_eig = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(J.inertia,
-                                                                        Eigen::EigenvaluesOnly)
-                             .eigenvalues()
-                             .minCoeff();
-  if (min_eig < -1e-12 * std::max(1.0, J.inertia.norm())) {
-    t.fail("inertia", "a positive semi-definite inertia [Ixx, Iyy, Izz, Ixy, Iyz, Ixz]",
-           "a matrix with eigenvalue " + std::to_string(min_eig));
-  }
+  read_inertia(t, J);
   J.rotor_inertia = t.number("rotor_inertia", Bounds::non_negative());
   J.gear_ratio = t.number("gear_ratio");
   if (J.gear_ratio == 0.0) t.fail("gear_ratio", "a non-zero number", "0");
@@ -50,7 +118,43 @@ JointParams read_joint(StrictTable& t) {
   return J;
 }
 
+// Every joint has inertia at every pose when every rotor inertia is > 0 (H is
+// the links' positive semi-definite part plus diag(Z^2 Im)). Otherwise H is
+// checked at the zero pose and at each named pose: a joint that moves no
+// mass there (and has no rotor) is refused at its rotor_inertia.
+void check_joints_have_inertia(const RobotModel& model, std::vector<StrictTable>& joints) {
+  const auto has_rotor = [](const JointParams& J) { return J.rotor_inertia > 0; };
+  if (std::all_of(model.joints.begin(), model.joints.end(), has_rotor)) return;
+  std::vector<NamedPose> poses = model.poses;
+  poses.insert(poses.begin(), NamedPose{"zero (q = 0)", Eigen::VectorXd::Zero(model.dof())});
+  for (const NamedPose& p : poses) {
+    const int j = joint_without_inertia(model, p.q);
+    if (j < 0) continue;
+    const std::string J = std::to_string(j + 1);
+    joints[static_cast<std::size_t>(j)].fail(
+        "rotor_inertia", "a rotor inertia > 0, or links that give joint " + J + " inertia at every pose",
+        "0, and at pose " + p.name + " joint " + J + " moves no mass: the joint-space inertia H(q) is singular");
+  }
+}
+
 }  // namespace
+
+int joint_without_inertia(const RobotModel& model, const Eigen::VectorXd& q) {
+  const int n = model.dof();
+  Eigen::MatrixXd H(n, n);
+  make_backend("crba", model)->mass_matrix(q, H);
+  const double tol = 1e-12 * H.diagonal().cwiseAbs().maxCoeff();
+  // Cholesky in joint order: the first pivot that vanishes is the first joint
+  // whose motion, the earlier joints' aside, carries no inertia.
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);
+  for (int j = 0; j < n; ++j) {
+    const double d = H(j, j) - L.row(j).head(j).squaredNorm();
+    if (!(d > tol)) return j;
+    L(j, j) = std::sqrt(d);
+    for (int i = j + 1; i < n; ++i) L(i, j) = (H(i, j) - L.row(i).head(j).dot(L.row(j).head(j))) / L(j, j);
+  }
+  return -1;
+}
 
 std::string robots_dir() {
   if (const char* env = std::getenv("PUMASIM_ROBOTS_DIR"); env && *env) return env;
@@ -69,7 +173,8 @@ RobotModel load_robot_file(const std::string& path) {
   model.gravity = vec3(robot.numbers("gravity", 3));
   robot.finish();
 
-  for (StrictTable& jt : root.array_of_tables("joint")) model.joints.push_back(read_joint(jt));
+  std::vector<StrictTable> joints = root.array_of_tables("joint");
+  for (StrictTable& jt : joints) model.joints.push_back(read_joint(jt));
   if (model.joints.empty()) root.fail("joint", "at least one [[joint]] table", "none");
 
   if (auto poses = root.optional_table("poses")) {
@@ -80,6 +185,7 @@ RobotModel load_robot_file(const std::string& path) {
     poses->finish();
   }
   root.finish();
+  check_joints_have_inertia(model, joints);
   return model;
 }
 

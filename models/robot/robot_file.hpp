@@ -11,6 +11,11 @@ namespace pumasim {
 // Loads and checks a robot file; ConfigError naming file, line and key otherwise.
 RobotModel load_robot_file(const std::string& path);
 
+// The first joint (0-based) whose motion carries no inertia at pose q -- the
+// joint-space inertia H(q), rotor inertia included, is singular there -- or
+// -1 when H(q) is positive definite (to 1e-12 of its largest diagonal entry).
+int joint_without_inertia(const RobotModel& model, const Eigen::VectorXd& q);
+
 // `name_or_path` is a path when it contains '/' or ends in ".toml"
 // (is_robot_path); otherwise the shipped robot file <robots dir>/<name>.toml
 // ("puma560").

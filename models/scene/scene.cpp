@@ -334,6 +334,7 @@ std::vector<std::vector<double>> read_rows(StrictTable& t, std::string_view key,
     for (const toml::node& x : *r) {
       const auto d = StrictTable::as_double(x);
       if (!d) t.fail(key, expected, x.is_integer() ? "an integer beyond +-2^53" : "a row with a non-number");
+      if (!std::isfinite(*d)) t.fail(key, expected + ", each finite", "a row with " + std::to_string(*d));
       v.push_back(*d);
     }
     rows.push_back(v);
@@ -596,6 +597,25 @@ void write_initial(toml::table& doc, const PlantConfig& pc) {
   doc.insert("initial", write_entries(kInitialEntries, init, pc.n));
 }
 
+// Without rotor inertia on some simulated joint, H(q) can be singular (a
+// joint that moves no mass): checked at the run's start pose, the pose the
+// plant must first invert H at (the robot file checked its zero and named
+// poses; every rotor inertia > 0 makes H definite at every pose).
+void check_start_inertia(StrictTable& root, const Scene& sc, Plant& plant) {
+  const PlantConfig& pc = sc.plant;
+  const RobotModel sim = simulated_robot(pc.robot, pc.n, pc.q_held);
+  const auto has_rotor = [](const JointParams& J) { return J.rotor_inertia > 0; };
+  if (std::all_of(sim.joints.begin(), sim.joints.end(), has_rotor)) return;
+  std::vector<double> x(static_cast<std::size_t>(plant.size()));
+  plant.initial_state(x.data());
+  const int j = joint_without_inertia(sim, Eigen::Map<const Eigen::VectorXd>(x.data(), pc.n));
+  if (j < 0) return;
+  const std::string J = std::to_string(j + 1);
+  root.table("scene").fail(sc.rotor_inertia ? "robot" : "rotor_inertia",
+                           "a joint-space inertia H(q) that is positive definite at the start pose",
+                           "joint " + J + " moving no mass there and without rotor inertia: H(q) is singular");
+}
+
 }  // namespace
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
@@ -621,6 +641,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   root.finish();
   try {
     Plant check(pc);  // the last consistency checks
+    check_start_inertia(root, sc, check);
   } catch (const std::invalid_argument& e) {
     throw ConfigError(path + ": " + e.what());
   }

@@ -18,7 +18,12 @@ class FrictionBlock {
   explicit FrictionBlock(const std::vector<FrictionParams>& params) : p_(params) {
     for (const auto& f : p_) {
       needs_applied_ |= pumasim::needs_applied_torque(f.model);
-      joint_events_.push_back(has_stick_slip_events(f.model));
+      // With Fs = Fk = 0 the stick/slip law is its viscous part alone (a stuck
+      // joint would need an applied torque of exactly 0): no modes, no events.
+      // Events there chattered: a joint released at zero speed whose
+      // acceleration, through H, points against its slip direction re-sticks
+      // at once, and CVODE took 1e-23 s steps at t = 1e-20 s until its budget.
+      joint_events_.push_back(has_stick_slip_events(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0));
       events_ |= joint_events_.back();
     }
   }
