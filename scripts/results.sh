@@ -3,7 +3,8 @@
 # experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
 # back-ends inside the ODE, the stiff scenes), the stiffness tables, the
 # planning methods (experiments/planning.py), the observed orders, the test set,
-# the output-grid table (experiments/output_grid.py), and the report. A fresh run
+# the output-grid table (experiments/output_grid.py), the extreme runs
+# (tests/check_extreme_runs.py, results/reliability/), and the report. A fresh run
 # takes about 20 minutes on 2 cores (the report's header states how long its
 # last run took). Runs already complete under build/sweeps/ are skipped:
 # delete that folder for a fresh run. Uses a private copy of the pumasim binary, so that
@@ -31,6 +32,8 @@ done
 /usr/bin/python3 experiments/observed_order.py
 /usr/bin/python3 experiments/testset.py
 /usr/bin/python3 experiments/output_grid.py
+# extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
+/usr/bin/python3 tests/check_extreme_runs.py "$PUMASIM" --jobs "$jobs" --out results/reliability > /dev/null
 # rosenbrock4's error estimate against its true local error (README, "Is the instrument right?")
 for lam in -1050 -1e4; do
   build/release/bin/rosenbrock_local_error "$lam" > "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp"
