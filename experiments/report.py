@@ -172,6 +172,11 @@ def sweep_section(summary, folder, rel):
     if "rank_by" not in summary:
         raise SystemExit(f"report: {folder}/{name}_summary.json predates the error measures (no rank_by): "
                          f"re-run `experiments/sweep.py {summary['file']} --merge`")
+    try:  # the table and plots the summary was written with (a merge interrupted, or another one, leaves others)
+        pumasim_io.check_outputs(folder, summary)
+    except pumasim_io.OutputsMismatch as e:
+        raise SystemExit(f"report: {folder}/{name}_summary.json: {e}; re-run "
+                         f"`experiments/sweep.py {summary['file']} --merge`")
     rows = read_csv(os.path.join(folder, name + ".csv"))
     rank = summary["rank_by"]
     runit, rlabel, target = rank["unit"], rank["label"], rank["target"]

@@ -2,7 +2,7 @@
 """Sweeps: variants of a scene x integrators x settings, as independent runs.
 
     /usr/bin/python3 experiments/sweep.py experiments/sweeps/<name>.toml
-        [--jobs N] [--shard K/N] [--merge] [--reduced] [--out DIR]
+        [--jobs N] [--shard K/N] [--merge] [--reduced] [--out DIR] [--work DIR]
 
 A sweep file (experiments/sweeps/README.md has the format) names a base scene,
 its variants (scene overrides, as `pumasim run --set`), a reference and a
@@ -19,7 +19,15 @@ program (`pumasim --version`: revision, compiler, flags; for a build with
 uncommitted changes also the binary's own SHA-256). A changed scene, robot
 file, setting, horizon or program re-runs the run instead of reusing it, and
 --merge refuses a summary whose key no longer matches. An interrupted run
-leaves no summary and is redone.
+leaves no summary and is redone. A run is run under its lock
+(build/sweeps/<sweep>/<run>.lock, fcntl.flock, held by the sweep and the
+pumasim it starts until the summary is written; a killed process leaves only
+the empty file): two sweep.py processes on one sweep share its runs, each
+run run once, and one that finds a run locked does the others first, then
+waits and finds it complete. Each attempt first removes the run's folder an
+earlier attempt left, so a pumasim that crashes is reported as a crash, never
+read from an older folder. A folder that cannot be written (read-only, disk
+full) is an error naming it.
 
 Without --shard the runs go to N local processes (--jobs, default: the
 number of cores) and the results are merged at the end. --shard K/N takes only
@@ -43,7 +51,11 @@ variant, hollow markers below the reference's accuracy), <sweep>_cost.png when
 the sweep has several variants (the RHS evaluations each integrator needs to
 reach the target in the ranking measure, against the variant value) and
 <sweep>_summary.json for the report (with each variant's reference verdict:
-too weak where it differs from its check by more than target/100).
+too weak where it differs from its check by more than target/100). These are
+written to temporaries first and then renamed into place, the summary last,
+carrying each file's SHA-256: a merge killed at any instant leaves the
+earlier set or a summary that does not match the table beside it, which the
+report refuses (re-run --merge); two merges of one sweep take turns.
 Each worker pins its pumasim runs to a CPU of its own where the platform allows.
 
 --reduced (CI): the first and last variants, two settings per method, one
@@ -60,6 +72,7 @@ import math
 import os
 import re
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -359,40 +372,83 @@ def complete(work, run, key):
     return sm if sm.get("key") == key else None
 
 
-def execute(s, work, run, pinning=None):
+def _lock_run(work, rid, wait):
+    """The run's lock (work/<rid>.lock, beside its summary) once taken; None
+    if another process holds it and wait is False. SweepError naming the
+    path if the lock file cannot be made (a read-only or full folder)."""
+    lock = pumasim_io.FileLock(os.path.join(work, rid + ".lock"))
+    try:
+        os.makedirs(os.path.dirname(lock.path), exist_ok=True)
+        return lock if lock.acquire(wait) else None
+    except OSError as e:
+        raise SweepError(f"cannot write {e.filename or lock.path} (the run's lock): {e.strerror}")
+
+
+def _run_once(full, cmd, out, preexec, lock):
+    """One repeat of a run: the stats of the run folder that this pumasim
+    process wrote at out (the folder of an earlier attempt was removed
+    before it); SweepError if it wrote none (a crash) or bad input."""
+    try:
+        pumasim_io.remove_run_folder(out)
+    except (OSError, pumasim_io.RunFolderError) as e:
+        raise SweepError(f"cannot replace the earlier attempt's run folder: {e}")
+    p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT, preexec_fn=preexec, pass_fds=(lock.fd,))
+    if p.returncode == 2:  # bad input: the sweep file is wrong, not the method (or --out not writable)
+        raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
+    if not os.path.exists(out):  # pumasim itself failed (a crash, not a reported failure)
+        how = (f"killed by signal {signal.Signals(-p.returncode).name} ({signal.strsignal(-p.returncode)})"
+               if p.returncode < 0 else f"exit status {p.returncode}")
+        raise SweepError(f"{' '.join(full)}: {how}, no run folder written: {p.stderr.strip()}")
+    try:
+        return pumasim_io.read_stats(out)
+    except pumasim_io.RunFolderError as e:
+        raise SweepError(f"{' '.join(full)}: exit status {p.returncode}: {e}")
+
+
+def execute(s, work, run, pinning=None, wait=True):
     """Runs one run (all repeats, pinned to this worker's CPU when `pinning`
-    is given) unless complete with the same key; returns its summary."""
+    is given) unless complete with the same key; returns its summary, or
+    None if another process is running it and wait is False.
+
+    The run's lock (work/<rid>.lock) is held from the check for completeness
+    to the summary, by this process and each pumasim it starts (so a pumasim
+    left running by a killed sweep holds it until it ends): two sweeps never
+    run one run at once, and the second finds it complete. Each repeat first
+    removes the run's folder left by an earlier attempt (the sweep's own, as
+    pumasim wrote it), so the folder read is the one this pumasim wrote."""
     rid, variant, tag, name, opts, repeats = run
     summary_path = os.path.join(work, rid + ".json")
     key = run_key(s, run)
     if (sm := complete(work, run, key)) is not None:
         return sm
-    out = os.path.join(work, rid)
-    options = run_options(s, run)  # "--integrator", name, then the rest
-    cmd = [PUMASIM, "run", scene_file(s)] + options[:2] + ["--out", out, "--force"] + options[2:]
-    walls = []
-    full, preexec, cpu = pinning.wrap(cmd) if pinning else (cmd, None, None)
-    for _ in range(repeats):
-        p = subprocess.run(full, capture_output=True, text=True, cwd=ROOT, preexec_fn=preexec)
-        if p.returncode == 2:  # bad input: the sweep file is wrong, not the method
-            raise SweepError(f"{' '.join(cmd)}: {p.stderr.strip()}")
-        if not pumasim_io.has_stats(out):  # pumasim itself failed (a crash, not a reported failure)
-            raise SweepError(f"{' '.join(full)}: exit status {p.returncode}, no stats.json: {p.stderr.strip()}")
+    lock = _lock_run(work, rid, wait)
+    if lock is None:
+        return None
+    try:
+        if (sm := complete(work, run, key)) is not None:  # another process finished it meanwhile
+            return sm
+        out = os.path.join(work, rid)
+        options = run_options(s, run)  # "--integrator", name, then the rest
+        cmd = [PUMASIM, "run", scene_file(s)] + options[:2] + ["--out", out] + options[2:]
+        walls = []
+        full, preexec, cpu = pinning.wrap(cmd) if pinning else (cmd, None, None)
+        for _ in range(repeats):
+            st = _run_once(full, cmd, out, preexec, lock)
+            walls.append(st["wall_time_s"])
+            if not st["ok"]:
+                break
+        summary = {"id": rid, "variant": variant["label"], "value": variant["value"], "tag": tag,
+                   "integrator": name, "options": opts, "stats": st, "wall_times_s": walls,
+                   "wall_time_median_s": statistics.median(walls), "command": cmd,
+                   "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None,
+                   "key": key, "program": program_identity(PUMASIM)}
         try:
-            st = pumasim_io.read_stats(out)
-        except pumasim_io.RunFolderError as e:
-            raise SweepError(f"{' '.join(full)}: exit status {p.returncode}: {e}")
-        walls.append(st["wall_time_s"])
-        if not st["ok"]:
-            break
-    summary = {"id": rid, "variant": variant["label"], "value": variant["value"], "tag": tag,
-               "integrator": name, "options": opts, "stats": st, "wall_times_s": walls,
-               "wall_time_median_s": statistics.median(walls), "command": cmd,
-               "pinned_cpu": cpu, "pinning": pinning.method if cpu is not None else None,
-               "key": key, "program": program_identity(PUMASIM)}
-    os.makedirs(os.path.dirname(summary_path), exist_ok=True)
-    pumasim_io.write_json_atomic(summary_path, summary, indent=1)
-    return summary
+            pumasim_io.write_json_atomic(summary_path, summary, indent=1)
+        except OSError as e:
+            raise SweepError(f"cannot write the run's summary {summary_path}: {e.strerror}")
+        return summary
+    finally:
+        lock.release()
 
 
 def trajectory(run_dir):
@@ -756,7 +812,7 @@ def _plot_work_precision(plt, s, rows, agreement, colors, path):
     axes[0][1].legend(handles, labels, fontsize=6, ncol=2)
     fig.suptitle(f"{s['title']} — ranked by {rlabel}", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=80, format="png")  # path: a temporary (.tmp)
     plt.close(fig)
 
 
@@ -796,7 +852,7 @@ def _plot_cost(plt, s, plottable, colors, path):
     ax.grid(True, which="major", lw=0.3)
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=80, format="png")  # path: a temporary (.tmp)
     plt.close(fig)
 
 
@@ -827,7 +883,6 @@ def merge(s, work, out_dir):
     module's docstring describes them); returns the summary. SweepError if a
     run is missing, stale (another key) or a reference or check failed."""
     plt = _pyplot()
-    os.makedirs(out_dir, exist_ok=True)
     rows, agreement, weak = [], {}, {}
     summaries = _complete_summaries(s, work)
     for v in s["variants"]:
@@ -841,21 +896,89 @@ def merge(s, work, out_dir):
     pinning = _pinning(rows)
     limit = _distance_to_limit(s, work)
     held_creep = _creep_by_variant(s, work)
+    return _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning)
+
+
+def _merge_lock(work):
+    """The sweep's merge lock (work/.merge.lock) once taken, so that two
+    merges of one sweep write one after the other; None if the work folder is
+    not writable (a read-only copy of the runs): two merges at once then
+    still leave no undetected mismatch, as the summary carries its files'
+    hashes."""
+    lock = pumasim_io.FileLock(os.path.join(work, ".merge.lock"))
+    try:
+        return lock if lock.acquire() else None
+    except OSError:
+        return None
+
+
+def _write_csv(path, text):
+    with open(path, "w", newline="") as f:
+        f.write(text)
+
+
+def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning):
+    """Writes out_dir/<sweep>.csv, <sweep>.png, <sweep>_cost.png (several
+    variants only) and <sweep>_summary.json together
+    (pumasim_io.write_output_set: temporaries first, then renamed into place,
+    the summary last with the others' SHA-256, which the report checks), so
+    that a merge killed at any instant never leaves a table beside a summary
+    of another merge undetected; under the sweep's merge lock. Returns the
+    summary; SweepError naming the file that cannot be written."""
     name = s["name"]
-    pumasim_io.write_table(os.path.join(out_dir, name + ".csv"), rows,
-                           comments=_table_comments(s, agreement, weak, limit, held_creep, pinning),
-                           fmt=pumasim_io.fmt_6g)
+    text = pumasim_io.table_text(rows, comments=_table_comments(s, agreement, weak, limit, held_creep, pinning),
+                                 fmt=pumasim_io.fmt_6g)
     integrators = sorted({r["integrator"] for r in rows})
     colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
-    _plot_work_precision(plt, s, rows, agreement, colors, os.path.join(out_dir, name + ".png"))
     cost = _cost_to_target(s, rows, agreement, integrators)
     plottable = {n: [p for p in pts if _usable(p["value"])] for n, pts in cost.items()}
     has_cost_plot = len(s["variants"]) > 1 and any(len(p) > 1 for p in plottable.values())
+    files = {name + ".csv": lambda p: _write_csv(p, text),
+             name + ".png": lambda p: _plot_work_precision(plt, s, rows, agreement, colors, p)}
     if has_cost_plot:
-        _plot_cost(plt, s, plottable, colors, os.path.join(out_dir, name + "_cost.png"))
+        files[name + "_cost.png"] = lambda p: _plot_cost(plt, s, plottable, colors, p)
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
-    pumasim_io.write_json_atomic(os.path.join(out_dir, name + "_summary.json"), summary, indent=1)
-    return summary
+    lock = _merge_lock(work)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+        pumasim_io.remove_dead_temporaries(out_dir, [*files, name + "_summary.json"])
+        return pumasim_io.write_output_set(out_dir, files, name + "_summary.json", summary)
+    except OSError as e:
+        raise SweepError(f"merge: cannot write {e.filename}: {e.strerror}")
+    finally:
+        if lock:
+            lock.release()
+
+
+def _print_run(sm):
+    st = sm["stats"]
+    print(f"  {sm['id']}: {'ok' if st['ok'] else 'FAILED'} {sm['wall_time_median_s']:.3g} s, "
+          f"{st['rhs_evaluations']} RHS", flush=True)
+
+
+def run_share(s, work, runs, jobs):
+    """Runs the runs (of this share) that are not complete on `jobs` worker
+    threads. A run that another process (another sweep.py on the same sweep)
+    is running is left for later; when the others are done, this process
+    waits for it and then finds it complete (or runs it, if that process
+    ended without finishing it)."""
+    todo = [r for r in runs if complete(work, r, run_key(s, r)) is None]
+    print(f"{s['name']}: {len(runs)} runs in this share, {len(runs) - len(todo)} already complete", flush=True)
+    pinning = CpuPinning()
+    if todo and len(pinning.cpus) < min(jobs, len(todo)):
+        print(f"  note: {jobs} workers on {len(pinning.cpus) or 'no'} pinnable CPUs: "
+              "workers share CPUs, wall times are less comparable", flush=True)
+    busy = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        for run, sm in zip(todo, pool.map(lambda r: execute(s, work, r, pinning, wait=False), todo)):
+            if sm is None:
+                busy.append(run)
+            else:
+                _print_run(sm)
+        if busy:
+            print(f"  {len(busy)} runs being run by another process: waiting for them", flush=True)
+        for sm in pool.map(lambda r: execute(s, work, r, pinning, wait=True), busy):
+            _print_run(sm)
 
 
 def main():
@@ -866,10 +989,12 @@ def main():
     ap.add_argument("--merge", action="store_true", help="only merge finished runs into results/")
     ap.add_argument("--reduced", action="store_true", help="CI: a small version, results outside results/")
     ap.add_argument("--out", default=None, help="results folder (default results/<sweep>)")
+    ap.add_argument("--work", default=None, help="the runs' folder (default build/sweeps/<sweep>, "
+                    "with --reduced build/sweeps-reduced/<sweep>)")
     args = ap.parse_args()
     try:
         s = load_sweep(args.sweep, args.reduced)
-        work = os.path.join(ROOT, "build", "sweeps-reduced" if args.reduced else "sweeps", s["name"])
+        work = args.work or os.path.join(ROOT, "build", "sweeps-reduced" if args.reduced else "sweeps", s["name"])
         out_dir = args.out or os.path.join(ROOT, "build", "sweeps-reduced", "results", s["folder"]) \
             if args.reduced else (args.out or os.path.join(ROOT, "results", s["folder"]))
         runs = run_list(s)
@@ -881,18 +1006,7 @@ def main():
                 except (ValueError, AssertionError):
                     raise SweepError(f"--shard {args.shard}: expected K/N with 1 <= K <= N")
                 runs = [r for i, r in enumerate(runs) if i % n == k - 1]
-            todo = [r for r in runs if complete(work, r, run_key(s, r)) is None]
-            print(f"{s['name']}: {len(runs)} runs in this share, {len(runs) - len(todo)} already complete",
-                  flush=True)
-            pinning = CpuPinning()
-            if todo and len(pinning.cpus) < min(args.jobs, len(todo)):
-                print(f"  note: {args.jobs} workers on {len(pinning.cpus) or 'no'} pinnable CPUs: "
-                      "workers share CPUs, wall times are less comparable", flush=True)
-            with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-                for sm in pool.map(lambda r: execute(s, work, r, pinning), todo):
-                    st = sm["stats"]
-                    print(f"  {sm['id']}: {'ok' if st['ok'] else 'FAILED'} "
-                          f"{sm['wall_time_median_s']:.3g} s, {st['rhs_evaluations']} RHS", flush=True)
+            run_share(s, work, runs, args.jobs)
             if args.shard:
                 return 0
         summary = merge(s, work, out_dir)
@@ -901,6 +1015,9 @@ def main():
         return 0
     except SweepError as e:
         print(f"sweep: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:  # a file or folder that cannot be read or written: the path, not a traceback
+        print(f"sweep: {e.filename}: {e.strerror}", file=sys.stderr)
         return 2
 
 

@@ -3,6 +3,8 @@
     /usr/bin/python3 -m pytest -q tests/test_pumasim_io.py
 """
 import os
+import socket
+import subprocess
 import sys
 
 import numpy as np
@@ -160,3 +162,88 @@ def test_list_in_marker_adds_only_new_names(tmp_path):
                                                  "scene.resolved.toml", "path_xy.png"]
     pumasim_io.list_in_marker(str(tmp_path), ["x.png"])  # no run folder: nothing written
     assert not os.path.exists(tmp_path / pumasim_io.RUN_MARKER)
+
+
+def test_remove_run_folder_removes_only_a_pumasim_run_folder(tmp_path):
+    run = make_run(tmp_path / "run")
+    pumasim_io.remove_run_folder(run)
+    assert not os.path.exists(run)
+    pumasim_io.remove_run_folder(run)  # absent: nothing to do
+    # A file the marker does not list, or no marker: nothing removed.
+    run = make_run(tmp_path / "run")
+    (tmp_path / "run" / "mine.txt").write_text("x")
+    with pytest.raises(pumasim_io.RunFolderError, match="mine.txt, which pumasim did not write"):
+        pumasim_io.remove_run_folder(run)
+    assert sorted(os.listdir(run)) == sorted([*pumasim_io.RUN_FILES, pumasim_io.RUN_MARKER, "mine.txt"])
+    other = make_run(tmp_path / "other", marker=False)
+    with pytest.raises(pumasim_io.RunFolderError, match="not a pumasim run folder"):
+        pumasim_io.remove_run_folder(other)
+    # A removal killed half-way (files gone, the marker left; or only the empty folder): removable.
+    half = make_run(tmp_path / "half")
+    os.remove(os.path.join(half, "trajectory.csv"))
+    pumasim_io.remove_run_folder(half)
+    os.makedirs(half)
+    pumasim_io.remove_run_folder(half)
+    assert not os.path.exists(half)
+
+
+def test_an_output_set_is_checked_against_its_summary(tmp_path):
+    def writer(text):
+        return lambda p: _write(p, text)
+    (tmp_path / "notes.txt").write_text("not ours")
+    s = pumasim_io.write_output_set(str(tmp_path), {"a.csv": writer("1,2\n"), "a.png": writer("png")},
+                                    "a_summary.json", {"name": "a"})
+    assert pumasim_io.read_json(tmp_path / "a_summary.json") == s and s["name"] == "a"
+    pumasim_io.check_outputs(str(tmp_path), s)
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "a.png", "a_summary.json", "notes.txt"]
+    (tmp_path / "a.csv").write_text("1,3\n")  # another merge's table beside this summary
+    with pytest.raises(pumasim_io.OutputsMismatch, match="a.csv is not the file the summary describes"):
+        pumasim_io.check_outputs(str(tmp_path), s)
+    os.remove(tmp_path / "a.png")
+    with pytest.raises(pumasim_io.OutputsMismatch, match="a.png is missing"):
+        pumasim_io.check_outputs(str(tmp_path), {"outputs": {"a.png": ""}})
+    with pytest.raises(pumasim_io.OutputsMismatch, match="lists no hashes"):
+        pumasim_io.check_outputs(str(tmp_path), {"name": "a"})
+
+
+def test_a_failed_output_set_changes_nothing_and_dead_temporaries_go(tmp_path):
+    (tmp_path / "a.csv").write_text("old\n")
+
+    def fail(p):
+        _write(p, "half")
+        raise OSError(28, "No space left on device")
+    with pytest.raises(OSError) as e:
+        pumasim_io.write_output_set(str(tmp_path), {"a.csv": lambda p: _write(p, "new\n"), "a.png": fail},
+                                    "a_summary.json", {})
+    assert e.value.filename == str(tmp_path / "a.png")  # the file meant, not its temporary
+    assert os.listdir(tmp_path) == ["a.csv"] and (tmp_path / "a.csv").read_text() == "old\n"
+    # A killed writer's temporary (its process gone) is removed; a live one's and others' files stay.
+    dead = _dead_pid()
+    host = socket.gethostname()
+    for pid in (dead, os.getpid()):
+        (tmp_path / f".a.csv.{host}.{pid}.tmp").write_text("x")
+    (tmp_path / f".b.csv.{host}.{dead}.tmp").write_text("x")
+    pumasim_io.remove_dead_temporaries(str(tmp_path), ["a.csv"])
+    assert sorted(os.listdir(tmp_path)) == sorted(["a.csv", f".a.csv.{host}.{os.getpid()}.tmp",
+                                                   f".b.csv.{host}.{dead}.tmp"])
+
+
+def _write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def _dead_pid():
+    """The process id of a process that has ended."""
+    p = subprocess.Popen(["true"])
+    p.wait()
+    return p.pid
+
+
+def test_a_file_lock_excludes_another_holder_until_released(tmp_path):
+    a, b = pumasim_io.FileLock(str(tmp_path / "x.lock")), pumasim_io.FileLock(str(tmp_path / "x.lock"))
+    assert a.acquire(wait=False)
+    assert not b.acquire(wait=False)
+    a.release()
+    assert b.acquire(wait=False)
+    b.release()
