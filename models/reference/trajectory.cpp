@@ -373,7 +373,10 @@ bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<doubl
   if (ik_.method == IkMethod::kNumerical) {
     q = near;
     for (int j = n_; j < 6; ++j) q[j] = q_held_[j];
-    return dls_ik(robot_, n_, p, n_ == 6 ? &R_fixed_ : nullptr, q).converged;
+    if (!dls_ik(robot_, n_, p, n_ == 6 ? &R_fixed_ : nullptr, q).converged) return false;
+    // Revolute joints: the same pose at every 2 pi; the representative nearest `near`.
+    for (int j = 0; j < n_; ++j) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+    return true;
   }
   q = q_held_;
   bool ok;
