@@ -130,7 +130,8 @@ class Reference {
   int segment_after(double t) const;
   // The instants where the reference is not infinitely differentiable in t,
   // sorted: the timing law's breakpoints and the times at which it crosses the
-  // path's curvature jumps (Cartesian), or the spline's knots (joint space).
+  // path's curvature jumps (Cartesian) or the joint curve's knots, or the
+  // spline's knots (joint-space interpolation of a path).
   // The plant makes them time events, so that no integrator steps across one.
   const std::vector<double>& breakpoints() const { return breakpoints_; }
   // The first breakpoint strictly after t (+inf if none).
