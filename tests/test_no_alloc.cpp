@@ -100,6 +100,31 @@ TEST(NoAllocation, PlantRightHandSide) {
   }
 }
 
+// The numerical inverse kinematics (damped least squares in the reference,
+// evaluated inside f) allocates nothing either.
+TEST(NoAllocation, PlantRightHandSideWithNumericalInverseKinematics) {
+  for (const std::string name : {"paper_slow", "paper_slow_6dof"}) {
+    std::vector<std::string> unset = {"reference.arm", "reference.elbow"};
+    if (name == "paper_slow_6dof") unset.push_back("reference.wrist");
+    const std::string path = std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml";
+    // Started at the closed form's first point (the default guess, mid-range,
+    // finds another wrist branch, which leaves joint 4's range on this path).
+    ReferenceSample start;
+    load_scene(path).plant.reference->eval(0.0, start);
+    std::string guess = "reference.ik_guess=[";
+    for (int j = 0; j < 6; ++j) guess += (j ? ", " : "") + std::to_string(start.q[j]);
+    if (name == "paper_slow") guess = "reference.ik_guess=[" + std::to_string(start.q[0]) + ", " +
+                                      std::to_string(start.q[1]) + ", " + std::to_string(start.q[2]);
+    Plant plant(load_scene(path, {"reference.ik=\"numerical\"", guess + "]"}, unset).plant);
+    std::vector<double> x(plant.size()), f(plant.size());
+    plant.initial_state(x.data());
+    plant.rhs(0.0, x.data(), f.data());
+    const long before = g_allocations.load();
+    for (int k = 1; k <= 5; ++k) plant.rhs(0.37 * k, x.data(), f.data());
+    EXPECT_EQ(g_allocations.load() - before, 0) << name;
+  }
+}
+
 struct EigenGuard {
   const RobotModel& m;
   template <template <class, int> class Algo>

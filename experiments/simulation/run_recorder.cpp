@@ -130,7 +130,7 @@ void RunRecorder::path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums) {
   const double e = (p - ref.p).norm();
   // Deviation: the distance to the geometric path, whatever the timing
   // (a joint-space interpolation leaves the path between via-points).
-  const double dev = cfg_.reference->path().distance(p);
+  const double dev = cfg_.reference->deviation(p);
   csv.num(ref.p.x()), csv.num(ref.p.y()), csv.num(ref.p.z()), csv.num(1e3 * e), csv.num(1e3 * dev);
   path_error_.push_back(e);
   path_deviation_.push_back(dev);

@@ -179,7 +179,7 @@ AccelerationBounds TimeOptimalPlanner::admissible(const PathDynamics& d, int i, 
 }
 
 Timing TimeOptimalPlanner::plan(const Reference& ref, int grid_points) const {
-  const double L = ref.path().length();
+  const double L = ref.length();
   std::vector<double> s(grid_points + 1);
   for (int k = 0; k <= grid_points; ++k) s[k] = L * k / grid_points;
   const PathDynamics d = path_dynamics(ref, s);

@@ -1,10 +1,13 @@
 #include "models/reference/trajectory.hpp"
 
+#include "models/reference/numerical_ik.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 namespace pumasim {
@@ -106,7 +109,7 @@ double Path::distance(const Eigen::Vector3d& p) const {
 
 Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held,
                      PumaConfig config, Eigen::Matrix3d R_fixed, Path path, Timing timing,
-                     Interpolation interpolation, int via_segments)
+                     Interpolation interpolation, int via_segments, IkSettings ik)
     : robot_(std::move(robot)),
       n_(n),
       q_held_(q_held),
@@ -114,31 +117,85 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
       R_fixed_(R_fixed),
       path_(std::move(path)),
       timing_(std::move(timing)),
-      interp_(interpolation) {
-  if (const std::string why = puma_ik_unsupported(robot_); !why.empty()) {
-    throw std::invalid_argument(why);
+      interp_(interpolation),
+      ik_(std::move(ik)) {
+  if (ik_.method == IkMethod::kClosedForm) {
+    if (const std::string why = puma_ik_unsupported(robot_); !why.empty()) {
+      throw std::invalid_argument(why);
+    }
+    if (n_ != 3 && n_ != 6) throw std::invalid_argument("reference: expected 3 or 6 joints");
+  } else if (n_ < 1 || n_ > robot_.dof() || n_ == 4 || n_ == 5) {
+    throw std::invalid_argument("reference: a Cartesian path needs 1 to 3 simulated joints (the position) or 6 "
+                                "(position and orientation), not " + std::to_string(n_));
   }
-  if (n_ != 3 && n_ != 6) throw std::invalid_argument("reference: expected 3 or 6 joints");
-  // The branch table: the first point's angles (the configured wrist
-  // solution) nearest the middle of each range, then each point's solution
-  // and angles nearest the previous one's. 2000 points: a few
-  // ms once per scene. A point out of reach, a joint leaving its range or
-  // moving more than pi/4 between two points (a pass close to a singularity)
-  // is reported here, before any run.
+  build_branch_table();
+  if (interp_ != Interpolation::kCartesian) {
+    if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
+    build_joint_spline(via_segments);
+    breakpoints_.assign(knots_.begin() + 1, knots_.end());
+  } else {
+    breakpoints_ = timing_.breakpoints();
+    for (double s : path_->breaks()) breakpoints_.push_back(timing_.time_at(s));
+  }
+  finish_breakpoints();
+}
+
+Reference::Reference(RobotModel robot, Eigen::Matrix<double, 6, 1> q_held, JointCurve curve, Timing timing)
+    : robot_(std::move(robot)),
+      n_(curve.joints()),
+      q_held_(q_held),
+      R_fixed_(Eigen::Matrix3d::Identity()),
+      curve_(std::move(curve)),
+      timing_(std::move(timing)),
+      interp_(curve_->kind() == JointCurve::Kind::kCubic ? Interpolation::kJointCubic
+                                                         : Interpolation::kJointQuintic) {
+  if (n_ > robot_.dof()) throw std::invalid_argument("reference: the joint curve has more joints than the robot");
+  if (!(std::abs(timing_.length() - curve_->length()) <= 1e-9 * curve_->length())) {
+    throw std::invalid_argument("reference: the timing law does not run along the whole curve");
+  }
+  check_curve_limits();
+  // The curve's knots, at the times the timing law reaches them (the given
+  // times themselves when it is the identity).
+  const bool identity = timing_.kind() == "unit-speed";
+  breakpoints_ = timing_.breakpoints();
+  for (double x : curve_->breaks()) breakpoints_.push_back(identity ? x : timing_.time_at(x));
+  finish_breakpoints();
+  build_trace();
+}
+
+const Path& Reference::path() const {
+  if (!path_) throw std::logic_error("reference: a joint curve has no Cartesian path");
+  return *path_;
+}
+
+std::string Reference::point_at(const Eigen::Vector3d& p, double s) const {
+  return "the path point (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+         std::to_string(p.z()) + ") m at s = " + std::to_string(s) + " m (t = " +
+         std::to_string(timing_.time_at(std::clamp(s, 0.0, timing_.length()))) + " s)";
+}
+
+// The branch table: the first point's angles (closed form: the configured
+// wrist solution nearest the middle of each range; numerical: from the guess,
+// default the middle of each range), then each point's solution and angles
+// nearest the previous one's. 2000 points: a few ms once per scene. A point
+// out of reach, a joint leaving its range or moving more than pi/4 between
+// two points (a pass close to a singularity) is reported here, before any run.
+void Reference::build_branch_table() {
   const int points = 2000;
-  const double L = path_.length();
-  Eigen::Matrix<double, 6, 1> prev;
-  for (int j = 0; j < 6; ++j) prev[j] = 0.5 * (robot_.joints[j].q_min + robot_.joints[j].q_max);
+  const double L = path_->length();
+  Eigen::Matrix<double, 6, 1> prev = q_held_;
+  for (int j = 0; j < robot_.dof(); ++j) prev[j] = 0.5 * (robot_.joints[j].q_min + robot_.joints[j].q_max);
+  if (ik_.method == IkMethod::kNumerical && ik_.guess) {
+    for (int j = 0; j < n_; ++j) prev[j] = (*ik_.guess)[j];
+  }
   branch_.reserve(points);
   for (int k = 0; k < points; ++k) {
     const double s = L * k / (points - 1);
     Eigen::Vector3d p, dp, ddp;
-    path_.eval(s, p, dp, ddp);
+    path_->eval(s, p, dp, ddp);
     Eigen::Matrix<double, 6, 1> q;
     if (!joint_angles(p, prev, k > 0, q)) {
-      throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
-                               std::to_string(p.y()) + ", " + std::to_string(p.z()) + ") m at s = " +
-                               std::to_string(s) + " m is out of reach");
+      throw std::runtime_error("reference: " + point_at(p, s) + " is out of reach");
     }
     for (int j = 0; j < n_; ++j) {
       const JointParams& J = robot_.joints[j];
@@ -157,14 +214,61 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
     branch_.push_back(q);
     prev = q;
   }
-  if (interp_ != Interpolation::kCartesian) {
-    if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
-    build_joint_spline(via_segments);
-    breakpoints_.assign(knots_.begin() + 1, knots_.end());
-  } else {
-    breakpoints_ = timing_.breakpoints();
-    for (double s : path_.breaks()) breakpoints_.push_back(timing_.time_at(s));
+}
+
+// A joint curve within the joints' limits: at its knots and 16 points per
+// piece (a spline may overshoot between knots; a narrower excursion between
+// the samples is not caught).
+void Reference::check_curve_limits() const {
+  const std::vector<double>& x = curve_->knots();
+  for (std::size_t k = 0; k + 1 < x.size(); ++k) {
+    for (int i = 0; i <= 16; ++i) {
+      const double xi = i == 16 ? x[k + 1] : x[k] + (x[k + 1] - x[k]) * i / 16;
+      Eigen::Matrix<double, 6, 1> q, dq, ddq;
+      curve_->eval_piece(static_cast<int>(k), xi, q, dq, ddq);
+      for (int j = 0; j < n_; ++j) {
+        const JointParams& J = robot_.joints[j];
+        if (q[j] < J.q_min - 1e-9 || q[j] > J.q_max + 1e-9) {
+          throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " at " + std::to_string(q[j]) +
+                                   " rad leaves its limits [" + std::to_string(J.q_min) + ", " +
+                                   std::to_string(J.q_max) + "] at the points' time " + std::to_string(xi) +
+                                   " s of the joint curve");
+        }
+      }
+    }
   }
+}
+
+// The flange's polyline along a joint curve, for deviation().
+void Reference::build_trace() {
+  const std::vector<double>& x = curve_->knots();
+  const double L = curve_->length();
+  Eigen::Matrix<double, 6, 1> q = q_held_, c, dc, ddc;
+  for (std::size_t k = 0; k + 1 < x.size(); ++k) {
+    const int sub = std::max(1, static_cast<int>(std::ceil(4000 * (x[k + 1] - x[k]) / L)));
+    for (int i = 0; i < sub; ++i) {
+      curve_->eval_piece(static_cast<int>(k), x[k] + (x[k + 1] - x[k]) * i / sub, c, dc, ddc);
+      for (int j = 0; j < n_; ++j) q[j] = c[j];
+      trace_.push_back(position(q));
+    }
+  }
+  for (int j = 0; j < n_; ++j) q[j] = curve_->points().back()[j];
+  trace_.push_back(position(q));
+}
+
+double Reference::deviation(const Eigen::Vector3d& p) const {
+  if (path_) return path_->distance(p);
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k + 1 < trace_.size(); ++k) {
+    const Eigen::Vector3d a = trace_[k], d = trace_[k + 1] - a;
+    const double len2 = d.squaredNorm();
+    const double u = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (p - a - u * d).norm());
+  }
+  return best;
+}
+
+void Reference::finish_breakpoints() {
   std::sort(breakpoints_.begin(), breakpoints_.end());
   // One instant for breakpoints that coincide to rounding (a piece of the
   // timing law ending where a path piece does).
@@ -175,11 +279,12 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
   for (std::size_t k = 0; k <= breakpoints_.size(); ++k) {
     const double a = k == 0 ? 0.0 : breakpoints_[k - 1];
     const double mid = k < breakpoints_.size() ? 0.5 * (a + breakpoints_[k]) : a + 1.0;
-    if (interp_ == Interpolation::kCartesian) {
+    if (curve_ || interp_ == Interpolation::kCartesian) {
       double s, sd, sdd;
       timing_.eval(mid, s, sd, sdd);
       seg_timing_.push_back(timing_.piece(mid));
-      seg_path_.push_back(path_.piece(std::clamp(s, 0.0, path_.length())));
+      seg_path_.push_back(curve_ ? curve_->piece(std::clamp(s, 0.0, curve_->length()))
+                                 : path_->piece(std::clamp(s, 0.0, path_->length())));
     } else {
       const auto after = std::upper_bound(knots_.begin(), knots_.end(), std::min(mid, timing_.duration()));
       seg_timing_.push_back(static_cast<int>(std::clamp<std::ptrdiff_t>(after - knots_.begin() - 1, 0,
@@ -205,55 +310,30 @@ void Reference::build_joint_spline(int M) {
   knots_.resize(M + 1);
   std::vector<ReferenceSample> via(M + 1);
   for (int k = 0; k <= M; ++k) {
-    knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_.length() * k / M);
+    knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_->length() * k / M);
     eval_cartesian(knots_[k], via[k], -1);
   }
   for (int k = 0; k < M; ++k) {
     if (!(knots_[k + 1] > knots_[k])) throw std::invalid_argument("reference: via-points at the same time");
   }
   coef_.assign(M, Eigen::Matrix<double, 6, 6>::Zero());
+  std::vector<double> y(M + 1);
   for (int j = 0; j < n_; ++j) {
+    std::vector<PieceCoefficients> c(M);
     if (interp_ == Interpolation::kJointQuintic) {
       // Hermite quintic on each piece: q, qd, qdd at both ends.
       for (int k = 0; k < M; ++k) {
-        const double h = knots_[k + 1] - knots_[k];
-        const double q0 = via[k].q[j], v0 = via[k].qd[j], a0 = via[k].qdd[j];
-        const double q1 = via[k + 1].q[j], v1 = via[k + 1].qd[j], a1 = via[k + 1].qdd[j];
-        auto& c = coef_[k];
-        c(j, 0) = q0, c(j, 1) = v0, c(j, 2) = a0 / 2;
-        c(j, 3) = (20 * (q1 - q0) - (8 * v1 + 12 * v0) * h - (3 * a0 - a1) * h * h) / (2 * h * h * h);
-        c(j, 4) = (30 * (q0 - q1) + (14 * v1 + 16 * v0) * h + (3 * a0 - 2 * a1) * h * h) / (2 * std::pow(h, 4));
-        c(j, 5) = (12 * (q1 - q0) - 6 * (v1 + v0) * h + (a1 - a0) * h * h) / (2 * std::pow(h, 5));
+        c[k] = quintic_hermite(knots_[k + 1] - knots_[k], via[k].q[j], via[k].qd[j], via[k].qdd[j],
+                               via[k + 1].q[j], via[k + 1].qd[j], via[k + 1].qdd[j]);
       }
     } else {
       // C2 cubic spline through the via-points, its end slopes clamped to the
-      // reference's end speeds: the knots' second derivatives m solve a
-      // tridiagonal system (Thomas algorithm; diagonally dominant).
-      std::vector<double> lo(M + 1), di(M + 1), up(M + 1), r(M + 1), m(M + 1);
-      auto hk = [&](int k) { return knots_[k + 1] - knots_[k]; };
-      auto slope = [&](int k) { return (via[k + 1].q[j] - via[k].q[j]) / hk(k); };
-      di[0] = 2 * hk(0), up[0] = hk(0), r[0] = 6 * (slope(0) - via[0].qd[j]);
-      for (int k = 1; k < M; ++k) {
-        lo[k] = hk(k - 1), di[k] = 2 * (hk(k - 1) + hk(k)), up[k] = hk(k);
-        r[k] = 6 * (slope(k) - slope(k - 1));
-      }
-      lo[M] = hk(M - 1), di[M] = 2 * hk(M - 1), r[M] = 6 * (via[M].qd[j] - slope(M - 1));
-      for (int k = 1; k <= M; ++k) {
-        const double w = lo[k] / di[k - 1];
-        di[k] -= w * up[k - 1];
-        r[k] -= w * r[k - 1];
-      }
-      m[M] = r[M] / di[M];
-      for (int k = M - 1; k >= 0; --k) m[k] = (r[k] - up[k] * m[k + 1]) / di[k];
-      for (int k = 0; k < M; ++k) {
-        const double h = hk(k);
-        auto& c = coef_[k];
-        c(j, 0) = via[k].q[j];
-        c(j, 1) = slope(k) - h * (2 * m[k] + m[k + 1]) / 6;
-        c(j, 2) = m[k] / 2;
-        c(j, 3) = (m[k + 1] - m[k]) / (6 * h);
-      }
+      // reference's end speeds.
+      for (int k = 0; k <= M; ++k) y[k] = via[k].q[j];
+      c = clamped_cubic_spline(knots_, y, via[0].qd[j], via[M].qd[j]);
     }
+    for (int k = 0; k < M; ++k)
+      for (int e = 0; e < 6; ++e) coef_[k](j, e) = c[k][static_cast<std::size_t>(e)];
   }
 }
 
@@ -290,6 +370,14 @@ void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bo
 
 bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near,
                              bool track_wrist, Eigen::Matrix<double, 6, 1>& q) const {
+  if (ik_.method == IkMethod::kNumerical) {
+    q = near;
+    for (int j = n_; j < 6; ++j) q[j] = q_held_[j];
+    if (!dls_ik(robot_, n_, p, n_ == 6 ? &R_fixed_ : nullptr, q).converged) return false;
+    // Revolute joints: the same pose at every 2 pi; the representative nearest `near`.
+    for (int j = 0; j < n_; ++j) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+    return true;
+  }
   q = q_held_;
   bool ok;
   if (n_ == 3) {
@@ -339,7 +427,9 @@ void Reference::eval(double t, ReferenceSample& out, int segment, bool extend) c
                        ((segment == 0 || t >= breakpoints_[static_cast<std::size_t>(segment - 1)] - seg_tol_) &&
                         (segment == m || t <= breakpoints_[static_cast<std::size_t>(segment)] + seg_tol_)));
   if (!inside) segment = -1;
-  if (interp_ == Interpolation::kCartesian) {
+  if (curve_) {
+    eval_curve(t, out, segment);
+  } else if (interp_ == Interpolation::kCartesian) {
     eval_cartesian(t, out, segment);
   } else {
     eval_joint_space(t, out, segment, extend);
@@ -351,16 +441,16 @@ void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) cons
   Eigen::Vector3d p, dp, ddp;
   if (segment < 0) {
     timing_.eval(t, s, sd, sdd);
-    path_.eval(s, p, dp, ddp);
+    path_->eval(s, p, dp, ddp);
   } else {
     timing_.eval_piece(seg_timing_[static_cast<std::size_t>(segment)], t, s, sd, sdd);
-    path_.eval_piece(seg_path_[static_cast<std::size_t>(segment)], s, p, dp, ddp);
+    path_->eval_piece(seg_path_[static_cast<std::size_t>(segment)], s, p, dp, ddp);
   }
   out.p = p;
   out.v = dp * sd;
   const Eigen::Vector3d a = ddp * sd * sd + dp * sdd;
   // Joint positions: the IK's branch nearest the table's angles at this s.
-  const double L = path_.length();
+  const double L = path_->length();
   const auto k = static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
   Eigen::Matrix<double, 6, 1> q;
   const bool ok = joint_angles(p, branch_[k], true, q);
@@ -369,22 +459,41 @@ void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) cons
                              std::to_string(p.y()) + ", " + std::to_string(p.z()) +
                              ") m at t = " + std::to_string(t) + " s is out of reach");
   }
+  Eigen::Matrix<double, 6, 1> qd, qdd;
+  cartesian_rates(q, out.v, a, qd, qdd);
+  out.q = q;
+  out.qd = qd;
+  out.qdd = qdd;
+}
+
+void Reference::cartesian_rates(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Vector3d& v,
+                                const Eigen::Vector3d& a, Eigen::Matrix<double, 6, 1>& qd,
+                                Eigen::Matrix<double, 6, 1>& qdd) const {
   // Rates: J qd = [v; 0] and J qdd = [a; 0] - Jdot qd, over the simulated joints
   // (n = 3: position rows only). Jdot qd exactly: the Jacobian on dual numbers
   // q + eps qd (a central difference here put noise of about 1e-10 into qdd,
   // which a tight-tolerance reference run could not get past).
   Eigen::Matrix<double, 6, 6> J;
   jacobian(q, J);
-  const int rows = n_ == 3 ? 3 : 6;
   Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-  rhs.head<3>() = out.v;
-  Eigen::Matrix<double, 6, 1> qd = Eigen::Matrix<double, 6, 1>::Zero();
-  Eigen::Matrix<double, 6, 1> qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  rhs.head<3>() = v;
+  qd.setZero();
+  qdd.setZero();
   Eigen::Matrix<double, 6, 6> Jdot;
-  if (rows == 3) {
+  if (n_ < 3) {
+    // Fewer joints than position rows: least squares on the normal
+    // equations (exact when v and a are tangent to what the joints can
+    // reach, as along a reachable path); unused joints' equations q_j = 0.
+    Eigen::Matrix<double, 6, 6> A = J.topRows<3>().transpose() * J.topRows<3>();
+    for (int j = n_; j < 6; ++j) A(j, j) = 1.0;
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
+    qd = ldlt.solve(J.topRows<3>().transpose() * v);
+    jacobian_rate(q, qd, Jdot);
+    qdd = ldlt.solve(J.topRows<3>().transpose() * (a - Jdot.topRows<3>() * qd));
+  } else if (n_ == 3) {
     const Eigen::Matrix3d A = J.topLeftCorner<3, 3>();
     const Eigen::PartialPivLU<Eigen::Matrix3d> lu(A);
-    qd.head<3>() = lu.solve(out.v);
+    qd.head<3>() = lu.solve(v);
     jacobian_rate(q, qd, Jdot);
     const Eigen::Vector3d Jdot_qd = Jdot.topLeftCorner<3, 3>() * qd.head<3>();
     qdd.head<3>() = lu.solve(a - Jdot_qd);
@@ -396,9 +505,27 @@ void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) cons
     acc.head<3>() = a;
     qdd = lu.solve(acc - Jdot * qd);
   }
-  out.q = q;
-  out.qd = qd;
-  out.qdd = qdd;
+}
+
+void Reference::eval_curve(double t, ReferenceSample& out, int segment) const {
+  double s, sd, sdd;
+  Eigen::Matrix<double, 6, 1> c, dc, ddc;
+  if (segment < 0) {
+    timing_.eval(t, s, sd, sdd);
+    curve_->eval(s, c, dc, ddc);
+  } else {
+    timing_.eval_piece(seg_timing_[static_cast<std::size_t>(segment)], t, s, sd, sdd);
+    curve_->eval_piece(seg_path_[static_cast<std::size_t>(segment)], s, c, dc, ddc);
+  }
+  // q(t) = c(s(t)): qd = c' sd, qdd = c'' sd^2 + c' sdd (entries beyond n are 0).
+  out.q = q_held_;
+  for (int j = 0; j < n_; ++j) out.q[j] = c[j];
+  out.qd = dc * sd;
+  out.qdd = ddc * (sd * sd) + dc * sdd;
+  Eigen::Matrix<double, 6, 6> J;
+  jacobian(out.q, J);
+  out.p = position(out.q);
+  out.v = J.topRows<3>() * out.qd;
 }
 
 }  // namespace pumasim

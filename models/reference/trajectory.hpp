@@ -1,6 +1,9 @@
 // Reference trajectories: a Cartesian path of lines and arcs in a horizontal
 // plane, a speed profile along it, and the joint references q_ref, qd_ref and
-// qdd_ref that the PUMA's closed-form inverse kinematics gives for it.
+// qdd_ref that the inverse kinematics gives for it (the PUMA's closed form,
+// or damped least squares for any arm: numerical_ik.hpp); or a curve in
+// joint space (joint_curve.hpp: splines through given points) with a timing
+// law along its own parameter.
 //
 // The path is drawn like a turtle: a start point and heading in the plane
 // z = height (base frame), then segments that go straight or turn along an arc,
@@ -16,6 +19,9 @@
 
 #include "models/robot/kinematics.hpp"
 #include "models/dynamics/robot_model.hpp"
+#include <optional>
+
+#include "models/reference/joint_curve.hpp"
 #include "models/reference/timing.hpp"
 
 namespace pumasim {
@@ -63,24 +69,51 @@ enum class Interpolation { kCartesian, kJointCubic, kJointQuintic };
 // "cartesian", "joint-cubic", "joint-quintic" (the scene's names).
 const char* to_string(Interpolation i);
 
+// How the joint angles of a Cartesian path are found: the PUMA's closed form,
+// or damped least squares on the geometric Jacobian (any arm), warm-started
+// from the solution at the nearest point of a table built by continuation
+// along the path from `guess` (default: the middle of each joint's range).
+enum class IkMethod { kClosedForm, kNumerical };
+struct IkSettings {
+  IkMethod method = IkMethod::kClosedForm;
+  std::optional<Eigen::Matrix<double, 6, 1>> guess;
+};
+
 struct ReferenceSample {
   Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
   Eigen::Vector3d p, v;                    // Cartesian position [m], velocity [m/s]
 };
 
 // Joint references for the first n joints of `robot`; the others are held at
-// q_held. n = 3: the wrist centre follows the path; n = 6: the flange also
-// keeps the orientation R_fixed.
+// q_held. A Cartesian path: n <= 3, the flange origin (the PUMA's wrist
+// centre) follows the path; n = 6: the flange also keeps the orientation
+// R_fixed (closed form: n = 3 or 6 on a PUMA-structured arm; n = 4, 5 are
+// refused: redundant for the position, short of the orientation). A joint
+// curve: q(t) = curve(s(t)), s the timing law along the curve's parameter.
 class Reference {
  public:
   // via_segments: with joint-space interpolation, the via-points split the
   // path into this many pieces of equal length (>= 1).
   Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held, PumaConfig config,
             Eigen::Matrix3d R_fixed, Path path, Timing timing,
-            Interpolation interpolation = Interpolation::kCartesian, int via_segments = 0);
-  const Path& path() const { return path_; }
+            Interpolation interpolation = Interpolation::kCartesian, int via_segments = 0,
+            IkSettings ik = {});
+  // A joint-space reference: the curve's joints are the first n (n = curve.joints()).
+  Reference(RobotModel robot, Eigen::Matrix<double, 6, 1> q_held, JointCurve curve, Timing timing);
+  bool has_path() const { return path_.has_value(); }
+  const Path& path() const;  // std::logic_error for a joint curve
+  const JointCurve* curve() const { return curve_ ? &*curve_ : nullptr; }
+  // The length of what the timing law runs along: the path [m], or the
+  // curve's parameter range.
+  double length() const { return path_ ? path_->length() : curve_->length(); }
+  // Distance from p to the geometric path [m]: exact for a path of lines and
+  // arcs; for a joint curve, to the polyline through the flange positions at
+  // the curve's knots and at least 4000 points in all, equally spaced in the
+  // parameter within each piece.
+  double deviation(const Eigen::Vector3d& p) const;
   const Timing& timing() const { return timing_; }
   Interpolation interpolation() const { return interp_; }
+  IkMethod ik_method() const { return ik_.method; }
   int simulated_joints() const { return n_; }
   // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
   // With a segment (the smooth piece between breakpoints segment - 1 and
@@ -97,7 +130,8 @@ class Reference {
   int segment_after(double t) const;
   // The instants where the reference is not infinitely differentiable in t,
   // sorted: the timing law's breakpoints and the times at which it crosses the
-  // path's curvature jumps (Cartesian), or the spline's knots (joint space).
+  // path's curvature jumps (Cartesian) or the joint curve's knots, or the
+  // spline's knots (joint-space interpolation of a path).
   // The plant makes them time events, so that no integrator steps across one.
   const std::vector<double>& breakpoints() const { return breakpoints_; }
   // The first breakpoint strictly after t (+inf if none).
@@ -108,7 +142,17 @@ class Reference {
  private:
   void eval_cartesian(double t, ReferenceSample& out, int segment) const;
   void eval_joint_space(double t, ReferenceSample& out, int segment, bool extend) const;
+  void eval_curve(double t, ReferenceSample& out, int segment) const;
   void build_joint_spline(int segments);
+  void build_branch_table();
+  void check_curve_limits() const;
+  void build_trace();
+  // The breakpoints (sorted, merged to rounding) and each segment's pieces.
+  void finish_breakpoints();
+  // Joint rates from the Cartesian velocity v and acceleration a at q
+  // (J qd = [v; 0], J qdd = [a; 0] - Jdot qd; least squares for n < 3).
+  void cartesian_rates(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Vector3d& v, const Eigen::Vector3d& a,
+                       Eigen::Matrix<double, 6, 1>& qd, Eigen::Matrix<double, 6, 1>& qdd) const;
   // Columns for the simulated joints of [Jv; Jw] at q (closed form).
   void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
   // Its time derivative along qd (exact: one pass on dual numbers).
@@ -116,18 +160,23 @@ class Reference {
                      Eigen::Matrix<double, 6, 6>& Jdot) const;
   // IK at the path point p, each angle the representative (mod 2 pi) nearest
   // `near`, and with track_wrist the wrist solution nearest it; false if out
-  // of reach.
+  // of reach. Numerical: damped least squares from `near`.
   bool joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near, bool track_wrist,
                     Eigen::Matrix<double, 6, 1>& q) const;
+  // "the path point (x, y, z) m at s = ... m (t = ... s)".
+  std::string point_at(const Eigen::Vector3d& p, double s) const;
 
   RobotModel robot_;
   int n_;
   Eigen::Matrix<double, 6, 1> q_held_;
   PumaConfig config_;
   Eigen::Matrix3d R_fixed_;
-  Path path_;
+  std::optional<Path> path_;
+  std::optional<JointCurve> curve_;
   Timing timing_;
   Interpolation interp_;
+  IkSettings ik_;
+  std::vector<Eigen::Vector3d> trace_;  // a joint curve's flange polyline (deviation)
   // Joint-space interpolation: knot times, and per piece the coefficients
   // c(j, k) of (t - t_k)^k for each simulated joint j.
   std::vector<double> knots_;
@@ -139,8 +188,9 @@ class Reference {
   // a wrist singularity.
   std::vector<Eigen::Matrix<double, 6, 1>> branch_;
   std::vector<double> breakpoints_;
-  // Per segment: the timing law's and the path's piece (Cartesian), or the
-  // spline piece (joint space), found at the segment's middle.
+  // Per segment: the timing law's and the path's or curve's piece (Cartesian,
+  // joint curve), or the spline piece (joint-space interpolation of a path),
+  // found at the segment's middle.
   std::vector<int> seg_timing_, seg_path_;
   double seg_tol_ = 0;  // how close to a segment's ends t counts as inside it [s]
 };

@@ -61,7 +61,8 @@ struct Entry {
 
 // '"piv"', or '"piv" (the default)' when the file does not give it: the value
 // of the entry `key` as read into obj ("" if no entry has it, or it is an
-// array or a table).
+// array or a table). Looks without reading: a decider that does not apply
+// itself stays unknown to finish().
 template <class T>
 std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, std::string_view key,
                           const T& obj, int n) {
@@ -81,7 +82,7 @@ std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, 
     } else {
       return "";  // an array or a table: named by the entries above it instead
     }
-    return out.str() + (t.node(key) ? "" : " (the default)");
+    return out.str() + (t.has(key) ? "" : " (the default)");
   }
   return "";
 }

@@ -10,6 +10,7 @@
 #include "models/robot/robot_file.hpp"
 #include "models/reference/time_optimal.hpp"
 #include "models/scene/entries.hpp"
+#include "models/scene/joint_csv.hpp"
 
 // Each section of a scene file is one table of entries (entries.hpp), read by
 // read_<section> and written by write_<section> over that table. The order of
@@ -425,35 +426,147 @@ std::vector<std::pair<std::string, Interpolation>> interpolations() {
   return out;
 }
 
+// joints: a CSV file of rows t, q1 ... qn (joint_csv.hpp), relative to the
+// scene's folder; the resolved scene names it by its absolute path.
+Codec<ReferenceSettings> joints_csv_codec() {
+  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int n) {
+            namespace fs = std::filesystem;
+            const fs::path p(t.string(key));
+            r.joints_file = fs::absolute(p.is_absolute() ? p : fs::path(r.scene_dir) / p).lexically_normal().string();
+            try {
+              r.points = read_joint_csv(r.joints_file, n);
+            } catch (const ConfigError& e) {
+              throw ConfigError(t.where(key) + e.what());
+            }
+          },
+          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
+            out.insert(key, r.joints_file);
+          },
+          [](const ReferenceSettings& r) { return r.joints_file.empty(); }};
+}
+
+// via_points: [[t, q1, ..., qn], ...] in the scene (the CSV's rows).
+Codec<ReferenceSettings> via_points_codec() {
+  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int n) {
+            const toml::node* nd = t.node(key);
+            const std::string expected = "an array of rows [t, q1, ..., q" + std::to_string(n) + "] of numbers";
+            if (!nd || !nd->is_array()) t.fail(key, expected, nd ? "another type" : "nothing");
+            std::vector<std::vector<double>> rows;
+            for (const toml::node& row : *nd->as_array()) {
+              const std::string at = "row " + std::to_string(rows.size() + 1);
+              const toml::array* a = row.as_array();
+              if (!a) t.fail(key, expected, at + " that is no array");
+              std::vector<double> v;
+              for (const toml::node& x : *a) {
+                const auto d = StrictTable::as_double(x);
+                if (!d) t.fail(key, expected, at + (x.is_integer() ? " with an integer beyond +-2^53" : " with a non-number"));
+                v.push_back(*d);
+              }
+              rows.push_back(v);
+            }
+            try {
+              check_joint_rows(rows, n, "");
+            } catch (const ConfigError& e) {
+              throw ConfigError(t.where(key) + e.what());
+            }
+            r.via_points = rows;
+            r.points = rows;
+          },
+          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
+            toml::array rows;
+            for (const auto& row : r.via_points) {
+              toml::array a;
+              for (double x : row) a.push_back(x);
+              rows.push_back(a);
+            }
+            out.insert(key, rows);
+          },
+          [](const ReferenceSettings& r) { return r.via_points.empty(); }};
+}
+
+bool no_joints_file(const ReferenceSettings& r) { return r.joints_file.empty(); }
+bool cartesian_path(const ReferenceSettings& r) { return !r.joint_source(); }
+bool numerical_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kNumerical; }
+bool closed_form_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kClosedForm; }
+
+// A joint-space source's defaults, before timing and interpolation are read:
+// its own times, the cubic spline.
+void joint_defaults(StrictTable&, ReferenceSettings& r) {
+  if (!r.joint_source()) return;
+  r.timing = "explicit";
+  r.interpolation = Interpolation::kJointCubic;
+}
+
 bool table_timing(const ReferenceSettings& r) { return r.timing == "table"; }
+bool table_speed(const ReferenceSettings& r) { return table_timing(r) && cartesian_path(r); }
 bool shaped_timing(const ReferenceSettings& r) {
   return r.timing == "trapezoid" || r.timing == "scurve" || r.timing == "quintic";
 }
 bool ramped_timing(const ReferenceSettings& r) { return r.timing == "trapezoid" || r.timing == "scurve"; }
 bool scurve_timing(const ReferenceSettings& r) { return r.timing == "scurve"; }
-bool joint_space(const ReferenceSettings& r) { return r.interpolation != Interpolation::kCartesian; }
+bool via_segmented(const ReferenceSettings& r) {
+  return cartesian_path(r) && r.interpolation != Interpolation::kCartesian;
+}
 
-// The table's duration: from max_speed or from traversal_time, exactly one.
-void one_table_duration(StrictTable& t, ReferenceSettings&) {
+// "explicit" (the points' own times) only for a joint-space source.
+void timing_of_source(StrictTable& t, ReferenceSettings& r) {
+  if (r.timing == "explicit" && cartesian_path(r)) {
+    t.fail("timing", "table | trapezoid | scurve | quintic | time-optimal for a Cartesian path (\"explicit\" takes "
+           "the times of reference.joints or reference.via_points)", "\"explicit\"");
+  }
+}
+
+// The table's duration: from max_speed or from traversal_time, exactly one;
+// a joint-space source has no path speed [m/s]: traversal_time.
+void one_table_duration(StrictTable& t, ReferenceSettings& r) {
+  if (r.joint_source()) {
+    if (t.has("max_speed")) {
+      t.fail("max_speed", "traversal_time instead (a joint-space reference has no path speed in m/s)", "max_speed");
+    }
+    if (!t.has("traversal_time")) t.fail("traversal_time", "the table's duration [s]", "nothing");
+    return;
+  }
   if (t.has("max_speed") == t.has("traversal_time")) {
     t.fail(t.has("max_speed") ? "traversal_time" : "max_speed",
            "exactly one of max_speed and traversal_time (the table's duration)", "both or neither");
   }
 }
 
+// A joint-space source is a spline through its points.
+void interpolation_of_source(StrictTable& t, ReferenceSettings& r) {
+  if (r.joint_source() && r.interpolation == Interpolation::kCartesian) {
+    t.fail("interpolation", "joint-cubic | joint-quintic for a joint-space reference (joints, via_points)",
+           "\"cartesian\"");
+  }
+}
+
+// ik: the closed form where the robot has it (the default there), else numerical.
+void ik_of_robot(StrictTable& t, ReferenceSettings& r) {
+  if (!t.has("ik")) {
+    r.ik = r.closed_form_why.empty() ? IkMethod::kClosedForm : IkMethod::kNumerical;
+  } else if (r.ik == IkMethod::kClosedForm && !r.closed_form_why.empty()) {
+    t.fail("ik", "\"numerical\" for this robot (" + r.closed_form_why + ")", "\"closed-form\"");
+  }
+}
+
 const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
-    {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired},
+    {"joints", joints_csv_codec(), "a CSV file of rows t, q1 ... qn (relative to the scene)", Need::kIfSet, {},
+     joint_defaults},
+    {"via_points", via_points_codec(), "rows [t, q1, ..., qn]: the points in the scene", Need::kIfSet,
+     {no_joints_file, "joints"}, joint_defaults},
+    {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired, {cartesian_path, {}}},
     {"start", scene_io::numbers([](const ReferenceSettings&, int) { return 2; }, kAny,
                                 [](const ReferenceSettings& r, int) { return std::vector<double>{r.start.x(), r.start.y()}; },
                                 [](ReferenceSettings& r, const std::vector<double>& v) { r.start = {v[0], v[1]}; }),
-     "[m] (x, y) in the plane", Need::kRequired},
-    {"heading", scene_io::number({-2 * M_PI, 2 * M_PI}, PUMASIM_AT(s.heading)), "[rad] of the first segment"},
-    {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired},
-    {"timing", scene_io::text(PUMASIM_AT(s.timing), {"table", "trapezoid", "scurve", "quintic", "time-optimal"}),
-     "the timing law s(t)"},
+     "[m] (x, y) in the plane", Need::kRequired, {cartesian_path, {}}},
+    {"heading", scene_io::number({-2 * M_PI, 2 * M_PI}, PUMASIM_AT(s.heading)), "[rad] of the first segment",
+     Need::kOptional, {cartesian_path, {}}},
+    {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired, {cartesian_path, {}}},
+    {"timing", scene_io::text(PUMASIM_AT(s.timing), {"table", "trapezoid", "scurve", "quintic", "time-optimal", "explicit"}),
+     "the timing law s(t)", Need::kOptional, {}, timing_of_source},
     {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, {table_timing, "timing"}},
     {"max_speed", scene_io::number(kPositive, PUMASIM_AT(s.max_speed)), "table: [m/s] peak path speed",
-     Need::kIfSet, {table_timing, "timing"}},
+     Need::kIfSet, {table_speed, "timing"}},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)),
      "table: [s] the duration instead of max_speed", Need::kIfSet, {table_timing, "timing"}, one_table_duration},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)), "[s] the duration",
@@ -463,16 +576,25 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"jerk_fraction", scene_io::number(kRampShare, PUMASIM_AT(s.jerk_fraction)),
      "share of an acceleration phase spent ramping it", Need::kOptional, {scurve_timing, "timing"}},
     {"interpolation", scene_io::choice(interpolations(), PUMASIM_AT(s.interpolation)),
-     "cartesian | joint-cubic | joint-quintic"},
+     "cartesian | joint-cubic | joint-quintic", Need::kOptional, {}, interpolation_of_source},
     {"via_segments", scene_io::whole({1.0, 1e5}, "a whole number >= 1", PUMASIM_AT(s.via_segments)),
-     "joint space: the via-points cut the path into this many pieces", Need::kOptional, {joint_space, "interpolation"}},
+     "joint space: the via-points cut the path into this many pieces", Need::kOptional, {via_segmented, "interpolation"}},
+    {"ik", scene_io::choice<IkMethod>({{"closed-form", IkMethod::kClosedForm}, {"numerical", IkMethod::kNumerical}},
+                                      PUMASIM_AT(s.ik)),
+     "inverse kinematics: closed-form (the PUMA; its default) | numerical (any arm)", Need::kOptional,
+     {cartesian_path, {}}, ik_of_robot},
+    {"ik_guess", scene_io::numbers([](const ReferenceSettings&, int n) { return n; }, kJointAngle,
+                                   [](const ReferenceSettings& r, int) { return r.ik_guess; },
+                                   [](ReferenceSettings& r, const std::vector<double>& v) { r.ik_guess = v; }),
+     "numerical: [rad] the guess at the path's start (default: mid-range)", Need::kIfSet, {numerical_ik, "ik"}},
     {"arm", scene_io::choice<bool>({{"right", true}, {"left", false}}, PUMASIM_AT(s.config.right_arm)),
-     "inverse kinematics branch: shoulder"},
+     "inverse kinematics branch: shoulder", Need::kOptional, {closed_form_ik, "ik"}},
     {"elbow", scene_io::choice<bool>({{"up", true}, {"down", false}}, PUMASIM_AT(s.config.elbow_up)),
-     "inverse kinematics branch: elbow"},
+     "inverse kinematics branch: elbow", Need::kOptional, {closed_form_ik, "ik"}},
     {"wrist", scene_io::choice<bool>({{"noflip", false}, {"flip", true}}, PUMASIM_AT(s.config.wrist_flip)),
-     "inverse kinematics branch: wrist"},
-    {"orientation", orientation_codec(), "6 joints: the flange's fixed orientation (rows)"},
+     "inverse kinematics branch: wrist", Need::kOptional, {closed_form_ik, "ik"}},
+    {"orientation", orientation_codec(), "6 joints: the flange's fixed orientation (rows)", Need::kOptional,
+     {cartesian_path, {}}},
 };
 
 // ---------------------------------------------------------------- [planning]
@@ -500,15 +622,57 @@ void read_planning(std::optional<StrictTable>& plan, const std::string& file, Re
   read_entries(plan ? *plan : empty, kPlanningEntries, r, n);
 }
 
+// The joint-space source's spline (its points' times as the parameter).
+JointCurve joint_curve_of(const ReferenceSettings& r, int n) {
+  std::vector<double> knots;
+  std::vector<JointCurve::Vec6> points;
+  for (const auto& row : r.points) {
+    knots.push_back(row[0]);
+    JointCurve::Vec6 q = JointCurve::Vec6::Zero();
+    for (int j = 0; j < n; ++j) q[j] = row[static_cast<std::size_t>(j + 1)];
+    points.push_back(q);
+  }
+  const auto kind = r.interpolation == Interpolation::kJointQuintic ? JointCurve::Kind::kQuintic
+                                                                    : JointCurve::Kind::kCubic;
+  return JointCurve(knots, points, n, kind);
+}
+
+IkSettings ik_of(const ReferenceSettings& r, int n) {
+  IkSettings ik{r.ik, std::nullopt};
+  if (!r.ik_guess.empty()) {
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int j = 0; j < n; ++j) g[j] = r.ik_guess[static_cast<std::size_t>(j)];
+    ik.guess = g;
+  }
+  return ik;
+}
+
+// The reference of the settings' source (the path with its IK, or the joint
+// curve) under `timing`, for the first n joints.
+std::unique_ptr<Reference> make_reference(const PlantConfig& pc, int n, const ReferenceSettings& r, Timing timing) {
+  if (r.joint_source()) return std::make_unique<Reference>(pc.robot, pc.q_held, joint_curve_of(r, n), std::move(timing));
+  const Path path(r.start, r.heading, r.height, r.segments);
+  return std::make_unique<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation, path, std::move(timing),
+                                     r.interpolation, r.via_segments, ik_of(r, n));
+}
+
+// The length the timing law runs along: the path's [m], or the joint
+// curve's parameter range (its points' last time) [s].
+double source_length(const ReferenceSettings& r) {
+  if (r.joint_source()) return r.points.back()[0];
+  return Path(r.start, r.heading, r.height, r.segments).length();
+}
+
 // The reference the controller follows, from the settings (the constructor
-// checks the whole path: reach, joint limits, branch).
+// checks the whole path or curve: reach, joint limits, branch).
 std::shared_ptr<const Reference> build_reference(const StrictTable& rt, const PlantConfig& pc,
                                                  const ReferenceSettings& r) {
   try {
-    Path path(r.start, r.heading, r.height, r.segments);
-    const double L = path.length();
+    const double L = source_length(r);
     std::optional<Timing> timing;
-    if (r.timing == "table") {
+    if (r.timing == "explicit") {
+      timing = Timing::unit_speed(L);
+    } else if (r.timing == "table") {
       timing = r.max_speed > 0 ? Timing::table(r.profile, L, r.max_speed)
                                : Timing::table_with_duration(r.profile, L, r.traversal_time);
     } else if (r.timing == "trapezoid") {
@@ -521,8 +685,7 @@ std::shared_ptr<const Reference> build_reference(const StrictTable& rt, const Pl
       const PlanningSetup setup = time_optimal_setup(pc, pc.n, r);
       timing = setup.planner->plan(*setup.unit, r.grid);
     }
-    return std::make_shared<Reference>(pc.robot, pc.n, pc.q_held, r.config, r.orientation, path, *timing,
-                                       r.interpolation, r.via_segments);
+    return make_reference(pc, pc.n, r, *timing);
   } catch (const ConfigError&) {
     throw;
   } catch (const std::exception& e) {
@@ -536,6 +699,8 @@ void read_reference(StrictTable& root, Scene& sc) {
   if (!rt) return;
   sc.has_reference = true;
   ReferenceSettings& r = sc.reference;
+  r.scene_dir = std::filesystem::path(sc.file).parent_path().string();
+  r.closed_form_why = puma_ik_unsupported(sc.plant.robot);
   read_entries(*rt, kReferenceEntries, r, sc.plant.n);
   std::optional<StrictTable> plan = root.optional_table("planning");
   if (plan && r.timing != "time-optimal") {
@@ -650,9 +815,9 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 
 PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r) {
   PlanningSetup out;
-  const Path path(r.start, r.heading, r.height, r.segments);
-  out.unit = std::make_unique<Reference>(pc.robot, n, pc.q_held, r.config, r.orientation, path,
-                                         Timing::unit_speed(path.length()));
+  ReferenceSettings unit = r;
+  unit.interpolation = r.joint_source() ? r.interpolation : Interpolation::kCartesian;
+  out.unit = make_reference(pc, n, unit, Timing::unit_speed(source_length(r)));
   DriveLimits lim;
   for (int j = 0; j < n; ++j) {
     lim.voltage.push_back(r.voltage_fraction * command_voltage_range(pc.amplifier[j], controller_output_limit(pc.controller_params, j)));

@@ -22,13 +22,20 @@ struct IntegratorSettings {
 };
 
 struct ReferenceSettings {
+  // A joint-space source instead of the Cartesian path: a CSV file (made
+  // absolute, relative to the scene's folder) or via-points in the scene;
+  // either way `points` holds the rows t, q1 ... qn.
+  std::string joints_file;
+  std::vector<std::vector<double>> via_points;
+  std::vector<std::vector<double>> points;
   double height = 0.0;                   // plane z [m]
   Eigen::Vector2d start = Eigen::Vector2d::Zero();
   double heading = 0.0;                  // [rad]
   std::vector<PathSegment> segments;
   // Timing law (models/reference/timing.hpp): "table" (the paper's piecewise-linear
   // speed: profile with max_speed or traversal_time), "trapezoid", "scurve",
-  // "quintic" (traversal_time; blend, jerk_fraction), "time-optimal" ([planning]).
+  // "quintic" (traversal_time; blend, jerk_fraction), "time-optimal" ([planning]);
+  // a joint-space source also "explicit" (its own times, the default).
   std::string timing = "table";
   std::vector<Eigen::Vector2d> profile;  // (t/T, v/v_max)
   double max_speed = 0.0;                // [m/s] (table; 0: from traversal_time)
@@ -42,9 +49,15 @@ struct ReferenceSettings {
   std::vector<double> current_limit;     // [A] per joint (inf: none)
   std::vector<double> joint_speed_limit; // [rad/s] per joint (inf: none)
   int grid = 1000;                       // arc-length grid intervals
+  IkMethod ik = IkMethod::kClosedForm;  // Cartesian path: closed form (the PUMA) or numerical
+  std::vector<double> ik_guess;          // numerical: the first path point's guess [rad] (empty: mid-range)
   PumaConfig config;
   // 6 joints: the flange's fixed orientation (default: its z axis pointing down).
   Eigen::Matrix3d orientation = (Eigen::Matrix3d() << 1, 0, 0, 0, -1, 0, 0, 0, -1).finished();
+  // Not keys: what reading the keys needs to know of the scene.
+  std::string scene_dir;       // the scene file's folder (joints is relative to it)
+  std::string closed_form_why; // why the robot has no closed-form IK ("" if it has)
+  bool joint_source() const { return !joints_file.empty() || !via_points.empty(); }
 };
 
 struct Scene {

@@ -1,0 +1,107 @@
+#include "models/scene/joint_csv.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "models/robot/strict_toml.hpp"
+
+namespace pumasim {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream in(line);
+  std::string field;
+  while (std::getline(in, field, ',')) out.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') out.emplace_back();  // a trailing empty field
+  return out;
+}
+
+std::string columns_expected(int n) {
+  return std::to_string(n + 1) + " columns (t, then q1 ... q" + std::to_string(n) + " for the scene's " +
+         std::to_string(n) + " simulated joints)";
+}
+
+// The row's values, each a finite number.
+std::vector<double> parse_row(const std::vector<std::string>& fields, const std::vector<std::string>& header,
+                              const std::string& at) {
+  std::vector<double> row;
+  for (std::size_t c = 0; c < fields.size(); ++c) {
+    const std::string& f = fields[c];
+    double x = 0;
+    const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), x);
+    if (f.empty() || ec != std::errc() || end != f.data() + f.size() || !std::isfinite(x)) {
+      throw ConfigError(at + "column " + std::to_string(c + 1) + " (" + header[c] +
+                        "): expected a finite number, got \"" + f + "\"");
+    }
+    row.push_back(x);
+  }
+  return row;
+}
+
+}  // namespace
+
+void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where) {
+  if (rows.size() < 2) {
+    throw ConfigError(where + "expected at least two points (rows t, q1 ... qn), got " + std::to_string(rows.size()));
+  }
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const std::string row = "row " + std::to_string(k + 1) + ": ";
+    if (rows[k].size() != static_cast<std::size_t>(n + 1)) {
+      throw ConfigError(where + row + "expected " + columns_expected(n) + ", got " + std::to_string(rows[k].size()));
+    }
+    for (double x : rows[k]) {
+      if (!std::isfinite(x)) throw ConfigError(where + row + "expected finite numbers, got " + std::to_string(x));
+    }
+    if (k == 0 && rows[0][0] != 0.0) {
+      throw ConfigError(where + row + "expected the first point at t = 0, got t = " + std::to_string(rows[0][0]));
+    }
+    if (k > 0 && !(rows[k][0] > rows[k - 1][0])) {
+      throw ConfigError(where + row + "expected t after the previous row's " + std::to_string(rows[k - 1][0]) +
+                        " s (strictly increasing times), got " + std::to_string(rows[k][0]));
+    }
+  }
+}
+
+std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot be opened");
+  std::vector<std::vector<double>> rows;
+  std::vector<std::string> header;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (trim(line).empty()) continue;
+    const std::string at = path + ":" + std::to_string(number) + ": ";
+    const std::vector<std::string> fields = split(line);
+    if (fields.size() != static_cast<std::size_t>(n + 1)) {
+      throw ConfigError(at + "expected " + columns_expected(n) + ", got " + std::to_string(fields.size()));
+    }
+    if (header.empty()) {
+      header = fields;
+      continue;
+    }
+    rows.push_back(parse_row(fields, header, at));
+    // The time checks here too, to name the line.
+    const std::size_t k = rows.size() - 1;
+    if (k == 0 && rows[0][0] != 0.0) {
+      throw ConfigError(at + "column 1 (" + header[0] + "): expected the first point at t = 0, got " + fields[0]);
+    }
+    if (k > 0 && !(rows[k][0] > rows[k - 1][0])) {
+      throw ConfigError(at + "column 1 (" + header[0] + "): expected a time after the previous row's " +
+                        std::to_string(rows[k - 1][0]) + " s (strictly increasing), got " + fields[0]);
+    }
+  }
+  if (header.empty()) throw ConfigError(path + ": expected a header line, then rows t, q1 ... qn; the file is empty");
+  check_joint_rows(rows, n, path + ": ");
+  return rows;
+}
+
+}  // namespace pumasim

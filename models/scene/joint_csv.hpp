@@ -1,0 +1,22 @@
+// A joint-space reference's points from a CSV file (scene key
+// reference.joints): a header line naming the columns, then one row per
+// point "t, q1, ..., qn" (t [s], angles [rad] of the scene's n simulated
+// joints), comma-separated; blank lines are skipped. The first t is 0, the
+// times strictly increase, every value is a finite number, and there are at
+// least two rows. Anything else is a ConfigError naming the file, the line
+// and, for a value, the column (1-based, with its header name).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace pumasim {
+
+// Each row: t, then n angles.
+std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n);
+
+// The same checks on rows given otherwise (reference.via_points); `where`
+// prefixes the messages, which name the row (1-based).
+void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where);
+
+}  // namespace pumasim
