@@ -54,7 +54,7 @@ struct Entry {
   struct Applies {
     bool (*fn)(const T&) = nullptr;
     std::string_view decided_by;
-  } applies;
+  } applies{};
   // After the entry is read (its value or its default): checks and derived values.
   void (*then)(StrictTable&, T&) = nullptr;
 };
