@@ -251,12 +251,12 @@ void add_dynamics(CLI::App* app, DynamicsArgs& a) {
       ->required()
       ->type_name("NAME")
       ->check(registry_name([](const std::string& s) { find_backend(s); }));
-  app->add_option("--q", a.q, "joint angles [rad], one per joint, comma-separated, or a pose name of the robot file")
+  app->add_option("--q", a.q, "joint values [rad; m for a prismatic joint], one per joint, comma-separated, or a pose name of the robot file")
       ->required()
       ->type_name("CSV|POSE");
-  add_text(app, "--qd", a.qd, "joint speeds [rad/s], comma-separated (default 0)", "CSV");
-  add_text(app, "--qdd", a.qdd, "joint accelerations [rad/s^2]: prints tau = ID(q, qd, qdd)", "CSV");
-  add_text(app, "--tau", a.tau, "joint torques [N m]: prints qdd = FD(q, qd, tau)", "CSV");
+  add_text(app, "--qd", a.qd, "joint speeds [rad/s; m/s], comma-separated (default 0)", "CSV");
+  add_text(app, "--qdd", a.qdd, "joint accelerations [rad/s^2; m/s^2]: prints tau = ID(q, qd, qdd)", "CSV");
+  add_text(app, "--tau", a.tau, "joint torques [N m; N for a prismatic joint]: prints qdd = FD(q, qd, tau)", "CSV");
   app->add_flag("--no-rotor-inertia", a.no_rotor_inertia, "the robot without its rotor inertias");
 }
 

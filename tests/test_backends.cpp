@@ -89,8 +89,23 @@ TEST(BackendAgreement, RandomChainsModifiedDh) {
   }
 }
 
+// Chains mixing revolute and prismatic joints (joint j prismatic where the
+// pattern, repeated, has a 'P'), n = 3, 6, 12, both conventions.
+TEST(BackendAgreement, RandomChainsMixingPrismaticJoints) {
+  for (const char* pattern : {"RP", "PPR", "RRRP", "P"}) {
+    for (int n : {1, 3, 6, 12}) {
+      const std::uint64_t seed = 500 + 17 * n + std::string(pattern).size();
+      expect_all_agree(random_chain(n, seed, DhConvention::kStandard, pattern), 13 * n, 4);
+      expect_all_agree(random_chain(n, seed + 1, DhConvention::kModified, pattern), 19 * n, 4);
+    }
+  }
+}
+
 // A standard-DH chain rewritten in the modified convention (same joints, link
-// data moved from distal to proximal frames) has the same dynamics.
+// data moved from distal to proximal frames) has the same dynamics. The same
+// rewrite holds for a prismatic joint: its d_j = q_j + offset sits, like a
+// revolute joint's d_j, in the modified frame j (Rz(theta_j) Tz(d_j)), so
+// type, theta and offset carry over unchanged.
 RobotModel to_modified(const RobotModel& s) {
   RobotModel m = s;
   m.convention = DhConvention::kModified;
@@ -112,30 +127,31 @@ RobotModel to_modified(const RobotModel& s) {
 }
 
 TEST(BackendAgreement, StandardAndModifiedDhDescribeTheSameRobot) {
-  for (int n : {1, 2, 5, 9}) {
-    const RobotModel s = random_chain(n, 300 + n);
+  for (const auto& [n, pattern] : std::vector<std::pair<int, std::string>>{
+           {1, "R"}, {2, "R"}, {5, "R"}, {9, "R"}, {1, "P"}, {3, "PR"}, {6, "RRP"}, {9, "RP"}}) {
+    const RobotModel s = random_chain(n, 300 + n, DhConvention::kStandard, pattern);
     const RobotModel m = to_modified(s);
     auto bs = make_backend("crba", s), bm = make_backend("crba", m);
     Rng rng(n);
     const Eigen::VectorXd q = rng.uniform_vector(n, -3, 3), qd = rng.uniform_vector(n, -2, 2);
     const Eigen::VectorXd qdd = rng.uniform_vector(n, -5, 5), tau = rng.uniform_vector(n, -9, 9);
     const Quantities a = evaluate(*bs, q, qd, qdd, tau), b = evaluate(*bm, q, qd, qdd, tau);
-    EXPECT_LT(rel_err(a.H, b.H), kAgree) << n;
-    EXPECT_LT(rel_err(a.h, b.h), kAgree) << n;
-    EXPECT_LT(rel_err(a.qdd, b.qdd), kAgree) << n;
+    EXPECT_LT(rel_err(a.H, b.H), kAgree) << n << pattern;
+    EXPECT_LT(rel_err(a.h, b.h), kAgree) << n << pattern;
+    EXPECT_LT(rel_err(a.qdd, b.qdd), kAgree) << n << pattern;
   }
 }
 
 // Holding joints k+1..n is the same as the full arm with those joints at rest
 // at the held angles: the reduced H is the full H's top-left block and the
 // reduced tau the full tau's head (qd = qdd = 0 on the held joints).
-TEST(LockJoints, EqualsTheFullArmWithHeldJointsAtRest) {
-  const RobotModel puma = load_robot("puma560");
-  Rng rng(5);
+// A held prismatic joint is merged at its displacement.
+void expect_lock_equals_rest(const RobotModel& robot, std::uint64_t seed) {
+  Rng rng(seed);
   for (int k : {1, 3, 5}) {
     const Eigen::VectorXd held = rng.uniform_vector(6, -2, 2);
-    const RobotModel reduced = lock_joints(puma, k, held);
-    auto full = make_backend("rnea-probing-shared", puma), red = make_backend("crba", reduced);
+    const RobotModel reduced = lock_joints(robot, k, held);
+    auto full = make_backend("rnea-probing-shared", robot), red = make_backend("crba", reduced);
     Eigen::VectorXd q = held, qd = Eigen::VectorXd::Zero(6), qdd = Eigen::VectorXd::Zero(6);
     q.head(k) = rng.uniform_vector(k, -2, 2);
     qd.head(k) = rng.uniform_vector(k, -1, 1);
@@ -146,9 +162,15 @@ TEST(LockJoints, EqualsTheFullArmWithHeldJointsAtRest) {
     red->mass_matrix(q.head(k), Hr);
     full->inverse_dynamics(q, qd, qdd, tf);
     red->inverse_dynamics(q.head(k), qd.head(k), qdd.head(k), tr);
-    EXPECT_LT(rel_err(Hf.topLeftCorner(k, k), Hr), kAgree) << k;
-    EXPECT_LT(rel_err(tf.head(k), tr), kAgree) << k;
+    EXPECT_LT(rel_err(Hf.topLeftCorner(k, k), Hr), kAgree) << robot.name << " " << k;
+    EXPECT_LT(rel_err(tf.head(k), tr), kAgree) << robot.name << " " << k;
   }
+}
+
+TEST(LockJoints, EqualsTheFullArmWithHeldJointsAtRest) {
+  expect_lock_equals_rest(load_robot("puma560"), 5);
+  expect_lock_equals_rest(random_chain(6, 61, DhConvention::kStandard, "RPP"), 6);
+  expect_lock_equals_rest(random_chain(6, 62, DhConvention::kModified, "PRRP"), 7);
 }
 
 // The PUMA 560's structure with other parameters: the generated closed form

@@ -1,5 +1,5 @@
 // Physics identities, checked for every algorithm on the PUMA 560 and on
-// random chains: H symmetric positive definite; C qd = h - g with C built from
+// random chains (revolute only, and mixing prismatic joints): H symmetric positive definite; C qd = h - g with C built from
 // the Christoffel symbols of H (exact derivatives by dual numbers); Hdot - 2C
 // skew-symmetric; g = dV/dq; energy conserved in torque-free motion.
 #include <gtest/gtest.h>
@@ -16,9 +16,17 @@ namespace {
 
 using testing::rel_err;
 
+// The PUMA 560, revolute random chains, and random chains mixing revolute and
+// prismatic joints (n = 3, 6, 12; both conventions).
 std::vector<RobotModel> models() {
-  return {load_robot("puma560"), random_chain(2, 21), random_chain(4, 22),
-          random_chain(7, 23, DhConvention::kModified)};
+  return {load_robot("puma560"),
+          random_chain(2, 21),
+          random_chain(4, 22),
+          random_chain(7, 23, DhConvention::kModified),
+          random_chain(3, 24, DhConvention::kStandard, "PR"),
+          random_chain(6, 25, DhConvention::kModified, "RPP"),
+          random_chain(12, 26, DhConvention::kStandard, "RRP"),
+          random_chain(12, 27, DhConvention::kModified, "PR")};
 }
 
 TEST(Identities, MassMatrixSymmetricPositiveDefinite) {
@@ -130,7 +138,9 @@ TEST(Identities, GravityIsTheGradientOfPotentialEnergy) {
 // scale is far above that and far below any modelling error (dropping the
 // Coriolis term, for instance, breaks it at the 1e-2 level).
 TEST(Identities, EnergyIsConservedInTorqueFreeMotion) {
-  for (const RobotModel& m : {load_robot("puma560"), random_chain(5, 31)}) {
+  for (const RobotModel& m : {load_robot("puma560"), random_chain(5, 31),
+                              random_chain(5, 32, DhConvention::kStandard, "RP"),
+                              random_chain(6, 33, DhConvention::kModified, "PRR")}) {
     for (const auto& info : testing::supported(m)) {
       auto b = info.make(m);
       const int n = m.dof();

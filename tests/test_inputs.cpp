@@ -2,6 +2,7 @@
 // message that says where and what was expected; good input works.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -274,6 +275,52 @@ TEST(SceneNumbers, NonFiniteNumbersInRowsAreRefused) {
   EXPECT_NE(r.err.find("reference.profile: expected an array of [a, b] rows of numbers, each finite"),
             std::string::npos)
       << r.err;
+}
+
+// A prismatic joint: type = "prismatic", its fixed angle theta (default 0),
+// d_j = q_j + offset [m], limits in metres (models/robots/README.md).
+std::string slide(const std::string& keys) {
+  return "[[joint]]\ntype = \"prismatic\"\na = 0.1\nalpha = 0.0\n" + keys +
+         "mass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1, 0.0, 0.0, 0.0]\n"
+         "rotor_inertia = 1e-5\ngear_ratio = 628.0\n";
+}
+
+TEST_F(RobotFile, APrismaticJointLoads) {
+  const RobotModel m = load_robot_file(
+      write(std::string(kHead) + joint() + slide("theta = 0.5\noffset = 0.25\nlimits = [0.0, 20.0]\n")));
+  ASSERT_EQ(m.dof(), 2);
+  EXPECT_EQ(m.joints[0].type, JointType::kRevolute);
+  EXPECT_EQ(m.joints[1].type, JointType::kPrismatic);
+  EXPECT_DOUBLE_EQ(m.joints[1].theta, 0.5);
+  EXPECT_DOUBLE_EQ(m.joints[1].offset, 0.25);
+  EXPECT_DOUBLE_EQ(m.joints[1].q_max, 20.0);  // metres: not bounded by 4 pi
+  const RobotModel dflt = load_robot_file(write(std::string(kHead) + slide("")));
+  EXPECT_EQ(dflt.joints[0].theta, 0.0);
+  EXPECT_EQ(dflt.joints[0].offset, 0.0);
+  EXPECT_TRUE(std::isinf(dflt.joints[0].q_max));  // no limits given: none
+}
+
+TEST_F(RobotFile, BadJointTypeNamesTheKey) {
+  expect_error(std::string(kHead) + joint("1.0", "type = \"spherical\"\n"),
+               {":14: joint[1].type: expected one of \"revolute\", \"prismatic\", got \"spherical\""});
+}
+
+TEST_F(RobotFile, ThetaOnARevoluteJointAndDOnAPrismaticJointAreRefused) {
+  expect_error(std::string(kHead) + joint("1.0", "theta = 0.3\n"),
+               {":14: joint[1].theta: expected no theta on a revolute joint", "got theta = 0.3"});
+  expect_error(std::string(kHead) + slide("d = 0.2\n"),
+               {":9: joint[1].d: expected no d on a prismatic joint (its d is q + offset [m]", "got d = 0.2"});
+}
+
+// The command line runs on a robot with a prismatic joint (tests/robots/rp_polar.toml).
+TEST(Cli, DynamicsOnARobotWithAPrismaticJoint) {
+  const std::string robot = std::string(PUMASIM_TEST_ROBOTS_DIR) + "/rp_polar.toml";
+  const Result r = cli({"dynamics", "--robot", robot, "--backend", "aba", "--q=0.3,0.2", "--qd=1,0.5",
+                        "--tau=0,0"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  EXPECT_NE(r.out.find("\"n\": 2"), std::string::npos) << r.out;
+  expect_bad({"dynamics", "--robot", robot, "--backend", "lagrange-symbolic", "--q=home"},
+             "lagrange-symbolic was generated for the PUMA 560");
 }
 
 // Integers a double cannot hold exactly (beyond +-2^53) are refused, naming

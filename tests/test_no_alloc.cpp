@@ -61,7 +61,9 @@ TEST(NoAllocation, CountingMallocSeesAllocationsAtAll) {
 }
 
 TEST(NoAllocation, EveryBackendThroughTheInterface) {
-  for (const RobotModel& m : {load_robot("puma560"), random_chain(9, 4)}) {
+  for (const RobotModel& m : {load_robot("puma560"), random_chain(9, 4),
+                              random_chain(6, 4, DhConvention::kStandard, "RP"),
+                              random_chain(9, 4, DhConvention::kModified, "PRR")}) {
     const int n = m.dof();
     for (const auto& info : testing::supported(m)) {
       auto b = info.make(m);
@@ -157,8 +159,9 @@ TEST(NoAllocationDeathTest, EigenRuntimeGuardFiresOnAnAllocation) {
 }
 
 TEST(NoAllocation, EigenRuntimeGuardOnTheAlgorithms) {
-  const RobotModel m = random_chain(7, 5);
-  testing::for_each_algorithm(m, EigenGuard{m});
+  for (const RobotModel& m : {random_chain(7, 5), random_chain(7, 5, DhConvention::kStandard, "RP")}) {
+    testing::for_each_algorithm(m, EigenGuard{m});
+  }
 }
 
 }  // namespace

@@ -491,10 +491,13 @@ TEST(Kinematics, PumaInverseKinematicsReproducesTheForward) {
 
 // The geometric Jacobian against central differences of the forward
 // kinematics (position rows) and of the rotation (angular rows, skew(w) = dR R^T),
-// in both DH conventions; its rate on dual numbers against central
-// differences of the Jacobian.
+// in both DH conventions, with and without prismatic joints; its rate on dual
+// numbers against central differences of the Jacobian.
 TEST(Kinematics, GeometricJacobianMatchesDifferencesOfForwardKinematics) {
-  for (const RobotModel& m : {load_robot("puma560"), random_chain(6, 77, DhConvention::kModified)}) {
+  // Mixed chains: a prismatic column is [z; 0] (Siciliano et al. 2009, eq. 3.30).
+  for (const RobotModel& m : {load_robot("puma560"), random_chain(6, 77, DhConvention::kModified),
+                              random_chain(6, 78, DhConvention::kStandard, "PR"),
+                              random_chain(6, 79, DhConvention::kModified, "RPP")}) {
     Rng rng(5);
     Eigen::Matrix<double, 6, 1> q;
     for (int j = 0; j < 6; ++j) q[j] = rng.uniform(-2, 2);

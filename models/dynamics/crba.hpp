@@ -4,8 +4,9 @@
 // Composite bodies are kept in the compact form (mass m, first moment hc about
 // the frame origin, rotational inertia Ic about the origin) in joint frame j,
 // and H's column j is the force that a unit acceleration of joint j needs,
-// carried inwards joint by joint. The kinematics (joint rotations) are shared
-// by the bias pass and the CRBA.
+// carried inwards joint by joint; H(i, j) is its moment about z_i (revolute
+// joint i) or its force along z_i (prismatic joint i). The kinematics (joint
+// transforms) are shared by the bias pass and the CRBA.
 #pragma once
 
 #include "models/dynamics/chain.hpp"
@@ -21,9 +22,19 @@ class CompositeInertia {
         hc_(make_per_joint<Vec3<S>, N>(n)),
         Ic_(make_per_joint<Mat3<S>, N>(n)) {}
 
-  // H (with Z^2 Im on the diagonal) for rotations R already computed from q.
+  // H (with Z^2 Im on the diagonal) for the joint transforms already computed from q.
   template <class M>
-  void run(const Chain<S, N>& c, const JointRotations<S, N>& rot, M&& H) {
+  void run(const Chain<S, N>& c, const JointTransforms<S, N>& rot, M&& H) {
+    if (c.any_prismatic) {
+      run_kinds<true>(c, rot, H);
+    } else {
+      run_kinds<false>(c, rot, H);
+    }
+  }
+
+ private:
+  template <bool kMixed, class M>
+  void run_kinds(const Chain<S, N>& c, const JointTransforms<S, N>& rot, M& H) {
     const int n = c.n;
     for (int j = 0; j < n; ++j) {
       m_[j] = c.mass[j];
@@ -31,24 +42,32 @@ class CompositeInertia {
       Ic_[j] = c.Io[j];
     }
     for (int j = n - 1; j >= 0; --j) {
-      // Force and moment (about origin j) for a unit acceleration about z_j:
-      // f = z x hc, n = Ic z.
-      Vec3<S> f(-hc_[j].y(), hc_[j].x(), S(0));
-      Vec3<S> m = Ic_[j].col(2);
-      H(j, j) = m.z() + c.armature[j];
+      // Force and moment (about origin j) for a unit acceleration of joint j:
+      // about z_j, f = z x hc, n = Ic z; along z_j, f = m z, n = hc x z.
+      Vec3<S> f, m;
+      if (slides<kMixed>(c, j)) {
+        f = Vec3<S>(S(0), S(0), m_[j]);
+        m = Vec3<S>(hc_[j].y(), -hc_[j].x(), S(0));
+        H(j, j) = f.z() + c.armature[j];
+      } else {
+        f = Vec3<S>(-hc_[j].y(), hc_[j].x(), S(0));
+        m = Ic_[j].col(2);
+        H(j, j) = m.z() + c.armature[j];
+      }
       for (int i = j; i > 0; --i) {
         const Mat3<S>& R = rot.R[i];
         const Vec3<S> fp = R * f;
-        m = R * m + c.p[i].cross(fp);
+        m = R * m + rot.template origin<kMixed>(c, i).cross(fp);
         f = fp;
-        H(i - 1, j) = m.z();
-        H(j, i - 1) = m.z();
+        const S Hij = slides<kMixed>(c, i - 1) ? f.z() : m.z();
+        H(i - 1, j) = Hij;
+        H(j, i - 1) = Hij;
       }
       if (j > 0) {
         // Add composite j to its parent, moving it into joint frame j-1:
         // body points r' = R r + p.
         const Mat3<S>& R = rot.R[j];
-        const Vec3<S>& p = c.p[j];
+        const Vec3<S>& p = rot.template origin<kMixed>(c, j);
         const S mj = m_[j];
         const Vec3<S> hr = R * hc_[j];
         const Vec3<S> mp = mj * p;
@@ -65,7 +84,6 @@ class CompositeInertia {
     }
   }
 
- private:
   PerJoint<S, N> m_;
   PerJoint<Vec3<S>, N> hc_;
   PerJoint<Mat3<S>, N> Ic_;

@@ -12,8 +12,11 @@
 //   c_i   = sum_{j >= i} -m_j g^T U_ji rbar_j
 //   tau   = D qdd + h + c
 //
-// Q is the derivative operator of a revolute joint about z, J_j the link's
-// 4x4 pseudo-inertia in its joint frame, rbar_j its homogeneous centre of mass.
+// Q_i is the derivative operator of joint i (FGL eq. 3.2-7): about z for a
+// revolute joint (Q(0,1) = -1, Q(1,0) = 1), along z for a prismatic one
+// (Q(2,3) = 1; Q Q = 0, so a slide has no second derivative of its own); J_j
+// the link's 4x4 pseudo-inertia in its joint frame, rbar_j its homogeneous
+// centre of mass.
 #pragma once
 
 #include "models/dynamics/chain.hpp"
@@ -40,9 +43,11 @@ class LagrangeEuler {
         hv_(make_vec<S, N>(n_)),
         cv_(make_vec<S, N>(n_)),
         chol_(n_) {
-    Q_.setZero();
-    Q_(0, 1) = S(-1);
-    Q_(1, 0) = S(1);
+    Qr_.setZero();
+    Qr_(0, 1) = S(-1);
+    Qr_(1, 0) = S(1);
+    Qp_.setZero();
+    Qp_(2, 3) = S(1);
     g_ << c_.gravity.x(), c_.gravity.y(), c_.gravity.z(), S(0);
     for (int j = 0; j < n_; ++j) {
       // Pseudo-inertia: integral of rbar rbar^T dm = [[tr(Io)/2 1 - Io, h], [h^T, m]].
@@ -109,29 +114,40 @@ class LagrangeEuler {
  private:
   Mat4<S>& T(int i, int j) { return Tij_[static_cast<std::size_t>(i * n_ + j)]; }  // iT_j
   Mat4<S>& U(int j, int i) { return U_[static_cast<std::size_t>(j * n_ + i)]; }    // U_ji
+  const Mat4<S>& Qop(int i) const { return is_prismatic(c_, i) ? Qp_ : Qr_; }
 
-  // 0T_j, iT_j and U_ji from the joint transforms (j-1)T_j = [E_j Rz(q_j), p_j].
-  template <class Q>
-  void kinematics(const Q& q) {
+  // (j-1)T_j = [E_j, p_j] Rz(q_j) (revolute) or [E_j, p_j] Tz(q_j) (prismatic).
+  template <class Qv>
+  Mat4<S> joint_transform(int j, const Qv& q) const {
     using std::cos;
     using std::sin;
+    Mat4<S> F = Mat4<S>::Identity();
+    F.template topLeftCorner<3, 3>() = c_.E[j];
+    F.template topRightCorner<3, 1>() = c_.p[j];
+    if (is_prismatic(c_, j)) {
+      F.template topRightCorner<3, 1>() += S(q[j]) * c_.E[j].col(2);
+      return F;
+    }
+    const S cq = cos(S(q[j])), sq = sin(S(q[j]));
+    Mat4<S> Rz = Mat4<S>::Identity();
+    Rz(0, 0) = cq;
+    Rz(0, 1) = -sq;
+    Rz(1, 0) = sq;
+    Rz(1, 1) = cq;
+    return F * Rz;
+  }
+
+  // 0T_j, iT_j and U_ji from the joint transforms (j-1)T_j.
+  template <class Qv>
+  void kinematics(const Qv& q) {
     for (int j = 0; j < n_; ++j) {
-      const S cq = cos(S(q[j])), sq = sin(S(q[j]));
-      Mat4<S> Rz = Mat4<S>::Identity();
-      Rz(0, 0) = cq;
-      Rz(0, 1) = -sq;
-      Rz(1, 0) = sq;
-      Rz(1, 1) = cq;
-      Mat4<S> F = Mat4<S>::Identity();
-      F.template topLeftCorner<3, 3>() = c_.E[j];
-      F.template topRightCorner<3, 1>() = c_.p[j];
-      const Mat4<S> A = F * Rz;
+      const Mat4<S> A = joint_transform(j, q);
       T(j, j).setIdentity();
       for (int i = 0; i < j; ++i) T(i, j) = T(i, j - 1) * A;
       T0_[j] = (j == 0) ? A : Mat4<S>(T0_[j - 1] * A);
     }
     for (int j = 0; j < n_; ++j)
-      for (int i = 0; i <= j; ++i) U(j, i) = T0_[i] * Q_ * T(i, j);
+      for (int i = 0; i <= j; ++i) U(j, i) = T0_[i] * Qop(i) * T(i, j);
   }
 
   void inertia() {
@@ -155,7 +171,7 @@ class LagrangeEuler {
       for (int k = 0; k <= j; ++k) {
         for (int m = 0; m <= j; ++m) {
           const int lo = k < m ? k : m, hi = k < m ? m : k;
-          const Mat4<S> Ujkm = T0_[lo] * Q_ * T(lo, hi) * Q_ * T(hi, j);
+          const Mat4<S> Ujkm = T0_[lo] * Qop(lo) * T(lo, hi) * Qop(hi) * T(hi, j);
           const S qq = S(qd[k]) * S(qd[m]);
           for (int i = 0; i <= j; ++i) hv_[i] += trace_of_product(Ujkm, W_[i]) * qq;
         }
@@ -184,7 +200,7 @@ class LagrangeEuler {
 
   const Chain<S, N>& c_;
   int n_;
-  Mat4<S> Q_;
+  Mat4<S> Qr_, Qp_;  // derivative operators, revolute and prismatic
   Vec4<S> g_;
   std::vector<Mat4<S>> J_, T0_, Tij_, U_, W_;
   MatN<S, N> D_;

@@ -76,6 +76,12 @@ class LagrangeClosedForm {
       return std::string(kName) + " was generated for the PUMA 560 with 3 or 6 joints, got " +
              std::to_string(n) + " joints";
     }
+    for (int j = 0; j < n; ++j) {
+      if (chain.type[j] == JointType::kPrismatic) {
+        return std::string(kName) + " was generated for the PUMA 560's structure (revolute joints "
+               "only); joint " + std::to_string(j + 1) + " is prismatic";
+      }
+    }
     const int* twist = n == 3 ? K3::kTwistHalfPi : K6::kTwistHalfPi;
     constexpr double tol = 1e-12;
     for (int j = 0; j < n; ++j) {

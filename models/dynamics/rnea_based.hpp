@@ -39,7 +39,7 @@ class RneaBased {
 
  protected:
   const Chain<S, N>& c_;
-  JointRotations<S, N> rot_;
+  JointTransforms<S, N> rot_;
   RneaPass<S, N> rnea_;
   VecN<S, N> zero_;
 };

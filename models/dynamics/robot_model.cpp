@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace pumasim {
 namespace {
@@ -33,6 +34,8 @@ const char* to_string(DhConvention c) {
   return c == DhConvention::kStandard ? "standard" : "modified";
 }
 
+const char* to_string(JointType t) { return t == JointType::kRevolute ? "revolute" : "prismatic"; }
+
 const NamedPose* RobotModel::pose(const std::string& pose_name) const {
   for (const auto& p : poses) {
     if (p.name == pose_name) return &p;
@@ -42,15 +45,15 @@ const NamedPose* RobotModel::pose(const std::string& pose_name) const {
 
 Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q) {
   const JointParams& J = model.joints.at(static_cast<std::size_t>(j));
-  const double theta = q + J.offset;
+  const double theta = J.dh_theta(q), d = J.dh_d(q);
   if (model.convention == DhConvention::kStandard) {
     // Rz(theta) Tz(d) Tx(a) Rx(alpha)
-    return homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, J.d)) *
+    return homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, d)) *
            homogeneous(rot_x(J.alpha), Eigen::Vector3d(J.a, 0, 0));
   }
   // Rx(alpha) Tx(a) Rz(theta) Tz(d)
   return homogeneous(rot_x(J.alpha), Eigen::Vector3d(J.a, 0, 0)) *
-         homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, J.d));
+         homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, d));
 }
 
 double potential_energy(const RobotModel& model, const Eigen::VectorXd& q) {
@@ -112,35 +115,66 @@ RobotModel lock_joints(const RobotModel& model, int n_active, const Eigen::Vecto
   return out;
 }
 
+namespace {
+
+// A revolute joint's theta and a prismatic joint's d are replaced by the joint
+// variable; a non-zero value there would be silently ignored, so it is refused.
+void check_unused_parameter(const RobotModel& model, int j) {
+  const JointParams& J = model.joints[j];
+  const bool bad = J.prismatic() ? J.d != 0.0 : J.theta != 0.0;
+  if (!bad) return;
+  const std::string name = J.prismatic() ? "d" : "theta";
+  throw std::invalid_argument(
+      model.name + ": joint " + std::to_string(j + 1) + " is " + to_string(J.type) + ": its " + name +
+      " is the joint variable q + offset, expected " + name + " = 0, got " +
+      std::to_string(J.prismatic() ? J.d : J.theta) + " (put a constant part in offset)");
+}
+
+}  // namespace
+
 JointFrameData joint_frames(const RobotModel& model) {
   const int n = model.dof();
   JointFrameData f;
   f.gravity = model.gravity;
+  // The part of row j that the joint variable does not move: the angle about
+  // z_j (offset or theta) and the translation along z_j (d or offset), and
+  // the fixed d that standard DH puts after the joint (0 for a prismatic joint,
+  // whose d moves the joint frame itself).
+  const auto fixed_angle = [](const JointParams& J) { return J.prismatic() ? J.theta : J.offset; };
+  const auto fixed_slide = [](const JointParams& J) { return J.prismatic() ? J.offset : J.d; };
+  const auto distal_d = [](const JointParams& J) { return J.prismatic() ? 0.0 : J.d; };
   for (int j = 0; j < n; ++j) {
+    check_unused_parameter(model, j);
     const JointParams& J = model.joints[j];
     Eigen::Matrix3d E;
     Eigen::Vector3d p;
     Eigen::Vector3d com = J.com;
     Eigen::Matrix3d I = J.inertia;
     if (model.convention == DhConvention::kStandard) {
-      // Joint frame j = DH frame j-1 * Rz(offset_j) * Rz(q_j), and
+      // Revolute: joint frame j = DH frame j-1 * Rz(offset_j) * Rz(q_j) and
       // DH frame j = joint frame j * Tz(d_j) Tx(a_j) Rx(alpha_j).
+      // Prismatic: joint frame j = DH frame j-1 * Rz(theta_j) Tz(offset_j) * Tz(q_j)
+      // and DH frame j = joint frame j * Tx(a_j) Rx(alpha_j).
+      // DH frame j-1 = joint frame j-1 * Tz(distal d_{j-1}) Tx(a_{j-1}) Rx(alpha_{j-1}).
       if (j == 0) {
-        E = rot_z(J.offset);
+        E = rot_z(fixed_angle(J));
         p.setZero();
       } else {
         const JointParams& P = model.joints[j - 1];
-        E = rot_x(P.alpha) * rot_z(J.offset);
-        p = Eigen::Vector3d(P.a, 0, P.d);
+        E = rot_x(P.alpha) * rot_z(fixed_angle(J));
+        p = Eigen::Vector3d(P.a, 0, distal_d(P));
       }
+      if (J.prismatic()) p += E.col(2) * J.offset;
       const Eigen::Matrix3d RF = rot_x(J.alpha);
-      com = RF * J.com + Eigen::Vector3d(J.a, 0, J.d);
+      com = RF * J.com + Eigen::Vector3d(J.a, 0, distal_d(J));
       I = RF * J.inertia * RF.transpose();
     } else {
-      // Joint frame j = DH frame j = DH frame j-1 * Rx(alpha) Tx(a) Tz(d) Rz(offset) Rz(q).
-      E = rot_x(J.alpha) * rot_z(J.offset);
-      p = rot_x(J.alpha) * Eigen::Vector3d(J.a, 0, J.d);
+      // Joint frame j = DH frame j = DH frame j-1 * Rx(alpha) Tx(a) Tz(fixed slide)
+      // Rz(fixed angle), then Rz(q) or Tz(q) (Rz and Tz commute).
+      E = rot_x(J.alpha) * rot_z(fixed_angle(J));
+      p = rot_x(J.alpha) * Eigen::Vector3d(J.a, 0, fixed_slide(J));
     }
+    f.type.push_back(J.type);
     f.E.push_back(E);
     f.p.push_back(p);
     f.mass.push_back(J.mass);
@@ -151,7 +185,7 @@ JointFrameData joint_frames(const RobotModel& model) {
   if (model.convention == DhConvention::kStandard && n > 0) {
     const JointParams& L = model.joints[n - 1];
     f.E_tool = rot_x(L.alpha);
-    f.p_tool = Eigen::Vector3d(L.a, 0, L.d);
+    f.p_tool = Eigen::Vector3d(L.a, 0, distal_d(L));
   }
   return f;
 }

@@ -1,4 +1,5 @@
-// Robot parameters: a serial chain of revolute joints described by DH rows.
+// Robot parameters: a serial chain of revolute and prismatic joints described
+// by DH rows.
 //
 // A RobotModel is plain, immutable data in SI units. It is loaded from a robot
 // file (robot_file.hpp), generated at random (random_chain.hpp), or derived
@@ -25,27 +26,48 @@ enum class DhConvention {
 
 const char* to_string(DhConvention c);
 
+// What joint j's variable q_j moves (the Robotics Toolbox's `Link` convention,
+// Corke): a revolute joint turns about z, theta_j = q_j + offset with
+// d_j = d fixed; a prismatic joint slides along z, d_j = q_j + offset with
+// theta_j = theta fixed. The parameter the variable replaces is not used: a
+// revolute joint's `theta` and a prismatic joint's `d` must be 0 (joint_frames
+// refuses them otherwise, so that no value is silently ignored).
+enum class JointType : unsigned char { kRevolute, kPrismatic };
+
+const char* to_string(JointType t);
+
 struct JointParams {
-  // Kinematics (meaning per DhConvention above); theta_j = q_j + offset.
+  // Kinematics (meaning per DhConvention and JointType above).
+  JointType type = JointType::kRevolute;
   double a = 0.0;       // link length [m]
   double alpha = 0.0;   // link twist [rad]
-  double d = 0.0;       // link offset [m]
-  double offset = 0.0;  // joint angle offset [rad]
+  double d = 0.0;       // link offset [m]; revolute joints only (0 for prismatic)
+  double theta = 0.0;   // joint angle [rad]; prismatic joints only (0 for revolute)
+  double offset = 0.0;  // joint variable offset: [rad] revolute, [m] prismatic
   // Link inertial parameters, in link j's DH frame.
   double mass = 0.0;                                       // [kg]
   Eigen::Vector3d com = Eigen::Vector3d::Zero();           // centre of mass [m]
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();       // about the centre of mass [kg m^2]
   // Drive (motor side of the gearbox).
   double rotor_inertia = 0.0;  // Im, motor rotor inertia [kg m^2], motor side
-  double gear_ratio = 1.0;     // Z = motor angle / joint angle [-]; link-side inertia Z^2 Im
-  // Joint range (link side).
-  double q_min = -3.141592653589793;  // [rad]
-  double q_max = 3.141592653589793;   // [rad]
+  // Z = motor angle / joint variable: [-] revolute, [rad/m] prismatic (a ball
+  // screw); the link-side armature Z^2 Im is in [kg m^2] or [kg].
+  double gear_ratio = 1.0;
+  // Joint range (link side): [rad] revolute, [m] prismatic.
+  double q_min = -3.141592653589793;
+  double q_max = 3.141592653589793;
+
+  bool prismatic() const { return type == JointType::kPrismatic; }
+  // The DH row's joint angle theta_j [rad] and offset d_j [m] at joint variable q.
+  template <class S>
+  S dh_theta(const S& q) const { return prismatic() ? S(theta) : S(q + S(offset)); }
+  template <class S>
+  S dh_d(const S& q) const { return prismatic() ? S(q + S(offset)) : S(d); }
 };
 
 struct NamedPose {
   std::string name;
-  Eigen::VectorXd q;  // [rad], one entry per joint
+  Eigen::VectorXd q;  // one entry per joint: [rad] revolute, [m] prismatic
 };
 
 struct RobotModel {
@@ -61,28 +83,32 @@ struct RobotModel {
   const NamedPose* pose(const std::string& pose_name) const;
 };
 
-// Homogeneous transform of DH row j (0-based) at joint angle q: frame j-1 -> frame j.
+// Homogeneous transform of DH row j (0-based) at joint variable q: frame j-1 -> frame j.
 Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q);
 
 // Potential energy of gravity V(q) = -sum_j m_j g . p_cj(q) [J] (a rotor turns
-// about its own axis: no potential of its own).
+// about its own axis: no potential of its own, for a ball-screw drive too).
 double potential_energy(const RobotModel& model, const Eigen::VectorXd& q);
 
 // The same model with every rotor inertia set to zero (rigid links only).
 RobotModel without_rotor_inertia(RobotModel model);
 
-// The first n_active joints of `model`; joints n_active..dof-1 are held at the
-// angles q_full[n_active..] and their links are merged, as one rigid body, into
-// link n_active-1 (their mass and inertia still count, their rotors do not turn).
+// The first n_active joints of `model`; joints n_active..dof-1 are held at
+// q_full[n_active..] (angles, or displacements for prismatic joints) and their
+// links are merged, as one rigid body, into link n_active-1 (their mass and
+// inertia still count, their rotors do not turn).
 // Poses are truncated to the active joints.
 RobotModel lock_joints(const RobotModel& model, int n_active, const Eigen::VectorXd& q_full);
 
 // Joint-frame form shared by every algorithm (see chain.hpp): joint frame j has
 // its z axis on joint j and is obtained from joint frame j-1 by the fixed
-// transform (E_j, p_j) followed by Rz(q_j). Inertial data are moved into these
-// frames; `E_tool, p_tool` place the last DH frame (the flange) in joint frame n.
+// transform (E_j, p_j) followed by Rz(q_j) (revolute) or Tz(q_j) (prismatic).
+// Inertial data are moved into these frames; `E_tool, p_tool` place the last
+// DH frame (the flange) in joint frame n. Throws std::invalid_argument for a
+// revolute joint with theta != 0 or a prismatic one with d != 0.
 struct JointFrameData {
-  std::vector<Eigen::Matrix3d> E;        // fixed rotation, joint frame j-1 -> j (before Rz(q_j))
+  std::vector<JointType> type;
+  std::vector<Eigen::Matrix3d> E;        // fixed rotation, joint frame j-1 -> j (before the joint)
   std::vector<Eigen::Vector3d> p;        // origin of joint frame j in joint frame j-1 [m]
   std::vector<double> mass;              // [kg]
   std::vector<Eigen::Vector3d> com;      // centre of mass in joint frame j [m]

@@ -13,6 +13,10 @@ std::string puma_ik_unsupported(const RobotModel& m) {
   }
   for (int j = 0; j < 6; ++j) {
     const JointParams& J = m.joints[j];
+    if (J.prismatic()) {
+      return "the PUMA inverse kinematics needs revolute joints; joint " + std::to_string(j + 1) +
+             " is prismatic";
+    }
     if (std::abs(J.alpha - twist[j]) > 1e-9 || J.offset != 0.0) {
       return "the PUMA inverse kinematics needs the PUMA's twists and zero offsets; joint " +
              std::to_string(j + 1) + " differs";

@@ -15,7 +15,8 @@
 namespace pumasim {
 
 // Pose of DH frame `count` (default: the flange, the last frame) for the joint
-// angles q. Allocation-free.
+// variables q (angles [rad], or displacements [m] for prismatic joints).
+// Allocation-free.
 template <class S, class Q>
 void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>& R,
                         Eigen::Matrix<S, 3, 1>& p, int count = -1) {
@@ -26,19 +27,19 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
   const int upto = count < 0 ? m.dof() : count;
   for (int j = 0; j < upto; ++j) {
     const JointParams& J = m.joints[j];
-    const S th = S(q[j]) + S(J.offset);
+    const S th = J.dh_theta(S(q[j])), d = J.dh_d(S(q[j]));
     const S ct = cos(th), st = sin(th);
     const double ca = std::cos(J.alpha), sa = std::sin(J.alpha);
     Eigen::Matrix<S, 3, 3> Rz, Rx;
     Rz << ct, -st, S(0), st, ct, S(0), S(0), S(0), S(1);
     Rx << S(1), S(0), S(0), S(0), S(ca), S(-sa), S(0), S(sa), S(ca);
     if (m.convention == DhConvention::kStandard) {  // Rz(th) Tz(d) Tx(a) Rx(alpha)
-      p += R * (Rz * Eigen::Matrix<S, 3, 1>(S(J.a), S(0), S(J.d)));
+      p += R * (Rz * Eigen::Matrix<S, 3, 1>(S(J.a), S(0), d));
       R = (R * Rz * Rx).eval();
     } else {  // Rx(alpha) Tx(a) Rz(th) Tz(d)
       p += R * Eigen::Matrix<S, 3, 1>(S(J.a), S(0), S(0));
       R = (R * Rx).eval();
-      p += R * Eigen::Matrix<S, 3, 1>(S(0), S(0), S(J.d));
+      p += R * Eigen::Matrix<S, 3, 1>(S(0), S(0), d);
       R = (R * Rz).eval();
     }
   }
@@ -46,8 +47,9 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
 
 // Geometric Jacobian of the flange of a robot with 6 joints (rows: linear
 // velocity, angular velocity; base frame), for the first `columns` joints
-// (the others zero): the closed form [z_i x (p_e - o_i); z_i] from one
-// kinematic pass. Allocation-free.
+// (the others zero): the closed form [z_i x (p_e - o_i); z_i] for a revolute
+// joint and [z_i; 0] for a prismatic one (Siciliano et al. 2009, eq. 3.30)
+// from one kinematic pass. Allocation-free.
 // With S = Dual and q = Dual(q, qd), the derivative parts are dJ/dt exactly.
 template <class S>
 void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, int columns,
@@ -61,25 +63,29 @@ void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, in
   V3 p = V3::Zero();
   for (int j = 0; j < m.dof(); ++j) {
     const JointParams& P = m.joints[j];
-    const S th = q[j] + S(P.offset), ct = cos(th), st = sin(th);
+    const S th = P.dh_theta(q[j]), d = P.dh_d(q[j]), ct = cos(th), st = sin(th);
     const double ca = std::cos(P.alpha), sa = std::sin(P.alpha);
     M3 Rz, Rx;
     Rz << ct, -st, S(0), st, ct, S(0), S(0), S(0), S(1);
     Rx << S(1), S(0), S(0), S(0), S(ca), S(-sa), S(0), S(sa), S(ca);
     if (m.convention == DhConvention::kStandard) {  // joint j turns about z of frame j-1
       z[j] = R.col(2), o[j] = p;
-      p += R * (Rz * V3(S(P.a), S(0), S(P.d)));
+      p += R * (Rz * V3(S(P.a), S(0), d));
       R = (R * Rz * Rx).eval();
     } else {  // about z of frame j, after Rx(alpha) Tx(a)
       p += R * V3(S(P.a), S(0), S(0));
       R = (R * Rx).eval();
       z[j] = R.col(2), o[j] = p;
-      p += R * V3(S(0), S(0), S(P.d));
+      p += R * V3(S(0), S(0), d);
       R = (R * Rz).eval();
     }
   }
   J.setZero();
   for (int k = 0; k < columns; ++k) {
+    if (m.joints[k].prismatic()) {
+      J.template block<3, 1>(0, k) = z[k];
+      continue;
+    }
     J.template block<3, 1>(0, k) = z[k].cross(p - o[k]);
     J.template block<3, 1>(3, k) = z[k];
   }

@@ -1,6 +1,8 @@
 #include "models/robot/random_chain.hpp"
 
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -8,10 +10,20 @@
 namespace pumasim {
 
 RobotModel random_chain(int n, std::uint64_t seed, DhConvention convention) {
+  return random_chain(n, seed, convention, "R");
+}
+
+RobotModel random_chain(int n, std::uint64_t seed, DhConvention convention, std::string_view joint_types) {
+  if (joint_types.empty() || joint_types.find_first_not_of("RP") != std::string_view::npos) {
+    throw std::invalid_argument("random_chain: expected joint types as a pattern of 'R' and 'P', got '" +
+                                std::string(joint_types) + "'");
+  }
+  const bool all_revolute = joint_types.find('P') == std::string_view::npos;
   Rng rng(seed);
   RobotModel m;
   m.name = "random" + std::to_string(n);
-  m.source = "random_chain(n=" + std::to_string(n) + ", seed=" + std::to_string(seed) + ")";
+  m.source = "random_chain(n=" + std::to_string(n) + ", seed=" + std::to_string(seed) +
+             (all_revolute ? "" : ", joints=" + std::string(joint_types)) + ")";
   m.convention = convention;
   for (int j = 0; j < n; ++j) {
     JointParams J;
@@ -31,6 +43,16 @@ RobotModel random_chain(int n, std::uint64_t seed, DhConvention convention) {
     J.inertia = R * principal.asDiagonal() * R.transpose();
     J.rotor_inertia = rng.uniform(1e-5, 5e-4);
     J.gear_ratio = rng.uniform(20.0, 120.0) * (rng.uniform() < 0.5 ? -1.0 : 1.0);
+    if (joint_types[static_cast<std::size_t>(j) % joint_types.size()] == 'P') {
+      // The same draws, so that the other joints do not change: the angle
+      // drawn as offset becomes the fixed theta, the d drawn the offset [m].
+      J.type = JointType::kPrismatic;
+      J.theta = J.offset;
+      J.offset = J.d;
+      J.d = 0.0;
+      J.q_min = -std::numeric_limits<double>::infinity();
+      J.q_max = std::numeric_limits<double>::infinity();
+    }
     m.joints.push_back(J);
   }
   return m;

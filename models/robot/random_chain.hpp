@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <random>
+#include <string_view>
 
 #include <Eigen/Core>
 
@@ -36,5 +37,14 @@ class Rng {
 // ratios of magnitude 20..120 with random sign; gravity -9.81 m/s^2 along z.
 RobotModel random_chain(int n, std::uint64_t seed,
                         DhConvention convention = DhConvention::kStandard);
+
+// The same with joint j prismatic where joint_types[j % size] is 'P' and
+// revolute where it is 'R' ("RP": alternating, "RRP": every third). The random
+// numbers drawn are the same as above, so every revolute joint is the one of
+// random_chain(n, seed, convention), and "R" gives that chain exactly. A
+// prismatic joint takes the angle drawn as offset for its fixed theta and the
+// length drawn as d for its offset (d_j = q_j + offset, |offset| <= 0.3 m);
+// its gear ratio is then in rad/m and its limits are none (+-inf).
+RobotModel random_chain(int n, std::uint64_t seed, DhConvention convention, std::string_view joint_types);
 
 }  // namespace pumasim

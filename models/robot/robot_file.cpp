@@ -1,10 +1,12 @@
 #include "models/robot/robot_file.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 
@@ -93,19 +95,54 @@ void read_inertia(StrictTable& t, JointParams& J) {
   }
 }
 
-JointParams read_joint(StrictTable& t) {
-  JointParams J;
+// The shortest text that reads back as x ("0.3", not "0.29999999999999999").
+std::string format_value(double x) {
+  char buf[32];
+  const auto end = std::to_chars(buf, buf + sizeof buf, x).ptr;
+  return std::string(buf, end);
+}
+
+// The joint type and the DH row: a revolute joint has d and no theta, a
+// prismatic joint theta (default 0) and no d, the variable replacing either
+// (robot_model.hpp, JointType); the offset is in rad or m accordingly.
+void read_dh_row(StrictTable& t, JointParams& J) {
+  const std::string type = t.string_or("type", "revolute", {"revolute", "prismatic"});
+  J.type = type == "prismatic" ? JointType::kPrismatic : JointType::kRevolute;
   J.a = t.number("a");
   J.alpha = t.number("alpha", {-2 * M_PI, 2 * M_PI});
-  J.d = t.number("d");
-  J.offset = t.number_or("offset", 0.0, {-2 * M_PI, 2 * M_PI});
+  const char* unused = J.prismatic() ? "d" : "theta";
+  if (t.has(unused)) {
+    const double v = t.number(unused);
+    t.fail(unused,
+           J.prismatic() ? "no d on a prismatic joint (its d is q + offset [m]; put a constant part in offset)"
+                         : "no theta on a revolute joint (its theta is q + offset [rad]; theta is the fixed "
+                           "angle of a prismatic joint, type = \"prismatic\")",
+           std::string(unused) + " = " + format_value(v));
+  }
+  if (J.prismatic()) {
+    J.theta = t.number_or("theta", 0.0, {-2 * M_PI, 2 * M_PI});
+    J.offset = t.number_or("offset", 0.0);  // [m]
+  } else {
+    J.d = t.number("d");
+    J.offset = t.number_or("offset", 0.0, {-2 * M_PI, 2 * M_PI});  // [rad]
+  }
+}
+
+JointParams read_joint(StrictTable& t) {
+  JointParams J;
+  read_dh_row(t, J);
   J.mass = t.number("mass", Bounds::non_negative());
   J.com = vec3(t.numbers("com", 3));
   read_inertia(t, J);
   J.rotor_inertia = t.number("rotor_inertia", Bounds::non_negative());
   J.gear_ratio = t.number("gear_ratio");
   if (J.gear_ratio == 0.0) t.fail("gear_ratio", "a non-zero number", "0");
-  const auto lim = t.optional_numbers("limits", 2, {-4 * M_PI, 4 * M_PI});
+  // [rad] for a revolute joint, [m] for a prismatic one (no bound; none by default).
+  const auto lim = t.optional_numbers("limits", 2, J.prismatic() ? Bounds::any() : Bounds{-4 * M_PI, 4 * M_PI});
+  if (J.prismatic()) {
+    J.q_min = -std::numeric_limits<double>::infinity();
+    J.q_max = std::numeric_limits<double>::infinity();
+  }
   if (lim) {
     if (!((*lim)[0] < (*lim)[1])) {
       t.fail("limits", "[q_min, q_max] with q_min < q_max", "[" + std::to_string((*lim)[0]) +
