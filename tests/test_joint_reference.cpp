@@ -359,6 +359,31 @@ TEST(NumericalIk, PlanarArmMatchesItsClosedForm) {
   EXPECT_FALSE(dls_ik(robot, 2, Eigen::Vector3d(1.0, 0.5, 0.1), nullptr, q).converged);
 }
 
+// A prismatic joint (tests/robots/rp_polar.toml): joint 1 turns about the
+// vertical axis at height d1 = 0.5 m, joint 2 slides along z1 =
+// Rz(q1) Rx(pi/2) e_z = (sin q1, -cos q1, 0) with d2 = q2 + 0.1 m, so the
+// flange is at (r sin q1, -r cos q1, 0.5), r = q2 + 0.1: the closed form
+// r = hypot(x, y), q1 = atan2(x, -y). The numerical IK, position only, finds it.
+TEST(NumericalIk, PolarArmWithAPrismaticJointMatchesItsClosedForm) {
+  const RobotModel robot = load_robot(std::string(PUMASIM_SCENES_DIR) + "/../../tests/robots/rp_polar.toml");
+  int solved = 0;
+  for (int i = 0; i <= 5; ++i) {
+    for (int k = -5; k <= 5; ++k) {
+      const double r = 0.15 + 0.1 * i, phi = 0.5 * k;  // r within the slide's [0, 0.6] m plus the 0.1 m offset
+      const double x = r * std::sin(phi), y = -r * std::cos(phi);
+      Vec6 q = Vec6::Zero();
+      q[0] = phi + 0.2;
+      q[1] = r - 0.1 - 0.05;
+      const IkSolveResult res = dls_ik(robot, 2, Eigen::Vector3d(x, y, 0.5), nullptr, q);
+      ASSERT_TRUE(res.converged) << x << " " << y << " error " << res.error;
+      EXPECT_NEAR(std::remainder(q[0] - std::atan2(x, -y), 2 * M_PI), 0.0, 1e-10) << x << " " << y;
+      EXPECT_NEAR(q[1], std::hypot(x, y) - 0.1, 1e-10) << x << " " << y;
+      ++solved;
+    }
+  }
+  EXPECT_EQ(solved, 66);
+}
+
 // Along the paper's path, 3 joints (wrist centre) and 6 (with orientation):
 // the numerical IK started near the closed form's first point stays on its
 // branch, and the references agree: angles within 1e-9 rad (the convergence

@@ -199,15 +199,16 @@ void Reference::build_branch_table() {
     }
     for (int j = 0; j < n_; ++j) {
       const JointParams& J = robot_.joints[j];
+      const char* unit = J.prismatic() ? " m" : " rad";
       if (k > 0 && std::abs(q[j] - prev[j]) > M_PI / 4) {
-        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " turns by " +
-                                 std::to_string(q[j] - prev[j]) + " rad between s = " +
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " moves by " +
+                                 std::to_string(q[j] - prev[j]) + unit + " between s = " +
                                  std::to_string(L * (k - 1) / (points - 1)) + " and " + std::to_string(s) +
                                  " m of the path (too close to a singularity)");
       }
       if (q[j] < J.q_min - 1e-9 || q[j] > J.q_max + 1e-9) {
-        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " at " + std::to_string(q[j]) +
-                                 " rad leaves its limits [" + std::to_string(J.q_min) + ", " +
+        throw std::runtime_error("reference: joint " + std::to_string(j + 1) + " at " + std::to_string(q[j]) + unit +
+                                 " leaves its limits [" + std::to_string(J.q_min) + ", " +
                                  std::to_string(J.q_max) + "] at s = " + std::to_string(s) + " m of the path");
       }
     }
@@ -375,7 +376,9 @@ bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<doubl
     for (int j = n_; j < 6; ++j) q[j] = q_held_[j];
     if (!dls_ik(robot_, n_, p, n_ == 6 ? &R_fixed_ : nullptr, q).converged) return false;
     // Revolute joints: the same pose at every 2 pi; the representative nearest `near`.
-    for (int j = 0; j < n_; ++j) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+    for (int j = 0; j < n_; ++j) {
+      if (!robot_.joints[j].prismatic()) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
+    }
     return true;
   }
   q = q_held_;
