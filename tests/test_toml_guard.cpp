@@ -61,6 +61,15 @@ TEST(TomlGuard, TableHeaderWithoutAKeyIsRefusedBeforeToml) {
   expect_refused("bracket_hash", "[# a comment\n", {":1", "after '['", "got '#'"});
 }
 
+// toml++ 3.3 calls parse_value() on a '}' where an array expects a value: an
+// assertion with asserts on, an assumption without (found by fuzz_scene).
+TEST(TomlGuard, ClosingBraceInAnArrayIsRefused) {
+  const std::string expected = ": TOML syntax error: expected a value, ',' or ']' in the array opened before, got '}'";
+  expect_refused("brace_in_array", "a = [}\n", {"brace_in_array.toml:1" + expected});
+  expect_refused("brace_after_comma", "a = [ 1,\n  }\n", {"brace_after_comma.toml:2" + expected});
+  expect_refused("brace_in_nested_array", "a = { b = [}] }\n", {":1" + expected});
+}
+
 // toml++ 3.3's is_non_ascii_horizontal_whitespace reaches TOML_UNREACHABLE
 // for 'é' (U+00E9) and others.
 TEST(TomlGuard, NonAsciiWhereTomlAsksForWhitespaceIsRefused) {
@@ -72,6 +81,9 @@ TEST(TomlGuard, NonAsciiWhereTomlAsksForWhitespaceIsRefused) {
   expect_refused("after_quoted_key", "\"a\"\xE2\x80\x83= 1\n", {":1", ascii});
   expect_refused("escape", "a = \"\"\"x\n\\\xC3\xA9\"\"\"\n", {":2", "expected an escape sequence after '\\'"});
   expect_refused("escape_single_line", "a = \"\\\xC3\xA9\"\n", {":1", "expected an escape sequence"});
+  // A quote after a value's first characters opens no string: toml++ reads on (found by fuzz_robot).
+  expect_refused("quote_inside_bare_value", "a = 0[offso\"x\xC3\xA9 \"ro]\n", {":1", ascii});
+  expect_refused("quote_after_dot_in_value", "a = [3, 665.\"x\xEF\xBB\xB5\"]\n", {":1", ascii});
   expect_refused("after_line_ending_backslash", "a = \"\"\"x \\\n\n   \xC3\xA9\"\"\"\n",
                  {":3", "expected an ASCII character first after a line-ending backslash", "\\uXXXX"});
 }
@@ -89,6 +101,7 @@ TEST(TomlGuard, ValidLookAlikesParse) {
       "cont = \"\"\"a \\\n    b\xC3\xA9\"\"\"\n"
       "lit = '''\n[\n\\\xC3\xA9'''\n"
       "quotes = \"\"\"x\"\"\"\"\"\n"
+      "dotted.\"k\xC3\xA9y\" = { x.\"\xC3\xA9\" = 1, y . '\xC3\xA9' = [\"\xC3\xA9\"] }\n"
       "[ \"a b\" . c ]\n"
       "[[ list ]]\n"
       "[\t'l' ]\n";
@@ -104,6 +117,7 @@ TEST(TomlGuard, ValidLookAlikesParse) {
   EXPECT_EQ(t["lit"].value_or(std::string()), "[\n\\\xC3\xA9");
   EXPECT_EQ(t["quotes"].value_or(std::string()), "x\"\"");
   EXPECT_TRUE(t["a b"]["c"].is_table());
+  EXPECT_EQ(t["dotted"]["k\xC3\xA9y"]["y"]["\xC3\xA9"][0].value_or(std::string()), "\xC3\xA9");
   EXPECT_TRUE(t["list"].is_array_of_tables());
   EXPECT_TRUE(t["l"].is_table());
 }

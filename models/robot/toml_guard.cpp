@@ -40,6 +40,7 @@ class Scanner {
   bool at(std::size_t i, std::string_view s) const { return t_.substr(i, s.size()) == s; }
   void step();  // one character (or token) outside strings and comments
   void table_header();
+  bool at_token_start() const;
   void basic_string(bool multi_line);
   void literal_string(bool multi_line);
   void escape(bool multi_line);
@@ -51,18 +52,21 @@ class Scanner {
   void newline() {
     ++line_;
     line_has_token_ = false;
+    if (open_.empty()) in_key_ = true;
   }
 
   std::string_view t_;
   std::size_t i_ = 0;
   int line_ = 1;
-  int depth_ = 0;                // open '[' and '{' of values
+  std::size_t start_ = 0;        // after a byte order mark
+  std::string open_;             // the open '[' and '{' of values, innermost last
+  bool in_key_ = true;           // where a key is read (before '=', in a table header)
   bool line_has_token_ = false;  // something other than blanks on this line (outside values)
   std::optional<TomlHazard> hazard_;
 };
 
 std::optional<TomlHazard> Scanner::run() {
-  if (at(0, "\xEF\xBB\xBF")) i_ = 3;
+  if (at(0, "\xEF\xBB\xBF")) i_ = start_ = 3;
   while (i_ < t_.size() && !hazard_) step();
   return hazard_;
 }
@@ -76,7 +80,7 @@ void Scanner::step() {
     ++i_;
   } else if (c == '#') {
     while (i_ < t_.size() && t_[i_] != '\n') ++i_;  // a comment may hold any character
-  } else if (c == '"' || c == '\'') {
+  } else if ((c == '"' || c == '\'') && at_token_start()) {
     const bool multi = at(i_, c == '"' ? "\"\"\"" : "'''");
     i_ += multi ? 3 : 1;
     if (c == '"') {
@@ -87,14 +91,29 @@ void Scanner::step() {
     line_has_token_ = true;
   } else if (!is_ascii(c)) {
     fail(i_, "ASCII outside strings and comments (TOML 1.0 keys are ASCII: quote a key with other characters)");
-  } else if (c == '[' && depth_ == 0 && !line_has_token_) {
+  } else if (c == '[' && open_.empty() && !line_has_token_) {
     table_header();
+  } else if (c == '}' && !open_.empty() && open_.back() == '[') {
+    fail(i_, "a value, ',' or ']' in the array opened before");
   } else {
-    if (c == '[' || c == '{') ++depth_;
-    if (c == ']' || c == '}') depth_ = std::max(0, depth_ - 1);
+    if (c == '[' || c == '{') open_.push_back(c);
+    if ((c == ']' || c == '}') && !open_.empty()) open_.pop_back();
+    // Keys come first on a line outside values, and after '{' or ',' in an inline table.
+    if (c == '=' || c == '[' || c == ']' || c == '}') in_key_ = false;
+    if (c == '{' || (c == ',' && !open_.empty() && open_.back() == '{')) in_key_ = true;
     line_has_token_ = true;
     ++i_;
   }
+}
+
+// A quote opens a string only where a token starts; after other characters
+// (a = 0"x") toml++ reads it as part of a bare value, up to a blank, ',', ']',
+// '}' or '#', asking of each character whether it is whitespace.
+bool Scanner::at_token_start() const {
+  if (i_ == start_) return true;
+  const char p = t_[i_ - 1];
+  return p == ' ' || p == '\t' || p == '\n' || p == '\r' || p == '=' || p == '[' || p == '{' || p == ',' ||
+         (p == '.' && in_key_);  // a dotted key's next part; in a value, 665."x" is one bare token
 }
 
 // '[' or '[[' first on a line outside any value: a table header, whose key
@@ -107,6 +126,7 @@ void Scanner::table_header() {
   if (j < t_.size() && (is_bare_key_char(t_[j]) || t_[j] == '"' || t_[j] == '\'')) {
     i_ = j;
     line_has_token_ = true;
+    in_key_ = true;
     return;
   }
   fail(j, "a table name after '" + brackets + "' (a bare key of A-Z a-z 0-9 _ - or a quoted key)");

@@ -1,6 +1,6 @@
 // Input that Debian 12's toml++ 3.3 mishandles, found before toml++ sees it.
 //
-// Two defects of toml++ 3.3 (found by the fuzz harnesses, tests/fuzz/) are
+// Three defects of toml++ 3.3 (found by the fuzz harnesses, tests/fuzz/) are
 // undefined behaviour in a release build, where toml++'s own checks are
 // compiled out; the release binary happens to print a syntax error today:
 //
@@ -10,17 +10,22 @@
 //      only asserts (TOML_ASSERT_ASSUME: an assumption when NDEBUG is set).
 //      Fixed upstream in toml++ pull request #301 (after 3.3).
 //   2. A non-ASCII character where toml++ asks whether it is whitespace:
-//      outside strings and comments, after a backslash in a multi-line basic
+//      outside strings and comments (a quote right after a value's first
+//      characters, as in a = 0"x", opens no string: toml++ reads on to a
+//      blank, ',', ']', '}' or '#'), after a backslash in a multi-line basic
 //      string, or first after a line-ending backslash there. Its unicode
 //      table (is_non_ascii_horizontal_whitespace) reaches TOML_UNREACHABLE
 //      for U+00A1..U+0499, U+2C5E..U+3057 but U+3000, and U+FB26..U+FEFE
 //      (e.g. 'é'). The scan refuses every non-ASCII character in those
 //      places, not only these ranges: simpler, and not tied to 3.3's tables.
+//   3. A '}' where an array expects a value ("a = [}", "a = [1, }"):
+//      parse_value() is called on a value terminator, a precondition it
+//      only asserts (TOML_ASSERT_ASSUME), as in 1.
 //
 // find_toml_hazard scans the text as TOML lexes it (strings of the four
 // kinds, comments, the brackets of values) and reports the first such input.
 // Every hazard it reports is invalid TOML 1.0 (bare keys are ASCII, escapes
-// are ASCII letters, a table header holds a key) except one: a non-ASCII
+// are ASCII letters, a table header holds a key, brackets match) except one: a non-ASCII
 // character first after a line-ending backslash, which is valid TOML that
 // has to be written another way here (a \uXXXX escape).
 #pragma once
