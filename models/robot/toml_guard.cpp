@@ -41,6 +41,7 @@ class Scanner {
   void step();  // one character (or token) outside strings and comments
   void table_header();
   bool at_token_start() const;
+  void bare_value();
   void basic_string(bool multi_line);
   void literal_string(bool multi_line);
   void escape(bool multi_line);
@@ -93,6 +94,8 @@ void Scanner::step() {
     fail(i_, "ASCII outside strings and comments (TOML 1.0 keys are ASCII: quote a key with other characters)");
   } else if (c == '[' && open_.empty() && !line_has_token_) {
     table_header();
+  } else if (!in_key_ && std::string_view(" \t\n\r\v\f,]}#\"'[{").find(c) == std::string_view::npos) {
+    bare_value();
   } else if (c == '}' && !open_.empty() && open_.back() == '[') {
     fail(i_, "a value, ',' or ']' in the array opened before");
   } else {
@@ -104,6 +107,18 @@ void Scanner::step() {
     line_has_token_ = true;
     ++i_;
   }
+}
+
+// A value that is not a string, an array or an inline table (a number, a
+// date, true, ...): toml++ reads it up to a blank, ',', ']', '}' or '#',
+// quotes and brackets included, asking of each character whether it is
+// whitespace.
+void Scanner::bare_value() {
+  while (i_ < t_.size() && std::string_view(" \t\n\r\v\f,]}#").find(t_[i_]) == std::string_view::npos) {
+    if (!is_ascii(t_[i_])) return fail(i_, "ASCII in a value that is not a string (a number, a date, true or false)");
+    ++i_;
+  }
+  line_has_token_ = true;
 }
 
 // A quote opens a string only where a token starts; after other characters
