@@ -70,6 +70,19 @@ TEST(TomlGuard, ClosingBraceInAnArrayIsRefused) {
   expect_refused("brace_in_nested_array", "a = { b = [}] }\n", {":1" + expected});
 }
 
+// A date, a space and one digit: toml++ 3.3 scans for a time from a value
+// terminator, an asserted precondition (found by fuzz_robot's long run).
+TEST(TomlGuard, DateSpaceDigitIsRefused) {
+  const std::string expected = ": TOML syntax error: expected a time hh:mm:ss after a date and a space, got '0'";
+  expect_refused("date_space_digit", "d = 1979-05-27 0\n", {"date_space_digit.toml:1" + expected});
+  expect_refused("date_space_digit_in_array", "d = [1979-05-27 0]\n", {":1" + expected});
+  const std::string ok = "d = 1979-05-27 07:32:00\ne = 1979-05-27 # 0\nf = [1979-05-27 ]\n";
+  EXPECT_FALSE(find_toml_hazard(ok).has_value());
+  const toml::table t = toml::parse(std::string_view(ok), std::string_view("dates"));
+  EXPECT_TRUE(t["d"].is_date_time());
+  EXPECT_TRUE(t["e"].is_date());
+}
+
 // toml++ 3.3's is_non_ascii_horizontal_whitespace reaches TOML_UNREACHABLE
 // for 'é' (U+00E9) and others.
 TEST(TomlGuard, NonAsciiWhereTomlAsksForWhitespaceIsRefused) {

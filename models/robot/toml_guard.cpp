@@ -119,6 +119,14 @@ void Scanner::bare_value() {
     ++i_;
   }
   line_has_token_ = true;
+  // "1979-05-27 0" then a blank, ',', ']' or '}': toml++ takes the space for a
+  // date-time's 'T' and scans on from the digit at a value terminator (an
+  // assertion, TOML_ASSERT_ASSUME). Valid TOML has hh:mm:ss there.
+  const std::string_view end(" \t\n\r\v\f,]}#");
+  if (i_ + 2 < t_.size() && t_[i_] == ' ' && t_[i_ + 1] >= '0' && t_[i_ + 1] <= '9' &&
+      end.find(t_[i_ + 2]) != std::string_view::npos) {
+    fail(i_ + 1, "a time hh:mm:ss after a date and a space");
+  }
 }
 
 // A quote opens a string only where a token starts; after other characters

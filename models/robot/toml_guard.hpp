@@ -1,6 +1,6 @@
 // Input that Debian 12's toml++ 3.3 mishandles, found before toml++ sees it.
 //
-// Three defects of toml++ 3.3 (found by the fuzz harnesses, tests/fuzz/) are
+// Four defects of toml++ 3.3 (found by the fuzz harnesses, tests/fuzz/) are
 // undefined behaviour in a release build, where toml++'s own checks are
 // compiled out; the release binary happens to print a syntax error today:
 //
@@ -21,6 +21,9 @@
 //   3. A '}' where an array expects a value ("a = [}", "a = [1, }"):
 //      parse_value() is called on a value terminator, a precondition it
 //      only asserts (TOML_ASSERT_ASSUME), as in 1.
+//   4. A date, a space and one digit before a value terminator
+//      ("d = 1979-05-27 0"): toml++ reads on for a date-time's time and calls
+//      its scan on the terminator, another asserted precondition.
 //
 // find_toml_hazard scans the text as TOML lexes it (strings of the four
 // kinds, comments, the brackets of values) and reports the first such input.
