@@ -49,6 +49,10 @@ struct ConsistentRosenbrockCoefficients : boost::numeric::odeint::default_rosenb
 // accurate; d_i as published (tests check them against gamma_i = sum_j gamma_ij).
 template <class Value>
 struct Rodas4PCoefficients {
+  // The orders odeint's stepper reports (order()); clang instantiates these
+  // members of rosenbrock4 with the class, GCC only where they are used.
+  static const unsigned short stepper_order = 4;
+  static const unsigned short error_order = 3;
   const Value gamma = 0.25;
   const Value d1 = 0.25, d2 = -0.5, d3 = -0.023504, d4 = -0.0362;
   const Value c2 = 0.75, c3 = 0.21, c4 = 0.63;

@@ -252,7 +252,7 @@ class Arkode final : public Integrator {
 
   std::string failure(int flag) {
     std::string msg = std::string(name()) + " failed with flag " + std::to_string(flag) + " (" +
-                      ARKStepGetReturnFlagName(flag) + ") at t = " + std::to_string(t_) + " s";
+                      detail::flag_name(ARKStepGetReturnFlagName(flag)) + ") at t = " + std::to_string(t_) + " s";
     if (!error_.empty()) msg += ": " + error_;
     N_Vector ele = N_VClone(y_), w = N_VClone(y_);
     if (ARKStepGetEstLocalErrors(mem_, ele) == ARK_SUCCESS && ARKStepGetErrWeights(mem_, w) == ARK_SUCCESS) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -47,6 +48,15 @@ int set_absolute_tolerances(const OdeSystem& sys, double atol, SUNContext ctx, S
 }
 
 // The index of the first root function SUNDIALS reports as found.
+// A flag's name from CVodeGetReturnFlagName / ARKStepGetReturnFlagName, which
+// return a malloc'd string that the caller frees (SUNDIALS 6; LeakSanitizer
+// found it left).
+inline std::string flag_name(char* name) {
+  std::string s = name ? name : "?";
+  std::free(name);
+  return s;
+}
+
 inline int first_root_found(const std::vector<int>& rootsfound) {
   return static_cast<int>(std::find_if(rootsfound.begin(), rootsfound.end(), [](int r) { return r != 0; }) -
                           rootsfound.begin());

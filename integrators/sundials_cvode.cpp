@@ -166,7 +166,7 @@ class Cvode final : public Integrator {
 
   std::string failure(int flag) {
     std::string msg = std::string(name()) + " failed with flag " + std::to_string(flag) + " (" +
-                      CVodeGetReturnFlagName(flag) + ") at t = " + std::to_string(t_) + " s";
+                      detail::flag_name(CVodeGetReturnFlagName(flag)) + ") at t = " + std::to_string(t_) + " s";
     if (!error_.empty()) msg += ": " + error_;
     // The components with the largest weighted local error estimates.
     N_Vector ele = N_VClone(y_), w = N_VClone(y_);

@@ -1,6 +1,17 @@
 #!/usr/bin/env bash
-# The README's test command: install what is missing, build, run every test.
+# The README's test command: install what is missing, build, run every test;
+# then the sanitizer build (preset asan) and its tests, and a one-minute fuzz
+# run of each parser (scripts/fuzz.sh --smoke). Each phase's wall time goes to stderr.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/build.sh
-ctest --preset release -j "$(nproc)"
+phase() {
+  local start=$SECONDS
+  "$@"
+  echo "test.sh: $* took $((SECONDS - start)) s" >&2
+}
+phase scripts/build.sh
+phase ctest --preset release -j "$(nproc)"
+phase cmake --preset asan >/dev/null
+phase cmake --build --preset asan -j "$(nproc)"
+phase ctest --preset asan -j "$(nproc)"
+phase scripts/fuzz.sh --smoke

@@ -42,8 +42,18 @@ template <class S, int N> using VecN = Eigen::Matrix<S, N, 1>;
 template <class S, int N> using MatN = Eigen::Matrix<S, N, N>;
 
 // Per-joint storage: in place for a fixed N, one allocation at construction otherwise.
+// (A specialisation, not std::conditional_t: that would name std::array<T, -1>
+// for a dynamic N, a narrowing that clang refuses.)
 template <class T, int N>
-using PerJoint = std::conditional_t<N == Eigen::Dynamic, std::vector<T>, std::array<T, N>>;
+struct PerJointStorage {
+  using type = std::array<T, static_cast<std::size_t>(N)>;
+};
+template <class T>
+struct PerJointStorage<T, Eigen::Dynamic> {
+  using type = std::vector<T>;
+};
+template <class T, int N>
+using PerJoint = typename PerJointStorage<T, N>::type;
 
 // Zero of a scalar or of a fixed-size Eigen type.
 template <class T>

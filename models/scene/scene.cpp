@@ -9,6 +9,7 @@
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/reference/time_optimal.hpp"
+#include "models/robot/toml_writer.hpp"
 #include "models/scene/entries.hpp"
 #include "models/scene/joint_csv.hpp"
 
@@ -842,7 +843,7 @@ std::string resolved_toml(const Scene& sc) {
   write_reference(doc, sc);
   write_initial(doc, pc);
   std::ostringstream out;
-  out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << doc << "\n";
+  out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << write_toml(doc) << "\n";
   return out.str();
 }
 
