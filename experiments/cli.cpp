@@ -264,6 +264,9 @@ void add_dynamics(CLI::App* app, DynamicsArgs& a) {
 
 int cmd_check(const SceneArgs& a, std::ostream& out) {
   const Scene sc = load_checked_scene(a);
+  // What `pumasim run` refuses up front with its default budgets: the output
+  // rows held in memory, more controller samples than steps.
+  check_run_size(sc, kDefaultStepBudget);
   Plant plant(sc.plant);
   std::vector<double> x(plant.size());
   plant.initial_state(x.data());
