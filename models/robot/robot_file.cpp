@@ -19,6 +19,8 @@
 namespace pumasim {
 namespace {
 
+constexpr std::size_t kMaxRobotFileJoints = 256;
+
 Eigen::Vector3d vec3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
 
 std::string str(double x) {
@@ -211,6 +213,12 @@ RobotModel load_robot_file(const std::string& path) {
   robot.finish();
 
   std::vector<StrictTable> joints = root.array_of_tables("joint");
+  // Bounded before any per-joint work (the inertia check below is O(n^3)):
+  // the longest chains the benchmark uses have 48 joints.
+  if (joints.size() > kMaxRobotFileJoints) {
+    root.fail("joint", "at most " + std::to_string(kMaxRobotFileJoints) + " [[joint]] tables",
+              std::to_string(joints.size()));
+  }
   for (StrictTable& jt : joints) model.joints.push_back(read_joint(jt));
   if (model.joints.empty()) root.fail("joint", "at least one [[joint]] table", "none");
 
