@@ -184,7 +184,10 @@ void Reference::build_branch_table() {
   const int points = 2000;
   const double L = path_->length();
   Eigen::Matrix<double, 6, 1> prev = q_held_;
-  for (int j = 0; j < robot_.dof(); ++j) prev[j] = 0.5 * (robot_.joints[j].q_min + robot_.joints[j].q_max);
+  for (int j = 0; j < robot_.dof(); ++j) {  // the middle of the range; 0 for a joint without limits (a slide)
+    const JointParams& J = robot_.joints[j];
+    prev[j] = std::isfinite(J.q_min) && std::isfinite(J.q_max) ? 0.5 * (J.q_min + J.q_max) : 0.0;
+  }
   if (ik_.method == IkMethod::kNumerical && ik_.guess) {
     for (int j = 0; j < n_; ++j) prev[j] = (*ik_.guess)[j];
   }
