@@ -23,6 +23,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import pumasim_io  # noqa: E402
 
 SCENES = os.path.join(pumasim_io.ROOT, "experiments", "scenes")
+SCENE = os.path.join(SCENES, "paper_slow.toml")
 # About 2 s of RK4 steps of 2 us on 1.6 s (800,000 steps) with one output at
 # the end: the progress line must come from the step loop, as no output falls
 # in between.
@@ -106,3 +107,41 @@ def test_quiet_has_no_progress_line_on_a_terminal(tmp_path):
     assert status == 0, err
     assert json.loads(out)["ok"] is True
     assert err == b""
+
+
+def _small_file_limit(limit_bytes):
+    """A preexec_fn: files the child writes stop at limit_bytes, and a write
+    past it fails with EFBIG instead of killing the child (SIGXFSZ ignored,
+    which exec keeps): what a full disk looks like to the program."""
+    import resource
+    import signal
+
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, limit_bytes))
+    return apply
+
+
+def test_a_full_disk_is_an_error_naming_the_file_and_leaves_no_run_folder(tmp_path):
+    # The reliability issue: with a 256 KiB tmpfs, pumasim run exited 0 and
+    # left trajectory.csv cut at 256 KiB and empty stats.json, meta.json and
+    # scene.resolved.toml. paper_slow's trajectory is far above 256 KiB.
+    out = tmp_path / "run"
+    p = subprocess.run([pumasim_io.PUMASIM, "run", SCENE, "--out", str(out), "--quiet"],
+                       capture_output=True, text=True, preexec_fn=_small_file_limit(256 * 1024))
+    assert p.returncode == 2, p.stderr
+    assert "could not write" in p.stderr and "trajectory.csv" in p.stderr, p.stderr
+    assert "no run folder written" in p.stderr, p.stderr
+    assert p.stdout == ""
+    assert os.listdir(tmp_path) == [], os.listdir(tmp_path)  # neither the folder nor its .partial
+
+
+def test_an_output_location_that_cannot_be_a_folder_is_an_error_naming_it(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder\n")
+    p = subprocess.run([pumasim_io.PUMASIM, "run", SCENE, "--out", str(blocker / "run"), "--quiet", "--t-end", "0.01"],
+                       capture_output=True, text=True)
+    assert p.returncode == 2, p.stderr
+    assert str(blocker / "run") in p.stderr, p.stderr
+    assert "internal error" not in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["file"]

@@ -150,6 +150,16 @@ TEST_F(RobotFile, InertiaNotPositiveSemiDefinite) {
                {":11: joint[1].inertia: expected a positive semi-definite inertia"});
 }
 
+// The joint count is bounded before any per-joint check (the review of the
+// reliability issue found a 3000-joint file holding `pumasim check` in the
+// O(n^3) inertia check): 256 joints load, 257 are refused naming the key.
+TEST_F(RobotFile, TheJointCountIsBounded) {
+  std::string text = kHead;
+  for (int j = 0; j < 256; ++j) text += joint();
+  EXPECT_EQ(load_robot_file(write(text)).dof(), 256);
+  expect_error(text + joint(), {"joint: expected at most 256 [[joint]] tables, got 257"});
+}
+
 TEST_F(RobotFile, WrongArrayLengthAndSyntaxError) {
   expect_error(std::string(kHead) + "[[joint]]\na = 0\nalpha = 0\nd = 0\nmass = 1\ncom = [0, 0]\n",
                {"joint[1].com: expected an array of 3 numbers, got an array of 2"});
@@ -365,6 +375,13 @@ TEST(SceneNumbers, CheckRefusesWhatRunWouldRefuse) {
            (std::filesystem::temp_directory_path() / ("pumasim_rows_" + std::to_string(::getpid()))).string()});
   EXPECT_EQ(r.status, kExitBadInput);
   EXPECT_NE(r.err.find("scene.duration / scene.output_interval: expected at most"), std::string::npos) << r.err;
+  // check refuses the same (its budgets are run's defaults), and a servo period whose samples exceed them.
+  r = cli({"check", scene, "--set", "scene.duration=1e300"});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("scene.duration / scene.output_interval: expected at most"), std::string::npos) << r.err;
+  r = cli({"check", scene, "--set", "controller.mode=\"sampled\"", "--set", "controller.servo_period=1e-12"});
+  EXPECT_EQ(r.status, kExitBadInput);
+  EXPECT_NE(r.err.find("controller.servo_period"), std::string::npos) << r.err;
   r = cli({"check", scene, "--set", "scene.robot=\"" + std::string(300, 'a') + "\""});
   EXPECT_EQ(r.status, kExitBadInput);
   EXPECT_NE(r.err.find("scene.robot: unknown robot"), std::string::npos) << r.err;
