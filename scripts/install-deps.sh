@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake git            # toolchain (g++ 12, CMake 3.25)
-  clang libclang-rt-14-dev             # clang 14 with its sanitizer and libFuzzer runtimes (preset asan)
+  clang libclang-rt-14-dev llvm-14     # clang 14 with its sanitizer and libFuzzer runtimes (preset asan), llvm-symbolizer for reports
   libeigen3-dev                        # Eigen 3.4
   libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
   libboost-dev                         # Boost 1.74 headers: Odeint

@@ -1,5 +1,5 @@
 // The workarounds of toml++ 3.3's defects. The guard in front of its parser
-// (models/robot/toml_guard.hpp): the inputs that reach its two defects are
+// (models/robot/toml_guard.hpp): the inputs that reach its four parser defects are
 // refused with a message naming file, line and what was expected; valid TOML
 // that looks like them still parses. The writer (models/robot/toml_writer.hpp):
 // arrays printed without toml++'s width estimate, which is undefined
