@@ -22,6 +22,26 @@ inline double rel_err(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double
   return (a - b).norm() / std::max(a.norm(), floor);
 }
 
+// Every quantity a back-end computes, at one state: H, h, g, the inverse
+// dynamics tau = ID(q, qd, qdd) and the forward dynamics qdd = FD(q, qd, tau).
+struct Quantities {
+  Eigen::MatrixXd H;
+  Eigen::VectorXd h, g, tau, qdd;
+};
+
+inline Quantities evaluate(DynamicsBackend& b, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                           const Eigen::VectorXd& qdd, const Eigen::VectorXd& tau) {
+  const int n = b.dof();
+  Quantities r{Eigen::MatrixXd(n, n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n),
+               Eigen::VectorXd(n)};
+  b.mass_matrix(q, r.H);
+  b.bias(q, qd, r.h);
+  b.gravity(q, r.g);
+  b.inverse_dynamics(q, qd, qdd, r.tau);
+  b.forward_dynamics(q, qd, tau, r.qdd);
+  return r;
+}
+
 // The registered back-ends that can describe `m` (all but generated ones
 // made for another arm).
 inline std::vector<BackendInfo> supported(const RobotModel& m) {

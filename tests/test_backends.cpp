@@ -15,28 +15,12 @@
 namespace pumasim {
 namespace {
 
+using testing::evaluate;
+using testing::Quantities;
 using testing::rel_err;
 
 // Agreement bound, relative to the norm of the quantity (the 1e-10).
 constexpr double kAgree = 1e-10;
-
-struct Quantities {
-  Eigen::MatrixXd H;
-  Eigen::VectorXd h, g, tau, qdd;
-};
-
-Quantities evaluate(DynamicsBackend& b, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
-                    const Eigen::VectorXd& qdd, const Eigen::VectorXd& tau) {
-  const int n = b.dof();
-  Quantities r{Eigen::MatrixXd(n, n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n),
-               Eigen::VectorXd(n)};
-  b.mass_matrix(q, r.H);
-  b.bias(q, qd, r.h);
-  b.gravity(q, r.g);
-  b.inverse_dynamics(q, qd, qdd, r.tau);
-  b.forward_dynamics(q, qd, tau, r.qdd);
-  return r;
-}
 
 void expect_all_agree(const RobotModel& model, std::uint64_t seed, int states) {
   std::vector<std::unique_ptr<DynamicsBackend>> all;

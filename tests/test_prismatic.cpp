@@ -21,28 +21,12 @@
 namespace pumasim {
 namespace {
 
+using testing::evaluate;
+using testing::Quantities;
 using testing::rel_err;
 
 // Closed form against a back-end: a few hundred roundings of O(1..10) numbers.
 constexpr double kClosedForm = 1e-12;
-
-struct AllQuantities {
-  Eigen::MatrixXd H;
-  Eigen::VectorXd h, g, tau, qdd;
-};
-
-AllQuantities evaluate(DynamicsBackend& b, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
-                       const Eigen::VectorXd& qdd, const Eigen::VectorXd& tau) {
-  const int n = b.dof();
-  AllQuantities r{Eigen::MatrixXd(n, n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n),
-                  Eigen::VectorXd(n)};
-  b.mass_matrix(q, r.H);
-  b.bias(q, qd, r.h);
-  b.gravity(q, r.g);
-  b.inverse_dynamics(q, qd, qdd, r.tau);
-  b.forward_dynamics(q, qd, tau, r.qdd);
-  return r;
-}
 
 // One prismatic joint, link of mass m, rotor Im behind a screw of ratio Z.
 RobotModel slider(DhConvention convention, double alpha, const Eigen::Vector3d& gravity) {
@@ -77,7 +61,7 @@ void expect_slider_law(const RobotModel& m, const Eigen::Vector3d& z) {
     for (int s = 0; s < 5; ++s) {
       const Eigen::VectorXd q = rng.uniform_vector(1, -1, 1), qd = rng.uniform_vector(1, -2, 2);
       const Eigen::VectorXd qdd = rng.uniform_vector(1, -5, 5), tau = rng.uniform_vector(1, -50, 50);
-      const AllQuantities r = evaluate(*b, q, qd, qdd, tau);
+      const Quantities r = evaluate(*b, q, qd, qdd, tau);
       const double gz = m.gravity.dot(z);
       const Eigen::VectorXd weight = Eigen::VectorXd::Constant(1, -mass * gz);
       const std::string who = std::string(info.name) + " " + m.name;
@@ -134,7 +118,7 @@ TEST(Prismatic, PolarArmHasTheTextbookClosedForm) {
     for (int s = 0; s < 5; ++s) {
       const Eigen::VectorXd q = rng.uniform_vector(2, -1, 1), qd = rng.uniform_vector(2, -2, 2);
       const Eigen::VectorXd qdd = rng.uniform_vector(2, -5, 5), tau = rng.uniform_vector(2, -5, 5);
-      const AllQuantities r = evaluate(*b, q, qd, qdd, tau);
+      const Quantities r = evaluate(*b, q, qd, qdd, tau);
       const double rad = q[1] + L2.offset;
       Eigen::Matrix2d H;
       H << J1 + J2 + m2 * rad * rad + arm1, 0, 0, m2 + arm2;
