@@ -64,6 +64,25 @@ void expect_reproduces(const std::vector<double>& x, const std::vector<PieceCoef
 // Uniqueness: a cubic is a C2 cubic spline on any knots, so the clamped
 // spline through its values with its end slopes is the cubic itself (de Boor
 // 2001, ch. IV). The values are of order 1; rounding in the tridiagonal solve
+
+// A polynomial's values at the knots, and its end slopes and second derivatives.
+struct Samples {
+  std::vector<double> p;
+  double v0 = 0, a0 = 0, vM = 0, aM = 0;
+};
+
+template <class Poly>
+Samples sample(const std::vector<double>& x, const Poly& poly) {
+  Samples s;
+  double p, v, a;
+  for (double xi : x) {
+    poly(xi, p, v, a);
+    s.p.push_back(p);
+  }
+  poly(x.front(), p, s.v0, s.a0);
+  poly(x.back(), p, s.vM, s.aM);
+  return s;
+}
 // leaves ~1e-15 on q, and each derivative divides by a knot spacing (>= 0.05).
 TEST(Splines, ClampedCubicReproducesACubic) {
   const auto poly = [](double x, double& p, double& v, double& a) {
@@ -72,16 +91,8 @@ TEST(Splines, ClampedCubicReproducesACubic) {
     a = 1.4 - 1.5 * x;
   };
   const std::vector<double> x = uneven_knots();
-  std::vector<double> y;
-  for (double xi : x) {
-    double p, v, a;
-    poly(xi, p, v, a);
-    y.push_back(p);
-  }
-  double p0, v0, a0, pM, vM, aM;
-  poly(x.front(), p0, v0, a0);
-  poly(x.back(), pM, vM, aM);
-  expect_reproduces(x, clamped_cubic_spline(x, y, v0, vM), poly);
+  const Samples y = sample(x, poly);
+  expect_reproduces(x, clamped_cubic_spline(x, y.p, y.v0, y.vM), poly);
 }
 
 // Likewise a quintic is a C4 quintic spline: given its end slopes and second
@@ -95,16 +106,8 @@ TEST(Splines, ClampedQuinticReproducesAQuintic) {
     for (int e = 5; e >= 2; --e) a = a * x + e * (e - 1) * c[e];
   };
   const std::vector<double> x = uneven_knots();
-  std::vector<double> y;
-  for (double xi : x) {
-    double p, v, a;
-    poly(xi, p, v, a);
-    y.push_back(p);
-  }
-  double p0, v0, a0, pM, vM, aM;
-  poly(x.front(), p0, v0, a0);
-  poly(x.back(), pM, vM, aM);
-  expect_reproduces(x, clamped_quintic_spline(x, y, v0, a0, vM, aM), poly);
+  const Samples y = sample(x, poly);
+  expect_reproduces(x, clamped_quintic_spline(x, y.p, y.v0, y.a0, y.vM, y.aM), poly);
 }
 
 // On data from no polynomial: the spline interpolates every knot, and at each
