@@ -61,10 +61,6 @@ void expect_reproduces(const std::vector<double>& x, const std::vector<PieceCoef
   }
 }
 
-// Uniqueness: a cubic is a C2 cubic spline on any knots, so the clamped
-// spline through its values with its end slopes is the cubic itself (de Boor
-// 2001, ch. IV). The values are of order 1; rounding in the tridiagonal solve
-
 // A polynomial's values at the knots, and its end slopes and second derivatives.
 struct Samples {
   std::vector<double> p;
@@ -83,6 +79,10 @@ Samples sample(const std::vector<double>& x, const Poly& poly) {
   poly(x.back(), p, s.vM, s.aM);
   return s;
 }
+
+// Uniqueness: a cubic is a C2 cubic spline on any knots, so the clamped
+// spline through its values with its end slopes is the cubic itself (de Boor
+// 2001, ch. IV). The values are of order 1; rounding in the tridiagonal solve
 // leaves ~1e-15 on q, and each derivative divides by a knot spacing (>= 0.05).
 TEST(Splines, ClampedCubicReproducesACubic) {
   const auto poly = [](double x, double& p, double& v, double& a) {
