@@ -72,7 +72,7 @@ def main():
         "--integrator ab2 --dt 0.0005` (3 joints, wrist held, 0.5 ms steps, "
         f"{slow['steps']:,} steps for the slow run), {REPEATS} repeats for the wall time (median).",
         "",
-        "| | paper (Sokolov & Toth 1999) | pumasim, slow (0.1 m/s) | pumasim, fast (0.4 m/s) |",
+        "| | paper (Sokolov & Toth 1999) | pumasim, slow (0.1 m/s) | pumasim, fast (0.4 m/s, chosen) |",
         "|---|---:|---:|---:|",
         f"| maximum path error [mm] | {PAPER_MAX_ERROR_MM} (slow) | {slow['max_path_error_mm']:.3f} | {fast['max_path_error_mm']:.3f} |",
         f"| RMS path error [mm] | – | {slow['rms_path_error_mm']:.4f} | {fast['rms_path_error_mm']:.4f} |",
@@ -96,7 +96,7 @@ def main():
         "- **Path.** The paper's figure of the path is not recoverable; ours is an S of three",
         "  U-turns in a horizontal plane 0.15 m below the shoulder, 1.656 m long, with an",
         "  arbitrary piecewise-linear speed profile of the same kind (peak 0.1 m/s, T = 24 s;",
-        "  the fast run has the same shape at 0.4 m/s). See `experiments/scenes/README.md`.",
+        "  the fast run has the same shape at 0.4 m/s, a speed we chose: the paper gives no figure for its fast run). See `experiments/scenes/README.md`.",
         "- **Parameters.** The arm is the Robotics Toolbox PUMA 560; friction is the paper's",
         "  (0.146 / 0.124 N m on the motor shaft, its stick-slip rule); amplifier, armature",
         "  resistance and inductance are chosen (no PUMA source), and the PIV gains are",
