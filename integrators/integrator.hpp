@@ -36,6 +36,14 @@ class OdeSystem {
     rhs(t, x, fi);
     for (int k = 0; k < size(); ++k) fe[k] = 0.0;
   }
+  // A constant diagonal linear part of f, f(t, x) = diag(lambda) x + N(t, x),
+  // lambda_i <= 0: the stiff decay the exponential methods (etd-*) integrate
+  // exactly, leaving N to their explicit formula. The default: none (every
+  // lambda_i = 0, and those methods are their explicit parents). Systems with
+  // a linear stiff component (the armature currents) override it.
+  virtual void linear_diagonal(double* lambda) const {
+    for (int k = 0; k < size(); ++k) lambda[k] = 0.0;
+  }
   virtual std::string state_name(int i) const { return std::string("x").append(std::to_string(i + 1)); }
   // The adaptive methods' absolute tolerance per component: atol_i =
   // atol * tolerance_scale(i), so that one --atol means the same thing for
@@ -55,6 +63,13 @@ struct IntegratorOptions {
   double atol = 1e-8;           // times the system's tolerance_scale(i) per component
   bool exact_jacobian = false;  // implicit methods: the system's exact Jacobian, not differences
   long max_steps = 50'000'000;  // per advance_to; beyond it, a reported failure
+  // Fixed-step methods: a reset at the time already reached (after an event)
+  // keeps the multistep history instead of restarting it, as a simulation loop
+  // that updates a sampled controller between steps and carries its
+  // Adams-Bashforth history across does (the paper's LabVIEW loop, by our
+  // reading). The history then mixes right-hand sides from before and after
+  // the event: a modelling choice to study, not a consistent method.
+  bool keep_history = false;
 };
 
 struct IntegratorStats {

@@ -97,7 +97,7 @@ namespace {
 // output is ARKODE's Hermite interpolant, degree 3 by default).
 constexpr auto F = IntegratorKind::kFixedStep;
 constexpr auto A = IntegratorKind::kAdaptive;
-constexpr std::array<IntegratorInfo, 13> kIntegrators{{
+constexpr std::array<IntegratorInfo, 17> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2, 1},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4, 3},
@@ -111,6 +111,17 @@ constexpr std::array<IntegratorInfo, 13> kIntegrators{{
      true, true, 0, 0.0, 12, 0},
     {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf, A, 5, true, true, 0,
      0.0, 5, 0},
+    // The exponential methods' stability interval is their explicit parent's,
+    // for the eigenvalues of N's Jacobian: the linear part (the system's
+    // linear_diagonal) is integrated exactly, stable for any lambda <= 0.
+    {"etd-ab2", "exponential Adams-Bashforth, order 2: the system's diagonal linear part (the armature) exact, the "
+     "rest AB2; fixed step (etd-rk4 start)", &detail::make_etd_ab2, F, 2, false, false, 1, 1.0, 2, 1},
+    {"etd-ab3", "exponential Adams-Bashforth, order 3: the diagonal linear part exact, the rest AB3; fixed step "
+     "(etd-rk4 start)", &detail::make_etd_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
+    {"etd-ab4", "exponential Adams-Bashforth, order 4: the diagonal linear part exact, the rest AB4; fixed step "
+     "(etd-rk4 start)", &detail::make_etd_ab4, F, 4, false, false, 1, 0.3, 4, 3},
+    {"etd-rk4", "Cox-Matthews exponential RK, order 4: the diagonal linear part exact (RK4 without one); fixed step",
+     &detail::make_etd_rk4, F, 4, false, false, 4, 2.785293563405282, 3, 0},
     {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1, 0},
     {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
      false, false, 0, 0.0, 4, 0},

@@ -28,7 +28,7 @@ struct IntegratorInfo {
   double real_stability;     // explicit methods: the stability interval on the negative real axis,
                              // h lambda in [-real_stability, 0] (closed forms); 0: implicit, or not one number
   int dense_order;           // order of the dense output (continuous extension) over a step
-  int starter_steps;         // multistep methods: steps of the RK4 starter after every (re)start (AB-k: k - 1)
+  int starter_steps;         // multistep methods: steps of the RK4 (etd-ab: ETDRK4) starter after every (re)start (k - 1)
 };
 
 // All integrators, sorted by name.

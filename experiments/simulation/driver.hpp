@@ -26,6 +26,7 @@ class PlantSystem final : public OdeSystem {
   bool has_exact_jacobian() const override { return true; }
   int time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
   void rhs_split(double t, const double* x, double* fe, double* fi) override { p_.rhs_split(t, x, fe, fi); }
+  void linear_diagonal(double* lambda) const override { p_.linear_diagonal(lambda); }
   std::string state_name(int i) const override { return p_.layout().names[static_cast<std::size_t>(i)]; }
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
   int num_roots() const override { return p_.num_roots(); }

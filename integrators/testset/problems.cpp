@@ -75,6 +75,12 @@ class ProtheroRobinson final : public Problem {
     J.resize(2, 2);
     J << lambda_, 0.0, 1.0, -1.0;
   }
+  // f = diag(lambda, -1) y + (cos t - lambda sin t, y0): the exponential
+  // methods integrate the stiff decay exactly.
+  void linear_diagonal(double* l) const override {
+    l[0] = lambda_;
+    l[1] = -1.0;
+  }
   int time_derivative(double t, const double*, double* dfdt) override {
     dfdt[0] = -lambda_ * std::cos(t) - std::sin(t);
     dfdt[1] = 0.0;

@@ -60,6 +60,8 @@ class Guarded final : public OdeSystem {
   }
   bool has_exact_jacobian() const override { return p_.has_exact_jacobian(); }
   int time_derivative(double t, const double* x, double* dfdt) override { return p_.time_derivative(t, x, dfdt); }
+  void rhs_split(double t, const double* x, double* fe, double* fi) override { p_.rhs_split(t, x, fe, fi); }
+  void linear_diagonal(double* lambda) const override { p_.linear_diagonal(lambda); }
   std::string state_name(int i) const override { return p_.state_name(i); }
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
   long calls() const { return calls_; }

@@ -195,6 +195,14 @@ void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
   }
 }
 
+void Plant::linear_diagonal(double* lambda) const {
+  std::fill(lambda, lambda + layout_.size, 0.0);
+  if (layout_.i < 0) return;
+  for (int j = 0; j < layout_.n; ++j) {
+    lambda[layout_.i + j] = -motor_.loop_resistance(j) / motor_.params(j).inductance;
+  }
+}
+
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = layout_.size;
   J.resize(m, m);

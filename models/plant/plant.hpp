@@ -124,6 +124,10 @@ class Plant {
   // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
   // integrals. Allocation-free.
   void rhs_split(double t, const double* x, double* fe, double* fi);
+  // The constant diagonal linear part of f (OdeSystem::linear_diagonal): the
+  // armature's -(R0 + R_j)/La_j on each current state, 0 elsewhere (and 0
+  // everywhere without current states).
+  void linear_diagonal(double* lambda) const;
   // df/dx exactly (dual numbers through the same code); differences are
   // OdeSystem::jacobian's (integrators/registry.cpp).
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
