@@ -290,6 +290,7 @@ struct RunArgs {
   std::optional<std::string> integrator, backend, out;
   std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
   bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false, quiet = false;
+  bool keep_history = false;
   std::vector<std::string> argv;  // the program and its arguments, for meta.json
 };
 
@@ -307,6 +308,7 @@ RunControls run_controls(Scene& sc, const RunArgs& a) {
   r.max_wall = a.max_wall;
   r.exact_jacobian = a.exact_jacobian;
   r.late_events = a.late_events;
+  r.keep_history = a.keep_history;
   r.stop_at_outputs = a.stop_at_outputs;
   return pumasim::run_controls(sc, r);
 }
@@ -388,6 +390,9 @@ void add_run(CLI::App* app, RunArgs& a) {
   auto* late = app->add_flag("--late-events", a.late_events,
                              "do not stop at controller samples and set-point updates; apply them late, at the "
                              "next output (shows what stepping over them does)");
+  app->add_flag("--keep-history", a.keep_history,
+                "fixed-step multistep methods: carry the history across controller samples and other events "
+                "instead of restarting it (the paper's simulation loop, by our reading)");
   app->add_flag("--stop-at-outputs", a.stop_at_outputs,
                 "also stop the integrator at every output time (the output grid then caps the step: for "
                 "comparison only)")

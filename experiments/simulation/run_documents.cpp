@@ -55,6 +55,7 @@ void settings(Json& js, const Scene& sc, const RunControls& rc, const SceneRun& 
   }
   js["exact_jacobian"] = io.exact_jacobian;
   js["late_events"] = rc.stops == Stops::kOutputsLateEvents;
+  js["keep_history"] = io.keep_history;
   js["stops"] = rc.stops == Stops::kEvents             ? "events (outputs from the dense output)"
                 : rc.stops == Stops::kEventsAndOutputs ? "events and outputs"
                                                        : "outputs (time events applied late)";

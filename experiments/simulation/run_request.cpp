@@ -50,7 +50,11 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
   io.rtol = sc.integrator.rtol;
   io.atol = sc.integrator.atol;
   io.exact_jacobian = a.exact_jacobian;
+  io.keep_history = a.keep_history;
   adaptive = info.make(io)->capabilities().adaptive;
+  if (io.keep_history && adaptive) {
+    throw std::invalid_argument("--keep-history: " + sc.integrator.name + " is adaptive; expected a fixed-step method");
+  }
   if (a.dt) {
     if (adaptive) throw std::invalid_argument("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
     io.dt = sc.integrator.dt = *a.dt;

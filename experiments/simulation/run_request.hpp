@@ -30,6 +30,7 @@ struct RunRequest {
   bool exact_jacobian = false;            // --exact-jacobian
   bool late_events = false;               // --late-events
   bool stop_at_outputs = false;           // --stop-at-outputs
+  bool keep_history = false;              // --keep-history
 };
 
 // load_scene(file, overrides, unsets), and the scene's integrator in the registry;
