@@ -12,7 +12,7 @@
 #                              the repository's own include paths, kept
 #   lib/libpumasim_*.a         the layers (static, as built here)
 #   lib/cmake/pumasim/         pumasim-config.cmake, -config-version.cmake, -targets*.cmake
-#   share/pumasim/robots/      models/robots/ (puma560.toml, its sources)
+#   share/pumasim/robots/      models/robots/ (puma560.toml and its sources, stanford.toml, planar2.toml)
 #   share/pumasim/scenes/      experiments/scenes/
 #
 # Nothing here changes how the build tree's own targets are compiled: what the

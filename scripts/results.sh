@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates results/README.md and everything it reads: every sweep in
-# experiments/sweeps/ (work-precision on the paper's scenes, the dynamics
-# back-ends inside the ODE, the stiff scenes), the stiffness tables, the
+# experiments/sweeps/ (work-precision on the paper's scenes and on the Stanford
+# arm's tracking scene, the dynamics back-ends inside the ODE, the stiff
+# scenes), the stiffness tables, the
 # planning methods (experiments/planning.py), the observed orders, the test set,
 # the output-grid table (experiments/output_grid.py), the extreme runs
 # (tests/check_extreme_runs.py, results/reliability/), and the report. A fresh run

@@ -9,6 +9,8 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "experiments/cli.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
@@ -74,7 +76,7 @@ TEST(Cli, BadInputExitsWithStatus2AndSaysWhatWasExpected) {
   expect_bad({"dynamics", "--robot", "/nonexistent/robot.toml", "--backend", "crba", "--q=qz"},
              "/nonexistent/robot.toml: cannot open file");
   expect_bad({"dynamics", "--robot", "kuka", "--backend", "crba", "--q=qz"},
-             "unknown robot 'kuka'; expected a robot file path or one of: puma560");
+             "unknown robot 'kuka'; expected a robot file path or one of: planar2, puma560, stanford");
   expect_bad({"fly"}, "unknown command 'fly'");
   expect_bad({}, "missing command");
 }
@@ -331,6 +333,31 @@ TEST(Cli, DynamicsOnARobotWithAPrismaticJoint) {
   EXPECT_NE(r.out.find("\"n\": 2"), std::string::npos) << r.out;
   expect_bad({"dynamics", "--robot", robot, "--backend", "lagrange-symbolic", "--q=home"},
              "lagrange-symbolic was generated for the PUMA 560");
+}
+
+// The shipped robots resolve by name (models/robots/README.md) and carry the
+// inertia their sources give, in closed form at any pose:
+// - stanford: the boom (joint 3, prismatic: its Jacobian column moves every
+//   later link by z2, turning none) carries links 3-6 and its reflected
+//   armature mass, M33 = m3 + m4 + m5 + m6 + Z^2 Jm3 = 4.25 + 1.08 + 0.63 + 0.51
+//   + 0.782 = 7.252 kg (RTB mdl_stanford.m after Paul 1981, tables 6.5, 6.6);
+// - planar2: M22 = I_l2 + m_l2 l2^2 + k_r2^2 I_m2 = 10 + 50 (0.5)^2 + 100^2 0.01
+//   = 122.5 kg m^2 (Siciliano et al. 2009, sec. 7.3.2's values).
+TEST(Cli, ShippedRobotsResolveByNameWithTheirSourcesInertia) {
+  struct Case {
+    const char* robot;
+    const char* q;
+    int j;
+    double m;
+  };
+  for (const Case& c : {Case{"stanford", "--q=qmid", 2, 7.252},
+                        Case{"stanford", "--q=0.3,-1.2,1.1,0.4,-0.7,2", 2, 7.252},
+                        Case{"planar2", "--q=0.4,-2.1", 1, 122.5}, Case{"planar2", "--q=-1,0.3", 1, 122.5}}) {
+    const Result r = cli({"dynamics", "--robot", c.robot, "--backend", "crba", c.q});
+    ASSERT_EQ(r.status, kExitOk) << r.err;
+    const auto doc = nlohmann::json::parse(r.out);
+    EXPECT_NEAR(doc["mass_matrix"][c.j][c.j].get<double>(), c.m, 1e-12 * c.m) << c.robot << " " << c.q;
+  }
 }
 
 // Integers a double cannot hold exactly (beyond +-2^53) are refused, naming

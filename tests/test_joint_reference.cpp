@@ -31,7 +31,8 @@ namespace {
 using test::scene_path;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-std::string planar2_path() { return std::string(PUMASIM_SCENES_DIR) + "/../../tests/robots/planar2.toml"; }
+// The shipped planar arm (models/robots/planar2.toml), by its file path.
+std::string planar2_path() { return std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/planar2.toml"; }
 
 // Value, first and second derivative of piece k of a spline at x.
 void eval_coefficients(const PieceCoefficients& c, double u, double& p, double& v, double& a) {

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -247,14 +248,16 @@ RobotModel load_robot(const std::string& name_or_path) {
   // "filesystem error".
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
-    std::string known;
+    // The shipped names, sorted (directory order is the file system's).
+    std::vector<std::string> names;
     if (std::filesystem::is_directory(robots_dir())) {
       for (const auto& e : std::filesystem::directory_iterator(robots_dir())) {
-        if (e.path().extension() == ".toml") {
-          known += (known.empty() ? "" : ", ") + e.path().stem().string();
-        }
+        if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
       }
     }
+    std::sort(names.begin(), names.end());
+    std::string known;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
     throw ConfigError("unknown robot '" + name_or_path + "'; expected a robot file path or one of: " +
                       (known.empty() ? "(none found in " + robots_dir() + ")" : known));
   }
