@@ -35,6 +35,7 @@ TEST(ControllerRegistry, EveryLawHasAUniqueNameAndUniqueKeys) {
     EXPECT_EQ(controller_joints(p), 3u);
     std::set<std::string_view> keys;
     for (const auto& k : Law::keys()) EXPECT_TRUE(keys.insert(k.key).second) << name << ": " << k.key;
+    for (const auto& k : Law::text_keys()) EXPECT_TRUE(keys.insert(k.key).second) << name << ": " << k.key;
     // The drive's limit on the command is every law's (the current's scale).
     EXPECT_GT(controller_output_limit(p, 0), 0.0) << name;
   });

@@ -75,6 +75,10 @@ void expect_same_controller(const PlantConfig& a, const PlantConfig& b, const st
             EXPECT_EQ(pa.joints[j].*k.member, pb.joints[j].*k.member) << what << ": " << k.key << " of joint " << j;
           }
         }
+        for (const auto& k : Params::Law::text_keys()) {
+          EXPECT_EQ(pa.settings.*k.member, pb.settings.*k.member) << what << ": " << k.key;
+          if (k.rows) EXPECT_EQ(pa.settings.*k.rows, pb.settings.*k.rows) << what << ": " << k.key << "'s rows";
+        }
       },
       a.controller_params);
 }

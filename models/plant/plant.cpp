@@ -53,7 +53,9 @@ PlantConfig Plant::checked(PlantConfig c) {
     if (!c.reference && c.q0.size() != n) {
       throw std::invalid_argument("plant: a controller needs a reference, or initial angles to hold");
     }
-    if (!c.drive) throw std::invalid_argument("plant: a controller needs the drive (amplifier, motor)");
+    const bool torque = controller_command(c.controller_params) == ControllerCommand::kTorque;
+    if (torque && c.drive) throw std::invalid_argument("plant: a torque input acts on the joints: no drive with it");
+    if (!torque && !c.drive) throw std::invalid_argument("plant: a controller needs the drive (amplifier, motor)");
   } else if (c.drive) {
     throw std::invalid_argument("plant: a drive needs a controller");
   } else if (c.q0.size() != n) {
@@ -74,7 +76,10 @@ Plant::Plant(PlantConfig config)
       friction_(cfg_.friction),
       controller_(make_controller(cfg_.controller, cfg_.controller_params,
                                   {gear_ratios(cfg_), cfg_.servo_period, cfg_.amplifier, cfg_.motor})),
-      ledger_(cfg_.energy_ledger) {
+      ledger_(cfg_.energy_ledger),
+      torque_input_(cfg_.controller != ControllerMode::kNone &&
+                    controller_command(cfg_.controller_params) == ControllerCommand::kTorque),
+      law_input_(std::visit([](const auto& c) { return std::decay_t<decltype(c)>::kHasInput; }, controller_)) {
   const int n = cfg_.n;
   layout_.n = n;
   body_.declare(layout_);
@@ -115,7 +120,8 @@ const ReferenceSample& Plant::reference_at(double t) { return current_reference(
 template <class S>
 void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
   if (cfg_.controller == ControllerMode::kContinuous) {
-    std::visit([&](const auto& c) { c.output(current_reference(t), x, layout_, w); }, controller_);
+    const ControllerClock clock{t, ds_.controller.piece, ds_.extend_piece};
+    std::visit([&](const auto& c) { c.output(clock, current_reference(t), x, layout_, w); }, controller_);
     return;
   }
   const bool held = cfg_.controller == ControllerMode::kSampled;  // else no controller: u = 0
@@ -123,13 +129,16 @@ void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
 }
 
 // Amplifier and motor: e_a, the current (state or algebraic), K i; the
-// electrical powers for the ledger.
+// electrical powers for the ledger. Without a drive the motor torque is 0, or
+// a torque input's joint torque u reflected to the motor side, u / Z, which
+// puts in the power u qd.
 template <class S>
 void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
   for (int j = 0; j < layout_.n; ++j) {
     if (!cfg_.drive) {
-      w.tm[j] = S(0);
+      w.tm[j] = torque_input_ ? w.u[j] / S(body_.gear_ratio(j)) : S(0);
       w.ea[j] = S(0);
+      if (ledger_.on() && torque_input_) w.p_in += w.u[j] * w.qd[j];
       continue;
     }
     const S wm = S(body_.gear_ratio(j)) * w.qd[j];
@@ -218,8 +227,8 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
   const int m = layout_.size;
   // A sampled controller holds its output and a held set-point holds the
   // reference: then f does not depend on t.
-  const bool depends_on_t =
-      cfg_.reference && cfg_.setpoint_interval == 0 && cfg_.controller == ControllerMode::kContinuous;
+  const bool continuous = cfg_.controller == ControllerMode::kContinuous;
+  const bool depends_on_t = continuous && ((cfg_.reference && cfg_.setpoint_interval == 0) || law_input_);
   if (!depends_on_t) {
     std::fill(dfdt, dfdt + m, 0.0);
     return 0;
@@ -228,7 +237,8 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
   // into the piece; f(t) too on the continued piece (at t = 0 or a breakpoint
   // the reference itself may jump: a joint spline's acceleration at the start
   // of the motion); the piece continued past its end, so that a step that
-  // starts just before a breakpoint does not see it. Truncation O(d^2),
+  // starts just before a breakpoint does not see it; so is the piece of a
+  // law's own input (an open-loop input's row). Truncation O(d^2),
   // rounding about eps |f| / d. Rosenbrock methods multiply df/dt by h d_i in
   // every stage and their step control is sensitive to its error: measured
   // while this was written, odeint-rodas4p on paper_slow_viscous at rtol 1e-8
@@ -259,11 +269,16 @@ double Plant::next_time_event(double t) const {
   if (cfg_.reference && cfg_.setpoint_interval == 0 && cfg_.controller != ControllerMode::kNone) {
     next = std::min(next, cfg_.reference->next_breakpoint(t));
   }
+  // And where a law's own input jumps or kinks (an open-loop input's rows).
+  if (cfg_.controller != ControllerMode::kNone) {
+    next = std::min(next, std::visit([t](const auto& c) { return c.next_time_event(t); }, controller_));
+  }
   return next;
 }
 
 void Plant::on_time_event(double t, double* x) {
   if (cfg_.controller == ControllerMode::kNone) return;
+  ds_.controller.piece = std::visit([t](const auto& c) { return c.piece_after(t); }, controller_);
   if (cfg_.reference) {  // the reference's smooth piece from here on
     ds_.ref_segment = cfg_.reference->segment_after(t);
     ds_.ref_time = std::numeric_limits<double>::quiet_NaN();
@@ -272,7 +287,9 @@ void Plant::on_time_event(double t, double* x) {
     cfg_.reference->eval(t, ds_.ref_held);
   }
   if (cfg_.controller == ControllerMode::kSampled && on_grid(t, cfg_.servo_period)) {
-    std::visit([&](const auto& c) { c.sample(current_reference(t), x, layout_, *wd_, ds_.controller); }, controller_);
+    const ControllerClock clock{t, ds_.controller.piece, false};
+    std::visit([&](const auto& c) { c.sample(clock, current_reference(t), x, layout_, *wd_, ds_.controller); },
+               controller_);
   }
   settle_modes(t, x);
 }
@@ -331,6 +348,7 @@ void Plant::settle_modes(double t, double* x) {
 void Plant::start_discrete_state(const Eigen::VectorXd& q) {
   ds_.ref_time = std::numeric_limits<double>::quiet_NaN();
   ds_.ref_segment = 0;
+  ds_.controller.piece = 0;
   std::fill(ds_.controller.u_held.begin(), ds_.controller.u_held.end(), 0.0);
   std::fill(ds_.controller.memory.begin(), ds_.controller.memory.end(), 0.0);
   // Joints with stick/slip events start stuck; the others slip (a law
@@ -359,6 +377,18 @@ void Plant::hold_gravity(const Eigen::VectorXd& q, double* x) {
   }
 }
 
+// An open-loop input holds nothing: at rest, the currents its first output
+// drives through each loop (di/dt = 0 at the start; the reduced model's
+// algebraic current is that already).
+void Plant::input_currents(double* x) {
+  if (layout_.i < 0) return;
+  body_.load(layout_, x, *wd_);
+  controller_output(0.0, x, *wd_);
+  for (int j = 0; j < layout_.n; ++j) {
+    x[layout_.i + j] = amplifier_.output(j, wd_->u[j]) / motor_.loop_resistance(j);
+  }
+}
+
 void Plant::initial_state(double* x) {
   const int n = layout_.n;
   std::fill(x, x + layout_.size, 0.0);
@@ -371,8 +401,9 @@ void Plant::initial_state(double* x) {
   }
   start_discrete_state(q);
   for (int j = 0; j < n; ++j) x[layout_.q + j] = q[j];
-  if (cfg_.drive) hold_gravity(q, x);
+  if (cfg_.drive && !law_input_) hold_gravity(q, x);
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
+  if (cfg_.drive && law_input_) input_currents(x);
   settle_modes(0.0, x);  // hybrid joints start stuck unless already pushed past Fs
 }
 

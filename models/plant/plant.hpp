@@ -14,9 +14,13 @@
 // The scratch of one evaluation (PlantWorkspace) and the discrete state
 // (PlantDiscreteState: held set-point and controller output, stick/slip
 // modes) are separate objects. Discrete parts are events for the
-// integrators: controller samples and set-point updates at known times
-// (next_time_event / on_time_event), and, for the hybrid friction model,
-// root functions (roots / on_root).
+// integrators: controller samples, set-point updates and the rows of an
+// open-loop input at known times (next_time_event / on_time_event), and, for
+// the hybrid friction model, root functions (roots / on_root).
+// An open-loop input (controller/open_loop.hpp) commands either the
+// amplifier (a voltage, with the drive) or the joints directly (torques,
+// without a drive); a drive needs a controller, and a controller other than a
+// torque input needs the drive.
 //
 // The torque that friction must resist at rest ("applied torque", motor
 // side) is K i - h_j / Z_j for the paper's rule and Karnopp (the coupling
@@ -50,7 +54,7 @@ struct PlantConfig {
   int n = 6;                             // simulated joints: the first n
   Eigen::Matrix<double, 6, 1> q_held = Eigen::Matrix<double, 6, 1>::Zero();  // joints > n [rad]
   std::string backend = "crba";
-  bool drive = true;                     // amplifier + motor (needs a controller)
+  bool drive = true;                     // amplifier + motor (needs a controller commanding a voltage)
   ControllerMode controller = ControllerMode::kContinuous;  // its timing
   double servo_period = 0.0;             // [s], sampled controller
   double setpoint_interval = 0.0;        // [s], reference held between updates; 0 = continuous
@@ -61,8 +65,9 @@ struct PlantConfig {
   std::shared_ptr<const Reference> reference;  // what a controller follows
   Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
   // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
-  // (electrical input e_a i, copper loss (R0 + R) i^2, friction loss
-  // tau_f w_m, summed over the joints), integrated with the rest.
+  // (electrical input e_a i, or a torque input's mechanical tau qd; copper
+  // loss (R0 + R) i^2, friction loss tau_f w_m; summed over the joints),
+  // integrated with the rest.
   bool energy_ledger = false;
 };
 
@@ -114,7 +119,8 @@ class Plant {
   double tolerance_scale(int i) const { return layout_.scale[static_cast<std::size_t>(i)]; }
 
   // x(0): on the reference at rest, currents and integrals in equilibrium
-  // with gravity; also (re)starts the discrete state at t = 0.
+  // with gravity (an open-loop input: the currents its first output drives at
+  // rest); also (re)starts the discrete state at t = 0.
   void initial_state(double* x);
 
   // f(t, x). Allocation-free.
@@ -138,7 +144,8 @@ class Plant {
   // (0 when f does not depend on t). Allocation-free.
   int time_derivative(double t, const double* x, double* dfdt);
 
-  // Time events: controller samples and set-point updates. The next event time
+  // Time events: controller samples, set-point updates, the reference's
+  // breakpoints and an open-loop input's rows. The next event time
   // strictly after t (+inf if none); at such a time, update the discrete state.
   double next_time_event(double t) const;
   // May release stuck hybrid-friction joints (settle_modes), hence x non-const.
@@ -193,6 +200,7 @@ class Plant {
   const ReferenceSample& current_reference(double t);
   void start_discrete_state(const Eigen::VectorXd& q);
   void hold_gravity(const Eigen::VectorXd& q, double* x);
+  void input_currents(double* x);
   double applied_torque(int joint) const { return wd_->applied[joint]; }
 
   const PlantConfig cfg_;
@@ -204,6 +212,8 @@ class Plant {
   const FrictionBlock friction_;
   const ControllerBlock controller_;  // dispatched once per evaluation
   const EnergyLedgerBlock ledger_;
+  const bool torque_input_;  // the law's output is joint torque (no drive)
+  const bool law_input_;     // the law has an input of its own in time (open loop)
   StateLayout layout_;
   std::unique_ptr<Workspace<double>> wd_;
   std::unique_ptr<Workspace<Dual>> wj_;

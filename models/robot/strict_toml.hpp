@@ -78,6 +78,8 @@ class StrictTable {
   // Rejects every key that no accessor asked for.
   void finish() const;
 
+  // The file the table was read from (a path as given to the reader).
+  const std::string& file() const { return file_; }
   // "file:line: path.key: " -- the prefix of any message about `key`.
   std::string where(std::string_view key) const;
   std::string where() const;  // the table itself

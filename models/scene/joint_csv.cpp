@@ -25,8 +25,9 @@ std::vector<std::string> split(const std::string& line) {
   return out;
 }
 
-std::string columns_expected(int n) {
-  return std::to_string(n + 1) + " columns (t, then q1 ... q" + std::to_string(n) + " for the scene's " +
+std::string columns_expected(int n, std::string_view column) {
+  const std::string c(column);
+  return std::to_string(n + 1) + " columns (t, then " + c + "1 ... " + c + std::to_string(n) + " for the scene's " +
          std::to_string(n) + " simulated joints)";
 }
 
@@ -49,14 +50,17 @@ std::vector<double> parse_row(const std::vector<std::string>& fields, const std:
 
 }  // namespace
 
-void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where) {
+void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where,
+                      std::string_view column) {
   if (rows.size() < 2) {
-    throw ConfigError(where + "expected at least two points (rows t, q1 ... qn), got " + std::to_string(rows.size()));
+    throw ConfigError(where + "expected at least two points (rows t, " + std::string(column) + "1 ... " +
+                      std::string(column) + "n), got " + std::to_string(rows.size()));
   }
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const std::string row = "row " + std::to_string(k + 1) + ": ";
     if (rows[k].size() != static_cast<std::size_t>(n + 1)) {
-      throw ConfigError(where + row + "expected " + columns_expected(n) + ", got " + std::to_string(rows[k].size()));
+      throw ConfigError(where + row + "expected " + columns_expected(n, column) + ", got " +
+                        std::to_string(rows[k].size()));
     }
     for (double x : rows[k]) {
       if (!std::isfinite(x)) throw ConfigError(where + row + "expected finite numbers, got " + std::to_string(x));
@@ -71,7 +75,7 @@ void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const
   }
 }
 
-std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n) {
+std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, std::string_view column) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot be opened");
   std::vector<std::vector<double>> rows;
@@ -82,7 +86,7 @@ std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n) 
     const std::string at = path + ":" + std::to_string(number) + ": ";
     const std::vector<std::string> fields = split(line);
     if (fields.size() != static_cast<std::size_t>(n + 1)) {
-      throw ConfigError(at + "expected " + columns_expected(n) + ", got " + std::to_string(fields.size()));
+      throw ConfigError(at + "expected " + columns_expected(n, column) + ", got " + std::to_string(fields.size()));
     }
     if (header.empty()) {
       header = fields;
@@ -99,8 +103,11 @@ std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n) 
                         std::to_string(rows[k - 1][0]) + " s (strictly increasing), got " + fields[0]);
     }
   }
-  if (header.empty()) throw ConfigError(path + ": expected a header line, then rows t, q1 ... qn; the file is empty");
-  check_joint_rows(rows, n, path + ": ");
+  if (header.empty()) {
+    throw ConfigError(path + ": expected a header line, then rows t, " + std::string(column) + "1 ... " +
+                      std::string(column) + "n; the file is empty");
+  }
+  check_joint_rows(rows, n, path + ": ", column);
   return rows;
 }
 

@@ -4,19 +4,23 @@
 // joints), comma-separated; blank lines are skipped. The first t is 0, the
 // times strictly increase, every value is a finite number, and there are at
 // least two rows. Anything else is a ConfigError naming the file, the line
-// and, for a value, the column (1-based, with its header name).
+// and, for a value, the column (1-based, with its header name). The same
+// format holds an open-loop input's rows "t, u1, ..., un" (controller.file;
+// `column` names the values in messages).
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pumasim {
 
 // Each row: t, then n angles.
-std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n);
+std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, std::string_view column = "q");
 
 // The same checks on rows given otherwise (reference.via_points); `where`
 // prefixes the messages, which name the row (1-based).
-void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where);
+void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where,
+                      std::string_view column = "q");
 
 }  // namespace pumasim

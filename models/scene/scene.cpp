@@ -270,8 +270,68 @@ bool law_is(const PlantConfig& pc) {
   return std::holds_alternative<LawParams<Law>>(pc.controller_params);
 }
 
-// The timing, then each law's own keys (ControllerKey: law.hpp), which apply
-// when it is the scene's law.
+// A file named in a scene: relative to the scene's folder (or absolute), made
+// absolute, so that the resolved scene loads from any working directory.
+std::string beside_scene(const std::string& scene_dir, const std::string& name) {
+  namespace fs = std::filesystem;
+  const fs::path p(name);
+  return fs::absolute(p.is_absolute() ? p : fs::path(scene_dir) / p).lexically_normal().string();
+}
+
+// A law's file key (ControllerTextKey with rows, law.hpp): the CSV file's
+// rows t, v1 ... vn into the law's settings, its path made absolute; errors
+// name the key, then the file's line.
+template <class Law>
+Codec<PlantConfig> law_file(const ControllerTextKey<typename Law::Settings>& k) {
+  const auto path = k.member;
+  const auto rows = k.rows;
+  const std::string column(k.column);
+  return {[path, rows, column](StrictTable& t, std::string_view key, PlantConfig& pc, int n) {
+            auto& s = std::get<LawParams<Law>>(pc.controller_params).settings;
+            const std::string name = t.string(key);
+            if (name.empty()) t.fail(key, "a CSV file's name (relative to the scene)", "\"\"");
+            s.*path = beside_scene(std::filesystem::path(t.file()).parent_path().string(), name);
+            try {
+              s.*rows = read_joint_csv(s.*path, n, column);
+            } catch (const ConfigError& e) {
+              throw ConfigError(t.where(key) + e.what());
+            }
+          },
+          [path](toml::table& out, std::string_view key, const PlantConfig& pc, int) {
+            out.insert(key, std::get<LawParams<Law>>(pc.controller_params).settings.*path);
+          },
+          nullptr};
+}
+
+// A law's keys: its text keys (settings for all joints: names from a list, or
+// a file), then its numbers per joint; each applies when it is the scene's law.
+template <class Law>
+void add_law_entries(std::vector<Entry<PlantConfig>>& e) {
+  const Entry<PlantConfig>::Applies applies{&law_is<Law>, "law"};
+  for (const ControllerTextKey<typename Law::Settings>& k : Law::text_keys()) {
+    const auto member = k.member;
+    const auto at = [member](auto& s, int) -> auto& {
+      return std::get<LawParams<Law>>(s.controller_params).settings.*member;
+    };
+    const Need need = k.required ? Need::kRequired : Need::kOptional;
+    if (k.rows) {
+      e.push_back({k.key, law_file<Law>(k), k.meaning, need, applies});
+    } else {
+      e.push_back({k.key, scene_io::text(at, k.allowed), k.meaning, need, applies});
+    }
+  }
+  for (const ControllerKey<typename Law::Params>& k : Law::keys()) {
+    const auto member = k.member;
+    const auto at = [member](auto& s, int j) -> auto& {
+      return std::get<LawParams<Law>>(s.controller_params).joints[static_cast<std::size_t>(j)].*member;
+    };
+    e.push_back({k.key, scene_io::per_joint(k.bounds, at), k.meaning, k.required ? Need::kRequired : Need::kOptional,
+                 applies});
+  }
+}
+
+// The timing, then each law's own keys (ControllerTextKey, ControllerKey:
+// law.hpp), which apply when it is the scene's law.
 const std::vector<Entry<PlantConfig>>& controller_entries() {
   static const std::vector<Entry<PlantConfig>> entries = [] {
     std::vector<Entry<PlantConfig>> e = {
@@ -286,29 +346,36 @@ const std::vector<Entry<PlantConfig>>& controller_entries() {
         {"setpoint_interval", scene_io::number(kNonNegative, PUMASIM_AT(s.setpoint_interval)),
          "[s] reference held between updates; 0: continuous"},
     };
-    ControllerLaws::for_each([&](auto tag) {
-      using Law = typename decltype(tag)::Law;
-      for (const ControllerKey<typename Law::Params>& k : Law::keys()) {
-        const auto member = k.member;
-        const auto at = [member](auto& s, int j) -> auto& {
-          return std::get<LawParams<Law>>(s.controller_params).joints[static_cast<std::size_t>(j)].*member;
-        };
-        e.push_back({k.key, scene_io::per_joint(k.bounds, at), k.meaning,
-                     k.required ? Need::kRequired : Need::kOptional, {&law_is<Law>, "law"}});
-      }
-    });
+    ControllerLaws::for_each([&](auto tag) { add_law_entries<typename decltype(tag)::Law>(e); });
     return e;
   }();
   return entries;
 }
 
-// A controller drives the drive: both or neither. Without `law`, the first law.
+// A law that commands a voltage drives the drive; a torque input
+// (open_loop's input = "torque") acts on the joints without one.
+void check_command(StrictTable& root, StrictTable& t, const PlantConfig& pc) {
+  const bool torque = controller_command(pc.controller_params) == ControllerCommand::kTorque;
+  if (torque && pc.drive) {
+    t.fail("input", "\"voltage\" with the drive ([amplifier] and [motor]), or \"torque\" without one",
+           "\"torque\" with a drive");
+  }
+  if (torque || pc.drive) return;
+  if (t.has("input")) {
+    t.fail("input", "\"torque\" without a drive, or \"voltage\" with the drive ([amplifier] and [motor])",
+           "\"voltage\" without a drive");
+  }
+  root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
+}
+
+// A controller drives the drive, both or neither, but for a torque input,
+// which needs no drive. Without `law`, the first law.
 void read_controller(StrictTable& root, PlantConfig& pc) {
   pc.controller = ControllerMode::kNone;
   if (auto t = root.optional_table("controller")) {
     default_controller_params(controller_law_names().front(), pc.n, &pc.controller_params);
     read_entries(*t, controller_entries(), pc, pc.n);
-    if (!pc.drive) root.fail("controller", "a drive ([amplifier] and [motor]) with a controller", "no drive");
+    check_command(root, *t, pc);
   } else if (pc.drive) {
     root.fail("amplifier", "a [controller] to drive the amplifier", "no controller");
   }
@@ -431,9 +498,7 @@ std::vector<std::pair<std::string, Interpolation>> interpolations() {
 // scene's folder; the resolved scene names it by its absolute path.
 Codec<ReferenceSettings> joints_csv_codec() {
   return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int n) {
-            namespace fs = std::filesystem;
-            const fs::path p(t.string(key));
-            r.joints_file = fs::absolute(p.is_absolute() ? p : fs::path(r.scene_dir) / p).lexically_normal().string();
+            r.joints_file = beside_scene(r.scene_dir, t.string(key));
             try {
               r.points = read_joint_csv(r.joints_file, n);
             } catch (const ConfigError& e) {
@@ -800,9 +865,12 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   read_controller(root, pc);
   read_reference(root, sc);
   if (!pc.reference) read_initial(root, pc);
-  if (sc.duration == 0) {  // scene.duration absent (a given one is > 0)
-    if (!pc.reference) root.fail("scene", "a duration (no reference to take it from)", "none");
-    sc.duration = pc.reference->timing().duration();
+  if (sc.duration == 0) {  // scene.duration absent (a given one is > 0): the reference's, or the input's
+    const double end = pc.controller == ControllerMode::kNone ? HUGE_VAL : controller_input_end(pc.controller_params);
+    if (!pc.reference && !std::isfinite(end)) {
+      root.fail("scene", "a duration (no reference or open-loop input to take it from)", "none");
+    }
+    sc.duration = pc.reference ? pc.reference->timing().duration() : end;
   }
   root.finish();
   try {

@@ -96,8 +96,8 @@ std::string resolved_toml(const Scene& scene);
 // that changes only at events (a sampled controller's held output, a held
 // set-point, the hybrid friction's stuck and slipping modes), named with the
 // scene keys that ask for it, "; "-separated; "" when f(t, x) alone is the
-// plant (its time events are then the reference's breakpoints only, where f
-// has kinks).
+// plant (its time events are then the reference's breakpoints, where f has
+// kinks, and an open-loop input's rows, where f jumps or kinks).
 std::string discrete_state(const Scene& scene);
 
 }  // namespace pumasim

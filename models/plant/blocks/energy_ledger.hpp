@@ -1,5 +1,6 @@
 // Energy ledger block: three quadrature states e_in, e_copper, e_friction [J]
-// (typical magnitude 1 J): the electrical input e_a i, the copper loss
+// (typical magnitude 1 J): the electrical input e_a i (without a drive, a
+// torque input's mechanical power tau qd), the copper loss
 // (R0 + R) i^2 and the friction loss tau_f w_m, summed over the joints and
 // integrated with the rest. The drive and friction blocks add their powers to
 // the workspace (p_in, p_cu, p_f) while they compute; the ledger writes them.

@@ -30,7 +30,7 @@ struct ComputedTorqueParams {
   double output_limit = 10.0;  // [V], DAC range
 };
 
-class ComputedTorqueController {
+class ComputedTorqueController : public WithoutSettings {
  public:
   static constexpr std::string_view kName = "computed_torque";
   using Params = ComputedTorqueParams;
@@ -44,14 +44,15 @@ class ComputedTorqueController {
   }
   static double output_limit(const ComputedTorqueParams& p) { return p.output_limit; }
 
-  ComputedTorqueController(ControllerMode, const std::vector<ComputedTorqueParams>& params,
+  ComputedTorqueController(ControllerMode, const std::vector<ComputedTorqueParams>& params, const NoSettings&,
                            const ControllerContext& context)
       : p_(params), c_(context) {}
 
   void declare(StateLayout&) const {}
 
   template <class S>
-  void output(const ReferenceSample& r, const S*, const StateLayout&, PlantWorkspace<S>& w) const {
+  void output(const ControllerClock&, const ReferenceSample& r, const S*, const StateLayout&,
+              PlantWorkspace<S>& w) const {
     const int n = static_cast<int>(p_.size());
     for (int j = 0; j < n; ++j) {
       const ComputedTorqueParams& P = p_[static_cast<std::size_t>(j)];
@@ -72,11 +73,11 @@ class ComputedTorqueController {
   void rates(const ReferenceSample&, const S*, const StateLayout&, const PlantWorkspace<S>&, S*) const {}
 
   int discrete_size() const { return 0; }
-  void sample(const ReferenceSample& r, const double* x, const StateLayout& L, PlantWorkspace<double>& w,
-              ControllerDiscreteState& d) const {
+  void sample(const ControllerClock& c, const ReferenceSample& r, const double* x, const StateLayout& L,
+              PlantWorkspace<double>& w, ControllerDiscreteState& d) const {
     const int n = static_cast<int>(p_.size());
     for (int j = 0; j < n; ++j) w.q[j] = x[L.q + j], w.qd[j] = x[L.qd + j];
-    output(r, x, L, w);
+    output(c, r, x, L, w);
     for (int j = 0; j < n; ++j) d.u_held[static_cast<std::size_t>(j)] = w.u[j];
   }
 

@@ -71,7 +71,7 @@ S piv_integral_rate(const PivParams& P, const S& z, const S& e) {
   return windup ? S(0) : e;
 }
 
-class PivController {
+class PivController : public WithoutSettings {
  public:
   static constexpr std::string_view kName = "piv";
   using Params = PivParams;
@@ -89,7 +89,8 @@ class PivController {
     return k;
   }
 
-  PivController(ControllerMode mode, const std::vector<PivParams>& params, const ControllerContext& context)
+  PivController(ControllerMode mode, const std::vector<PivParams>& params, const NoSettings&,
+                const ControllerContext& context)
       : mode_(mode), p_(params), Z_(context.gear_ratio), period_(context.servo_period) {}
   const PivParams& params(int j) const { return p_[static_cast<std::size_t>(j)]; }
   int joints() const { return static_cast<int>(Z_.size()); }
@@ -106,7 +107,8 @@ class PivController {
 
   // Continuous: w.u from the reference and the state (w.q, w.qd, the integrals in slice L.z).
   template <class S>
-  void output(const ReferenceSample& r, const S* x, const StateLayout& L, PlantWorkspace<S>& w) const {
+  void output(const ControllerClock&, const ReferenceSample& r, const S* x, const StateLayout& L,
+              PlantWorkspace<S>& w) const {
     for (int j = 0; j < joints(); ++j) {
       const double Z = Z_[static_cast<std::size_t>(j)];
       w.u[j] = piv_law(params(j), Z, piv_error(Z, r.q[j], w.q[j]), x[L.z + j], w.qd[j], r.qd[j], r.qdd[j]);
@@ -124,8 +126,8 @@ class PivController {
 
   // Sampled: the memory is the integral of each joint.
   int discrete_size() const { return joints(); }
-  void sample(const ReferenceSample& r, const double* x, const StateLayout& L, PlantWorkspace<double>&,
-              ControllerDiscreteState& d) const {
+  void sample(const ControllerClock&, const ReferenceSample& r, const double* x, const StateLayout& L,
+              PlantWorkspace<double>&, ControllerDiscreteState& d) const {
     for (int j = 0; j < joints(); ++j) {
       const std::size_t k = static_cast<std::size_t>(j);
       const double Z = Z_[k];

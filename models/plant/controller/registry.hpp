@@ -3,7 +3,8 @@
 // the list: the parameters a plant configuration holds (ControllerParams, a
 // variant over the laws), the block the plant runs (ControllerBlock), the
 // scene's [controller] law names and keys (models/scene/scene.cpp walks each
-// law's keys()), and the names the command line and the tests list.
+// law's keys() and text_keys()), and the names the command line and the tests
+// list.
 #pragma once
 
 #include <cstddef>
@@ -15,16 +16,18 @@
 
 #include "models/plant/controller/computed_torque.hpp"
 #include "models/plant/controller/law.hpp"
+#include "models/plant/controller/open_loop.hpp"
 #include "models/plant/controller/piv.hpp"
 
 namespace pumasim {
 
-// A law's parameters, one per simulated joint (a type per law, so that two
-// laws may share a Params struct).
+// A law's parameters, one per simulated joint, and its settings for all
+// joints (a type per law, so that two laws may share a Params struct).
 template <class L>
 struct LawParams {
   using Law = L;
   std::vector<typename L::Params> joints;
+  typename L::Settings settings{};
 };
 
 template <class L>
@@ -48,7 +51,7 @@ struct ControllerLawList {
   }
 };
 
-using ControllerLaws = ControllerLawList<PivController, ComputedTorqueController>;
+using ControllerLaws = ControllerLawList<PivController, ComputedTorqueController, OpenLoopController>;
 using ControllerParams = ControllerLaws::Params;  // the first law's, empty, by default
 using ControllerBlock = ControllerLaws::Block;
 
@@ -85,12 +88,23 @@ inline double controller_output_limit(const ControllerParams& p, int j) {
       p);
 }
 
+// What the law's output is: a voltage to the drive, or joint torques (no drive).
+inline ControllerCommand controller_command(const ControllerParams& p) {
+  return std::visit([](const auto& lp) { return std::decay_t<decltype(lp)>::Law::command(lp.settings); }, p);
+}
+
+// The last time the law's own input is given for [s] (+inf: it has none; after
+// it, the input holds its last values).
+inline double controller_input_end(const ControllerParams& p) {
+  return std::visit([](const auto& lp) { return std::decay_t<decltype(lp)>::Law::input_end(lp.settings); }, p);
+}
+
 // The block of the law the parameters belong to.
 inline ControllerBlock make_controller(ControllerMode mode, const ControllerParams& p, const ControllerContext& c) {
   return std::visit(
       [&](const auto& lp) {
         using Law = typename std::decay_t<decltype(lp)>::Law;
-        return ControllerBlock(std::in_place_type<Law>, mode, lp.joints, c);
+        return ControllerBlock(std::in_place_type<Law>, mode, lp.joints, lp.settings, c);
       },
       p);
 }
