@@ -7,7 +7,7 @@
 # ConfigError, a hang (an input over 10 s) or an input over 2 GB fails the run;
 # libFuzzer writes the input to build/asan/fuzz/artifacts/<harness>/.
 #
-#   scripts/fuzz.sh --smoke                 CI: 60 s per harness
+#   scripts/fuzz.sh --smoke                 CI: 30 s per harness
 #   scripts/fuzz.sh --time 3600             a long run, an hour per harness
 #   scripts/fuzz.sh --runs 1000000 robot    one million inputs, the robot harness only
 #   --record                                also write the summary to results/fuzz/long_run.json
@@ -24,7 +24,7 @@ record=0
 command="scripts/fuzz.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --smoke) limit=(-max_total_time=60) ;;
+    --smoke) limit=(-max_total_time=30) ;;
     --time) limit=(-max_total_time="$2"); shift ;;
     --runs) limit=(-runs="$2"); shift ;;
     --record) record=1 ;;
