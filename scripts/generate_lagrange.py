@@ -31,6 +31,9 @@ Derivation (Lagrange, symbolic, no numbers but the arm's structure):
   - Gravity g = dV/dq, V = -sum_j gvec . (m_j o_j + R_j h_j) in the base frame.
   - cos q_j and sin q_j are symbols c_j, s_j; derivatives use d c_j = -s_j dq_j,
     d s_j = c_j dq_j. Common subexpressions are eliminated per kernel.
+Kernels: gravity (g), mass_matrix_upper (H), coriolis (C qd alone) and
+dynamics (H and h = C qd + g sharing subexpressions). emit_kernel, header and
+the folding are shared with scripts/generate_recursive.py.
 """
 import argparse
 import os
