@@ -4,8 +4,9 @@
 // random chains n = 3, 6, 12, 24, 48. Inputs are deterministic; every call
 // goes through the DynamicsBackend interface (one virtual call per call, as in
 // the ODE right-hand side). Each benchmark also carries the operation counts
-// of one call (Counted scalar) as user counters, so that one JSON file holds
-// both; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
+// of one call (Counted scalar) as user counters, and each forward-dynamics
+// benchmark those of H, c = C(q, qd) qd, g, the solve and inverse dynamics
+// (prefixes H_, c_, g_, solve_, id_), so that one JSON file holds all; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
 // The JSON's context names the build that ran (pumasim_flags: -march=native or
 // not, pumasim_build_type, pumasim_compiler, pumasim_git_revision), from the
 // build information fixed when the program was built (cmake/build_info.cmake).
@@ -42,6 +43,14 @@ std::vector<Robot> robots() {
   return r;
 }
 
+void add_counts(benchmark::State& state, const std::string& prefix, const pumasim::OpCounts& ops) {
+  state.counters[prefix + "mul"] = static_cast<double>(ops.mul);
+  state.counters[prefix + "add"] = static_cast<double>(ops.add);
+  state.counters[prefix + "div"] = static_cast<double>(ops.div);
+  state.counters[prefix + "sqrt"] = static_cast<double>(ops.sqrt);
+  state.counters[prefix + "trig"] = static_cast<double>(ops.trig);
+}
+
 void run(benchmark::State& state, const pumasim::BackendInfo* info, const pumasim::RobotModel* model,
          Quantity what) {
   const int n = model->dof();
@@ -63,13 +72,17 @@ void run(benchmark::State& state, const pumasim::BackendInfo* info, const pumasi
     benchmark::DoNotOptimize(H.data());
     benchmark::ClobberMemory();
   }
-  const pumasim::OpCounts ops = info->count_ops(*model, what);
   state.counters["n"] = n;
-  state.counters["mul"] = static_cast<double>(ops.mul);
-  state.counters["add"] = static_cast<double>(ops.add);
-  state.counters["div"] = static_cast<double>(ops.div);
-  state.counters["sqrt"] = static_cast<double>(ops.sqrt);
-  state.counters["trig"] = static_cast<double>(ops.trig);
+  add_counts(state, "", info->count_ops(*model, what));
+  if (what == Quantity::kForwardDynamics) {
+    // The split the paper's claim needs, one standalone call each.
+    for (const auto& [prefix, part] :
+         {std::pair{"H_", Quantity::kMassMatrix}, std::pair{"c_", Quantity::kCoriolis},
+          std::pair{"g_", Quantity::kGravity}, std::pair{"solve_", Quantity::kSolve},
+          std::pair{"id_", Quantity::kInverseDynamics}}) {
+      add_counts(state, prefix, info->count_ops(*model, part));
+    }
+  }
 }
 
 }  // namespace

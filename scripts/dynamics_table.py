@@ -4,8 +4,10 @@
 Usage: dynamics_table.py <bench_dynamics JSON> <output .md>
 
 Every number in the output is read from the JSON (Google Benchmark medians of
-5 repetitions, and the operation counts the benchmark attaches as counters);
-ratios are taken between benchmarks of the same run.
+5 repetitions, and the operation counts the benchmark attaches as counters),
+but the published reference points (the paper's 425/369, Armstrong, Khatib &
+Burdick 1986), which are constants below with their sources; ratios are taken
+between benchmarks of the same run.
 """
 import json
 import subprocess
@@ -13,7 +15,41 @@ import sys
 from collections import defaultdict
 
 PAPER_MUL, PAPER_ADD = 425, 369  # Sokolov & Toth 1999, sec. 5: Lagrange, n = 6, per step
+# Armstrong, Khatib & Burdick 1986, "The explicit dynamic model and inertial
+# parameters of the PUMA 560 arm", Proc. IEEE ICRA 1986, vol. 3, pp. 510-518.
+# Read here only in text (OCR) copies: the abstract and opening at
+# https://zbook.org/read/b3be7e_the-explicit-dynamic-and-inertial-parameters-of-puma-566-pdf.html,
+# the derivation's paragraph in a copy embedded in http://gildia-stark.phorum.pl/viewtopic.php?p=726.
+# Their Table 1 (cost of the RNE, of the full explicit model and of the
+# abbreviated one) was not found in a readable form; its figures are not quoted.
+AKB86_READ = ("read in OCR text copies (zbook.org/read/b3be7e…, and a copy embedded in "
+              "gildia-stark.phorum.pl/viewtopic.php?p=726); OCR errors are possible")
+AKB86 = [
+    ("Armstrong, Khatib & Burdick 1986, ICRA, pp. 510–518, abstract",
+     "the explicit PUMA 560 model \"abbreviated from the full explicit model with a 1% significance "
+     "criterion\" (terms below 1 % dropped: not exact), n = 6: \"can be evaluated with 305 calculations, "
+     "one fifth the number required by the recursive Newton-Euler method\"; multiplies and additions "
+     "together; " + AKB86_READ, "305 (total)", "(in the total)"),
+    ("Armstrong, Khatib & Burdick 1986, sec. on the derivation",
+     "the raw output of their symbolic program EMDEG, \"including Coriolis and centrifugal terms\", "
+     "before their simplification (a size of generated code, not their model's cost); " + AKB86_READ,
+     "15,000", "3,500"),
+    ("Armstrong, Khatib & Burdick 1986, Table 1",
+     "the cost of the RNE algorithm, of the full explicit model and of the abbreviated one, which the "
+     "text says Table 1 gives: the table was not found in a readable source here, so its figures (and "
+     "any split into kinetic-energy matrix, Coriolis/centrifugal and gravity terms) are not quoted",
+     "not found", "not found"),
+]
 REFERENCE = "rnea-probing"
+OPS = ("mul", "add", "div", "sqrt", "trig")
+SPLIT = ("H", "c", "g", "solve", "id")  # counter prefixes of the forward-dynamics rows
+# Like for like: (kind, probing, Lagrange, CRBA) back-ends of the same kind.
+KINDS = [
+    ("generic", "rnea-probing", "lagrange-euler", "crba"),
+    ("generated, parameters at run time", "rnea-probing-symbolic", "lagrange-symbolic", "crba-symbolic"),
+    ("generated, numbers folded in", "rnea-probing-symbolic-puma560", "lagrange-symbolic-puma560",
+     "crba-symbolic-puma560"),
+]
 
 
 def load(path):
@@ -28,6 +64,9 @@ def load(path):
         rows[(quantity, robot)][backend] = {
             "ns": b["real_time"] * scale,
             **{k: int(round(b[k])) for k in ("n", "mul", "add", "div", "sqrt", "trig")},
+            # forward dynamics only: the split (H_, c_, g_, solve_, id_ counters)
+            **{k: int(round(v)) for k, v in b.items()
+               if k.split("_")[0] in SPLIT and k.split("_")[-1] in OPS},
         }
     return doc["context"], rows
 
@@ -98,10 +137,95 @@ def robot_section(robot, rows, backends):
         w(f"\n`{REFERENCE}` forward dynamics = {honest:.2f} × the time of {calls} (n + 2) RNEA calls "
           f"({fmt_ns(fd[REFERENCE]['ns'])} ns against {calls} × {fmt_ns(idr[REFERENCE]['ns'])} ns); "
           f"the rest is the Cholesky solve and the subtractions.")
-    if n == 6:
-        w(f"\nThe paper (sec. 5) quotes **{PAPER_MUL} multiplies and {PAPER_ADD} additions** for one "
-          f"step of its Lagrange computation at n = 6. Per forward-dynamics call we count: " +
-          "; ".join(f"`{b}` {fd[b]['mul']:,} mul / {fd[b]['add']:,} add" for b in sorted(fd)) + ".")
+    w("")
+    return out
+
+
+def like_for_like(rows, robots):
+    """The paper's claim, like for like: per PUMA robot and kind, the forward
+    dynamics of probing, of Lagrange and of the CRBA, and probing's ratios."""
+    out = []
+    w = out.append
+    pumas = [r for r in robots if r.startswith("puma560")]
+    if not pumas:
+        return out
+    w("## The paper's claim, like for like\n")
+    w("Forward dynamics of the PUMA 560, six joints and the wrist held at zero (the paper's "
+      "experiment, n = 3). Each row compares back-ends of one kind. *generic*: they serve any arm "
+      "and multiply by the PUMA's zero parameters like by any other (`lagrange-euler` is the textbook "
+      "Lagrange-Euler formulation, the paper's reference [10]). *generated*: made for the PUMA by "
+      "the same SymPy pipeline (`scripts/generate_lagrange.py` for Lagrange, "
+      "`scripts/generate_recursive.py` for the RNEA and the CRBA: the recursion unrolled, operations "
+      "on constant zeros and ones removed, common subexpressions shared), with the parameters at run "
+      "time (any arm of the PUMA's structure) or with `puma560.toml`'s numbers folded in. Probing "
+      "is n + 2 inverse-dynamics calls of the RNEA of its kind. Ratios are between times of the "
+      "same run; the machine is shared (2 cores, other jobs running): a ratio near 1 is not "
+      "decided by one run.\n")
+    w("| robot | kind | probing [ns] | Lagrange [ns] | CRBA [ns] | probing / Lagrange | "
+      "probing / CRBA | probing mul / add | Lagrange mul / add | CRBA mul / add |")
+    w("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for robot in pumas:
+        fd = rows.get(("fd", robot), {})
+        n = next(iter(fd.values()))["n"] if fd else "?"
+        for kind, probing, lagrange, crba in KINDS:
+            if not all(b in fd for b in (probing, lagrange, crba)):
+                continue
+            p, l, c = fd[probing], fd[lagrange], fd[crba]
+            w(f"| {robot} (n = {n}) | {kind} (`{probing}`, `{lagrange}`, `{crba}`) | {fmt_ns(p['ns'])} | "
+              f"{fmt_ns(l['ns'])} | {fmt_ns(c['ns'])} | {p['ns'] / l['ns']:.2f} | {p['ns'] / c['ns']:.2f} | "
+              f"{p['mul']:,} / {p['add']:,} | {l['mul']:,} / {l['add']:,} | {c['mul']:,} / {c['add']:,} |")
+    w("")
+    return out
+
+
+def split_counts(rows, robots):
+    """Operation counts of H, c = C qd, g and the solve per back-end, on the PUMA robots."""
+    out = []
+    w = out.append
+    pumas = [r for r in robots if r.startswith("puma560")]
+    if not pumas:
+        return out
+    w("## Operation counts split: H, c, g and the solve\n")
+    w("One standalone call of each part through the back-end's own code (`Counted` scalar): `H` the "
+      "mass matrix (with Z²Im); `c` = C(q, q̇) q̇, the Coriolis and centrifugal torques (h without "
+      "gravity); `g` the gravity torques; `solve` the Cholesky factorisation of H and the two "
+      "substitutions (the same for every back-end that forms H; the ABA forms no H); `id` one "
+      "inverse-dynamics call; `fd` one forward-dynamics call as the back-end runs it. A back-end "
+      "that shares work between its parts (the joint rotations; subexpressions of H and h in one "
+      "generated kernel) spends less on `fd` than on its parts called one by one; probing spends "
+      "n + 2 `id` calls on `fd` (its `H` is n + 1 of them: g, then one per column). Each cell is "
+      "multiplies / additions; divisions, square roots and sin/cos are listed for `fd`.\n")
+    w("| robot | back-end | H | c | g | solve (mul / add / div / sqrt) | id | fd | fd div / sqrt / trig |")
+    w("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    for robot in pumas:
+        fd = rows.get(("fd", robot), {})
+        for b in [x for kind in KINDS for x in kind[1:]] + sorted(set(fd) - {x for k in KINDS for x in k[1:]}):
+            if b not in fd or "H_mul" not in fd[b]:
+                continue
+            r = fd[b]
+            part = lambda k: f"{r[k + '_mul']:,} / {r[k + '_add']:,}"  # noqa: E731
+            solve = (f"{r['solve_mul']} / {r['solve_add']} / {r['solve_div']} / {r['solve_sqrt']}"
+                     if r["solve_mul"] else "none")
+            w(f"| {robot} (n = {r['n']}) | `{b}` | {part('H')} | {part('c')} | {part('g')} | {solve} | "
+              f"{part('id')} | {r['mul']:,} / {r['add']:,} | {r['div']} / {r['sqrt']} / {r['trig']} |")
+    w("")
+    return out
+
+
+def reference_points():
+    """Published operation counts for the PUMA 560, with what each counts."""
+    out = []
+    w = out.append
+    w("## Published reference points\n")
+    w("| source | what it counts, as the source says | multiplies | additions |")
+    w("|---|---|---:|---:|")
+    w(f"| Sokolov & Toth 1999, sec. 5 (the paper) | \"when the Lagrange formulation is used and "
+      f"(n = 6 joints) there are {PAPER_MUL} multiplies and {PAPER_ADD} additions are required to take in "
+      f"one simulation step\"; nothing more: not which terms (H, h, C), whether the numbers are folded "
+      f"in, whether sin/cos, the solve or the probing are included, nor where the figure comes from | "
+      f"{PAPER_MUL} | {PAPER_ADD} |")
+    for source, what, mul, add in AKB86:
+        w(f"| {source} | {what} | {mul} | {add} |")
     w("")
     return out
 
@@ -144,6 +268,9 @@ def main(src, dst):
         if robot not in robots:
             robots.append(robot)
     out = header(ctx)
+    out += like_for_like(rows, robots)
+    out += split_counts(rows, robots)
+    out += reference_points()
     for robot in robots:
         out += robot_section(robot, rows, backends)
     # Cost against n on the random chains.

@@ -66,6 +66,10 @@ void for_each_algorithm(const RobotModel& m, F&& f) {
   call.template operator()<LagrangeEuler>();
   call.template operator()<LagrangeSymbolic>();
   call.template operator()<LagrangeSymbolicPuma560>();
+  call.template operator()<RneaProbingSymbolic>();
+  call.template operator()<RneaProbingSymbolicPuma560>();
+  call.template operator()<CrbaSymbolic>();
+  call.template operator()<CrbaSymbolicPuma560>();
 }
 
 }  // namespace pumasim::testing

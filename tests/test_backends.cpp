@@ -52,7 +52,19 @@ void expect_all_agree(const RobotModel& model, std::uint64_t seed, int states) {
   }
 }
 
-TEST(BackendAgreement, Puma560) { expect_all_agree(load_robot("puma560"), 1, 20); }
+// The back-ends generated for the PUMA 560 (closed-form Lagrange, unrolled
+// RNEA and CRBA; parameters at run time, and puma560.toml's numbers folded in).
+const std::vector<std::string> kGenerated = {
+    "crba-symbolic",         "crba-symbolic-puma560",         "lagrange-symbolic",
+    "lagrange-symbolic-puma560", "rnea-probing-symbolic", "rnea-probing-symbolic-puma560"};
+const std::vector<std::string> kFolded = {"crba-symbolic-puma560", "lagrange-symbolic-puma560",
+                                          "rnea-probing-symbolic-puma560"};
+
+TEST(BackendAgreement, Puma560) {
+  const RobotModel puma = load_robot("puma560");
+  ASSERT_EQ(testing::supported(puma).size(), backends().size()) << "every back-end takes part";
+  expect_all_agree(puma, 1, 20);
+}
 
 TEST(BackendAgreement, Puma560WithoutRotorInertia) {
   expect_all_agree(without_rotor_inertia(load_robot("puma560")), 2, 10);
@@ -61,6 +73,14 @@ TEST(BackendAgreement, Puma560WithoutRotorInertia) {
 TEST(BackendAgreement, Puma560WristHeld) {
   const RobotModel puma = load_robot("puma560");
   expect_all_agree(lock_joints(puma, 3, puma.pose("qn")->q), 3, 10);
+}
+
+// The paper's experiment: joints 1-3 move, the wrist held at zero, the arm
+// the folded 3-joint kernels were generated for.
+TEST(BackendAgreement, Puma560WristHeldAtZero) {
+  const RobotModel arm = lock_joints(load_robot("puma560"), 3, Eigen::VectorXd::Zero(6));
+  ASSERT_EQ(testing::supported(arm).size(), backends().size()) << "every back-end takes part";
+  expect_all_agree(arm, 4, 10);
 }
 
 TEST(BackendAgreement, RandomChainsStandardDh) {
@@ -179,32 +199,38 @@ RobotModel puma_with_random_parameters(std::uint64_t seed) {
   return m;
 }
 
-TEST(LagrangeSymbolic, BothVariantsTakePartForThePuma) {
+TEST(GeneratedBackEnds, AllTakePartForThePuma) {
   for (const RobotModel& m : {load_robot("puma560"), lock_joints(load_robot("puma560"), 3,
                                                                  Eigen::VectorXd::Zero(6))}) {
-    int found = 0;
-    for (const auto& info : testing::supported(m)) {
-      const std::string name = info.name;
-      found += name == "lagrange-symbolic" || name == "lagrange-symbolic-puma560";
+    for (const std::string& name : kGenerated) {
+      EXPECT_EQ(find_backend(name).why_unsupported(m), "") << name << ", " << m.name;
     }
-    EXPECT_EQ(found, 2) << m.name;
   }
 }
 
-TEST(LagrangeSymbolic, FoldedVariantRefusesOtherParametersNamingOne) {
+// A folded variant names the first parameter that differs and points to the
+// variant with parameters at run time, which accepts the model.
+TEST(GeneratedBackEnds, FoldedVariantsRefuseOtherParametersNamingOne) {
   RobotModel m = load_robot("puma560");
   m.joints[2].mass += 0.5;
-  const std::string why = find_backend("lagrange-symbolic-puma560").why_unsupported(m);
-  EXPECT_NE(why.find("m2"), std::string::npos) << why;
-  EXPECT_TRUE(find_backend("lagrange-symbolic").why_unsupported(m).empty());
   // Wrist held elsewhere than zero: a different lumped link 3.
   const RobotModel held = lock_joints(load_robot("puma560"), 3,
                                       (Eigen::VectorXd(6) << 0, 0, 0, 0.3, 0.2, 0).finished());
-  EXPECT_FALSE(find_backend("lagrange-symbolic-puma560").why_unsupported(held).empty());
-  EXPECT_TRUE(find_backend("lagrange-symbolic").why_unsupported(held).empty());
+  for (const std::string& folded : kFolded) {
+    const std::string runtime = folded.substr(0, folded.size() - std::string("-puma560").size());
+    const std::string why = find_backend(folded).why_unsupported(m);
+    EXPECT_NE(why.find("m2"), std::string::npos) << why;
+    EXPECT_NE(why.find("(use " + runtime + ")"), std::string::npos) << why;
+    EXPECT_THROW(make_backend(folded, m), std::invalid_argument) << folded;
+    EXPECT_TRUE(find_backend(runtime).why_unsupported(m).empty()) << runtime;
+    EXPECT_FALSE(find_backend(folded).why_unsupported(held).empty()) << folded;
+    EXPECT_TRUE(find_backend(runtime).why_unsupported(held).empty()) << runtime;
+  }
 }
 
-TEST(LagrangeSymbolic, AgreesForAnyParametersOfThePumaStructure) {
+// Every back-end with parameters at run time takes part (expect_all_agree
+// compares every supported back-end).
+TEST(GeneratedBackEnds, AgreeForAnyParametersOfThePumaStructure) {
   for (std::uint64_t seed : {1u, 2u, 3u}) {
     const RobotModel m = puma_with_random_parameters(seed);
     expect_all_agree(m, seed, 5);
@@ -213,15 +239,18 @@ TEST(LagrangeSymbolic, AgreesForAnyParametersOfThePumaStructure) {
   }
 }
 
-TEST(LagrangeSymbolic, RefusesOtherArmsWithTheReason) {
+TEST(GeneratedBackEnds, RefuseOtherArmsWithTheReason) {
   for (const RobotModel& m : {random_chain(6, 9), random_chain(4, 9)}) {
-    EXPECT_FALSE(find_backend("lagrange-symbolic").why_unsupported(m).empty());
-    try {
-      make_backend("lagrange-symbolic", m);
-      FAIL() << "accepted " << m.name;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("generated for the PUMA 560"), std::string::npos)
-          << e.what();
+    for (const std::string& name : kGenerated) {
+      EXPECT_FALSE(find_backend(name).why_unsupported(m).empty()) << name;
+      try {
+        make_backend(name, m);
+        ADD_FAILURE() << name << " accepted " << m.name;
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(name + " was generated for the PUMA 560"),
+                  std::string::npos)
+            << e.what();
+      }
     }
   }
 }

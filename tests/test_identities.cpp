@@ -1,5 +1,6 @@
 // Physics identities, checked for every algorithm on the PUMA 560 and on
-// random chains (revolute only, and mixing prismatic joints): H symmetric positive definite; C qd = h - g with C built from
+// random chains (revolute only, and mixing prismatic joints): H symmetric positive definite; C qd = h - g
+// and C qd = each algorithm's own Coriolis term, with C built from
 // the Christoffel symbols of H (exact derivatives by dual numbers); Hdot - 2C
 // skew-symmetric; g = dV/dq; energy conserved in torque-free motion.
 #include <gtest/gtest.h>
@@ -16,10 +17,12 @@ namespace {
 
 using testing::rel_err;
 
-// The PUMA 560, revolute random chains, and random chains mixing revolute and
-// prismatic joints (n = 3, 6, 12; both conventions).
+// The PUMA 560 (six joints, and three with the wrist held at zero, which the
+// 3-joint generated kernels serve), revolute random chains, and random chains
+// mixing revolute and prismatic joints (n = 3, 6, 12; both conventions).
 std::vector<RobotModel> models() {
   return {load_robot("puma560"),
+          lock_joints(load_robot("puma560"), 3, Eigen::VectorXd::Zero(6)),
           random_chain(2, 21),
           random_chain(4, 22),
           random_chain(7, 23, DhConvention::kModified),
@@ -83,11 +86,13 @@ struct ChristoffelCheck {
           for (int j = 0; j < n; ++j)
             C(i, j) += 0.5 * (dH[k](i, j) + dH[j](i, k) - dH[i](j, k)) * qd[k];
       }
-      Eigen::VectorXd h(n), g(n);
+      Eigen::VectorXd h(n), g(n), c(n);
       algo.bias(q, qd, h);
       algo.gravity(q, g);
+      algo.coriolis(q, qd, c);
       const std::string who = std::string(Algo<double, Eigen::Dynamic>::kName) + " " + m.name;
       EXPECT_LT(rel_err(h - g, C * qd), 1e-10) << who;
+      EXPECT_LT(rel_err(c, C * qd), 1e-10) << who << " coriolis";
       const Eigen::MatrixXd N = Hdot - 2 * C;
       EXPECT_LT((N + N.transpose()).norm(), 1e-12 * std::max(Hdot.norm(), 1e-12)) << who;
       // Hdot from one dual pass along qd equals sum_k dH/dq_k qd_k.

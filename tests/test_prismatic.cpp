@@ -141,15 +141,17 @@ TEST(Prismatic, PolarArmHasTheTextbookClosedForm) {
   EXPECT_LT((p - Eigen::Vector3d(rad * std::sin(q[0]), -rad * std::cos(q[0]), L1.d)).norm(), 1e-14);
 }
 
-// A PUMA 560 with its elbow made a slide: the generated closed forms describe
-// revolute joints only and say so.
+// A PUMA 560 with its elbow made a slide: the back-ends generated for the PUMA
+// (closed form, unrolled RNEA and CRBA) describe revolute joints only and say so.
 TEST(Prismatic, ClosedFormBackEndsRefuseAPrismaticJoint) {
   RobotModel m = load_robot("puma560");
   JointParams& J = m.joints[2];
   J.type = JointType::kPrismatic;
   J.offset = J.d;
   J.d = 0.0;
-  for (const char* name : {"lagrange-symbolic", "lagrange-symbolic-puma560"}) {
+  for (const char* name : {"lagrange-symbolic", "lagrange-symbolic-puma560", "crba-symbolic",
+                           "crba-symbolic-puma560", "rnea-probing-symbolic",
+                           "rnea-probing-symbolic-puma560"}) {
     const std::string why = find_backend(name).why_unsupported(m);
     EXPECT_NE(why.find("joint 3 is prismatic"), std::string::npos) << name << ": " << why;
     EXPECT_THROW(make_backend(name, m), std::invalid_argument) << name;

@@ -24,6 +24,8 @@ class Aba : public RneaBased<S, N> {
 
  public:
   static constexpr const char* kName = "aba";
+  // Forward dynamics in O(n) without H: no Cholesky to count (backend_impl.hpp).
+  static constexpr bool kFactorsMassMatrix = false;
 
   explicit Aba(const Chain<S, N>& chain)
       : Base(chain),

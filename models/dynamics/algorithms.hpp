@@ -1,5 +1,6 @@
 // Every dynamics algorithm, and what the registry and the tests need to know
-// about them generically: whether one can describe a given chain.
+// about them generically: whether one can describe a given chain, and whether
+// its forward dynamics solves with H.
 #pragma once
 
 #include <string>
@@ -9,6 +10,7 @@
 #include "models/dynamics/crba.hpp"
 #include "models/dynamics/lagrange_euler.hpp"
 #include "models/dynamics/lagrange_symbolic.hpp"
+#include "models/dynamics/recursive_symbolic.hpp"
 #include "models/dynamics/rnea_probing.hpp"
 
 namespace pumasim {
@@ -24,6 +26,17 @@ std::string why_unsupported(const RobotModel& model) {
   } else {
     (void)model;
     return "";
+  }
+}
+
+// Whether Algo's forward dynamics forms H and solves with it (Cholesky).
+// Every algorithm here does but the ABA, which declares kFactorsMassMatrix.
+template <template <class, int> class Algo>
+constexpr bool factors_mass_matrix() {
+  if constexpr (requires { Algo<double, Eigen::Dynamic>::kFactorsMassMatrix; }) {
+    return Algo<double, Eigen::Dynamic>::kFactorsMassMatrix;
+  } else {
+    return true;
   }
 }
 

@@ -10,26 +10,34 @@ namespace detail {
 // One file each in models/dynamics/backends/.
 BackendInfo aba_entry();
 BackendInfo crba_entry();
+BackendInfo crba_symbolic_entry();
+BackendInfo crba_symbolic_puma560_entry();
 BackendInfo lagrange_euler_entry();
 BackendInfo lagrange_symbolic_entry();
 BackendInfo lagrange_symbolic_puma560_entry();
 BackendInfo rnea_probing_entry();
 BackendInfo rnea_probing_shared_entry();
+BackendInfo rnea_probing_symbolic_entry();
+BackendInfo rnea_probing_symbolic_puma560_entry();
 }  // namespace detail
 
 namespace {
 
 // Sorted by name (checked below). A new back-end is one file in
 // models/dynamics/backends/ and one line here.
-const std::array<BackendInfo, 7>& registry() {
-  static const std::array<BackendInfo, 7> table{{
+const std::array<BackendInfo, 11>& registry() {
+  static const std::array<BackendInfo, 11> table{{
       detail::aba_entry(),
       detail::crba_entry(),
+      detail::crba_symbolic_entry(),
+      detail::crba_symbolic_puma560_entry(),
       detail::lagrange_euler_entry(),
       detail::lagrange_symbolic_entry(),
       detail::lagrange_symbolic_puma560_entry(),
       detail::rnea_probing_entry(),
       detail::rnea_probing_shared_entry(),
+      detail::rnea_probing_symbolic_entry(),
+      detail::rnea_probing_symbolic_puma560_entry(),
   }};
   return table;
 }

@@ -52,7 +52,19 @@ using ConstVecRef = DynamicsBackend::ConstVecRef;
 using VecRef = DynamicsBackend::VecRef;
 using MatRef = DynamicsBackend::MatRef;
 
-enum class Quantity { kInverseDynamics, kMassMatrix, kBias, kGravity, kForwardDynamics };
+// What count_ops counts. kCoriolis is h without gravity, C(q, qd) qd; kSolve
+// is the Cholesky factorisation of H and the two substitutions that forward
+// dynamics does after forming H and h (nothing for a back-end that does not
+// form H: the ABA).
+enum class Quantity {
+  kInverseDynamics,
+  kMassMatrix,
+  kBias,
+  kCoriolis,
+  kGravity,
+  kSolve,
+  kForwardDynamics
+};
 
 struct BackendInfo {
   const char* name;

@@ -115,6 +115,19 @@ std::unique_ptr<BasicDynamicsBackend<S>> make(const RobotModel& model) {
   return std::make_unique<Adapter<Algo, Eigen::Dynamic, S>>(model);
 }
 
+// The solve that forward dynamics does once H and h are formed: Cholesky of
+// H (here a symmetric positive definite stand-in of the same size; the
+// operations do not depend on the values), then the two substitutions.
+template <class M, class V>
+void solve_ops(M& H, V& x) {
+  const int n = static_cast<int>(H.rows());
+  H.setConstant(Counted(0.1));
+  for (int j = 0; j < n; ++j) H(j, j) = Counted(1.0 + n);
+  Cholesky<Counted, Eigen::Dynamic> chol(n);
+  chol.factor(H);
+  chol.solve_in_place(x);
+}
+
 template <template <class, int> class Algo>
 OpCounts count_ops(const RobotModel& model, Quantity what) {
   using V = Eigen::Matrix<Counted, Eigen::Dynamic, 1>;
@@ -135,7 +148,11 @@ OpCounts count_ops(const RobotModel& model, Quantity what) {
     case Quantity::kInverseDynamics: algo.inverse_dynamics(q, qd, qdd, out); break;
     case Quantity::kMassMatrix: algo.mass_matrix(q, H); break;
     case Quantity::kBias: algo.bias(q, qd, out); break;
+    case Quantity::kCoriolis: algo.coriolis(q, qd, out); break;
     case Quantity::kGravity: algo.gravity(q, out); break;
+    case Quantity::kSolve:
+      if constexpr (factors_mass_matrix<Algo>()) solve_ops(H, out);
+      break;
     case Quantity::kForwardDynamics: algo.forward_dynamics(q, qd, qdd, out); break;
   }
   const OpCounts counted = op_counts();

@@ -68,7 +68,7 @@ class LagrangeEuler {
   void inverse_dynamics(const Q& q, const Qd& qd, const Qdd& qdd, Tau&& tau) {
     kinematics(q);
     inertia();
-    coriolis(qd);
+    velocity_terms(qd);
     gravity_terms();
     for (int i = 0; i < n_; ++i) {
       S t = hv_[i] + cv_[i];
@@ -88,9 +88,16 @@ class LagrangeEuler {
   template <class Q, class Qd, class V>
   void bias(const Q& q, const Qd& qd, V&& h) {
     kinematics(q);
-    coriolis(qd);
+    velocity_terms(qd);
     gravity_terms();
     for (int i = 0; i < n_; ++i) h[i] = hv_[i] + cv_[i];
+  }
+
+  template <class Q, class Qd, class V>
+  void coriolis(const Q& q, const Qd& qd, V&& c) {
+    kinematics(q);
+    velocity_terms(qd);
+    for (int i = 0; i < n_; ++i) c[i] = hv_[i];
   }
 
   template <class Q, class V>
@@ -104,7 +111,7 @@ class LagrangeEuler {
   void forward_dynamics(const Q& q, const Qd& qd, const Tau& tau, Qdd&& qdd) {
     kinematics(q);
     inertia();
-    coriolis(qd);
+    velocity_terms(qd);
     gravity_terms();
     for (int i = 0; i < n_; ++i) qdd[i] = S(tau[i]) - hv_[i] - cv_[i];
     chol_.factor(D_);
@@ -163,7 +170,7 @@ class LagrangeEuler {
   }
 
   template <class Qd>
-  void coriolis(const Qd& qd) {
+  void velocity_terms(const Qd& qd) {
     for (int i = 0; i < n_; ++i) hv_[i] = S(0);
     for (int j = 0; j < n_; ++j) {
       // Tr(U_jkm J_j U_ji^T) = sum of entries of U_jkm .* (U_ji J_j), J_j symmetric.

@@ -1,5 +1,5 @@
-// Shared part of the back-ends built on the RNEA: inverse dynamics, bias and
-// gravity are one RNEA pass each; the back-ends differ in how they build H and
+// Shared part of the back-ends built on the RNEA: inverse dynamics, bias,
+// Coriolis and gravity are one RNEA pass each; the back-ends differ in how they build H and
 // solve for qdd. Not a virtual base: the derived algorithms are used through
 // templates, and the registry wraps each one once (backend.hpp).
 #pragma once
@@ -29,6 +29,13 @@ class RneaBased {
   void bias(const Q& q, const Qd& qd, V&& h) {
     rot_.compute(c_, q);
     rnea_.run(c_, rot_, qd, zero_, true, h);
+  }
+
+  // c = C(q, qd) qd: one RNEA pass without gravity or acceleration
+  template <class Q, class Qd, class V>
+  void coriolis(const Q& q, const Qd& qd, V&& c) {
+    rot_.compute(c_, q);
+    rnea_.run(c_, rot_, qd, zero_, false, c);
   }
 
   template <class Q, class V>

@@ -122,6 +122,114 @@ struct LagrangePuma560_3 {
     H[8] = Izz2 + arm2;
   }
 
+  // c(q, qd) = C(q, qd) qd: Coriolis and centrifugal torques (h without g)
+  template <class S>
+  static void coriolis(const S* P, const S* q, const S* qd, S* c) {
+    using std::cos;
+    using std::sin;
+    const S c1 = cos(q[1]);
+    const S s1 = sin(q[1]);
+    const S c2 = cos(q[2]);
+    const S s2 = sin(q[2]);
+    const S qd0 = qd[0];
+    const S qd1 = qd[1];
+    const S qd2 = qd[2];
+    const S& hx1 = P[11];
+    const S& hy1 = P[12];
+    const S& Ixx1 = P[14];
+    const S& Iyy1 = P[15];
+    const S& Ixy1 = P[17];
+    const S& Iyz1 = P[18];
+    const S& Ixz1 = P[19];
+    const S& m2 = P[20];
+    const S& hx2 = P[21];
+    const S& hy2 = P[22];
+    const S& hz2 = P[23];
+    const S& Ixx2 = P[24];
+    const S& Iyy2 = P[25];
+    const S& Ixy2 = P[27];
+    const S& Iyz2 = P[28];
+    const S& Ixz2 = P[29];
+    const S& a0 = P[33];
+    const S& a1 = P[35];
+    const S& d1 = P[36];
+    const S t0 = c1*s2;
+    const S t1 = c2*s1;
+    const S t2 = t0 + t1;
+    const S t3 = c1*c2;
+    const S t4 = s1*s2;
+    const S t5 = t3 - t4;
+    const S t6 = Ixx2*t2 + Ixy2*t5;
+    const S t7 = -a0 - a1*c1;
+    const S t8 = d1*t0;
+    const S t9 = d1*t1;
+    const S t10 = -t8 - t9;
+    const S t11 = hz2*t10;
+    const S t12 = hy2*t7 - t11;
+    const S t13 = S(2)*d1;
+    const S t14 = t10*t13;
+    const S t15 = d1*t3;
+    const S t16 = d1*t4;
+    const S t17 = t15 - t16;
+    const S t18 = Ixy2*s2;
+    const S t19 = Ixy2*c2;
+    const S t20 = Ixy2*t2 + Iyy2*t5;
+    const S t21 = -hx2*t7 + hz2*t17;
+    const S t22 = c2*hy2;
+    const S t23 = hx2*s2;
+    const S t24 = S(2)*a0;
+    const S t25 = S(2)*s1;
+    const S t26 = S(2)*c1;
+    const S t27 = hz2*t17;
+    const S t28 = d1*hz2;
+    const S t29 = s2*t28;
+    const S t30 = c2*t28;
+    const S t31 = c2*c2;
+    const S t32 = a1*d1;
+    const S t33 = s2*s2;
+    const S t34 = a1*hz2;
+    const S t35 = hy2*s2;
+    const S t36 = c2*hx2;
+    const S t37 = Ixz2*c2 - Iyz2*s2 + d1*t35 - d1*t36;
+    const S t38 = Ixz1 + m2*(-t31*t32 - t32*t33) - t31*t34 - t33*t34 + t37;
+    const S t39 = qd1*t38;
+    const S t40 = qd2*t37;
+    const S t41 = qd0*(Ixx1*t25 + Ixy1*t26 - c2*t11 + c2*t12 + c2*t6 - hy1*t24 + m2*(-c2*t14 - s2*t13*t17) - s2*t20 - s2*t21 - s2*t27 + S(2)*t2*t30 + t2*(Ixx2*c2 - t18) - S(2)*t29*t5 + t5*(-Iyy2*s2 + t19) - t7*(-t22 - t23)) + t39 + t40;
+    const S t42 = a1*hx2;
+    const S t43 = a1*hy2;
+    const S t44 = Ixz2*s2 + Iyz2*c2 - d1*t22 - d1*t23;
+    const S t45 = Iyz1 + t44;
+    const S t46 = qd1*t45;
+    const S t47 = qd2*t44;
+    const S t48 = qd0*(Ixy1*t25 + Iyy1*t26 + a1*(hx2*t5 - hy2*t2) + c2*t20 + c2*t21 + c2*t27 + hx1*t24 + m2*(-S(2)*a1*t7 + S(2)*c2*d1*t17 - s2*t14) - s2*t11 + s2*t12 + s2*t6 + t2*t29 + t2*(Ixx2*s2 + t19) + t2*(d1*hz2*s2 - t43) + t30*t5 + t5*(t30 + t42) + t5*(Iyy2*c2 + t18) - t7*(-t35 + t36)) + t46 + t47;
+    const S t49 = d1*t10;
+    const S t50 = d1*t17;
+    const S t51 = Ixy2*s1;
+    const S t52 = Ixy2*c1;
+    const S t53 = c1*hy2;
+    const S t54 = hx2*s1;
+    const S t55 = t28*t5;
+    const S t56 = t2*t28;
+    const S t57 = hy2*s1;
+    const S t58 = c1*hx2;
+    const S t59 = Ixz2*c1 - Iyz2*s1 + d1*t57 - d1*t58;
+    const S t60 = m2*(-a1*t15 - a1*t16 + a1*t17) - t3*t34 - t34*t4 + t34*t5 + t59;
+    const S t61 = qd0*(-c1*t11 + c1*t12 + c1*t6 + m2*(-t25*t50 - t26*t49) - s1*t20 - s1*t21 - s1*t27 + t2*(Ixx2*c1 - t51) - t25*t55 + t26*t56 + t5*(-Iyy2*s1 + t52) - t7*(-t53 - t54)) + qd1*t60 + qd2*t59;
+    const S t62 = Ixz2*s1 + Iyz2*c1 - d1*t53 - d1*t54;
+    const S t63 = m2*(a1*t10 + a1*t8 - a1*t9) + t0*t34 - t1*t34 - t2*t34 + t62;
+    const S t64 = qd0*(c1*t20 + c1*t21 + c1*t27 + m2*(-t25*t49 + t26*t50) - s1*t11 + s1*t12 + s1*t6 + t2*(Ixx2*s1 + t52) + t25*t56 + t26*t55 + t5*(Iyy2*c1 + t51) - t7*(-t57 + t58)) + qd1*t63 + qd2*t62;
+    const S t65 = c1*qd0;
+    const S t66 = qd0*s1;
+    const S t67 = S(2)*a1*a1*m2;
+    const S t68 = qd0*t60 + qd1*(s2*t67 - S(2)*t43) - qd2*t43;
+    const S t69 = qd0*t63 + qd1*(c2*t67 + S(2)*t42) + qd2*t42;
+    const S t70 = qd0*t59 - qd1*t43;
+    const S t71 = qd0*t62 + qd1*t42;
+    c[0] = qd1*(c1*t41 - s1*t48) + qd2*(c2*t61 - s2*t64);
+    c[1] = -S(0.5)*c1*(qd0*t39 + qd0*t40 + qd0*t41) + qd1*(t38*t65 - t45*t66) + qd2*(c2*t68 - s2*t69) + (S(0.5))*s1*(qd0*t46 + qd0*t47 + qd0*t48);
+    c[2] = -S(0.5)*c2*(qd0*t61 + qd1*t68 + qd2*t70) + qd1*(t37*t65 - t44*t66) + qd2*(c2*t70 - s2*t71) + (S(0.5))*s2*(qd0*t64 + qd1*t69 + qd2*t71);
+  }
+
   // upper triangle of H(q) and h(q, qd) = C(q, qd) qd + g(q), sharing subexpressions
   template <class S>
   static void dynamics(const S* P, const S* q, const S* qd, S* H, S* h) {

@@ -57,6 +57,66 @@ struct LagrangePuma560Folded_3 {
     H[8] = S(0.9386527304379999);
   }
 
+  // c(q, qd) = C(q, qd) qd: Coriolis and centrifugal torques (h without g)
+  template <class S>
+  static void coriolis(const S* /*P: folded in*/, const S* q, const S* qd, S* c) {
+    using std::cos;
+    using std::sin;
+    const S c1 = cos(q[1]);
+    const S s1 = sin(q[1]);
+    const S c2 = cos(q[2]);
+    const S s2 = sin(q[2]);
+    const S qd0 = qd[0];
+    const S qd1 = qd[1];
+    const S qd2 = qd[2];
+    const S t0 = S(0.011331663)*s2;
+    const S t1 = c1*s2;
+    const S t2 = S(0.49864510712500004)*c2;
+    const S t3 = S(0.011331663)*c2;
+    const S t4 = -c1*t3 + s1*t0 + s1*t2 + S(0.49864510712500004)*t1;
+    const S t5 = c2*s1;
+    const S t6 = t1 + t5;
+    const S t7 = S(0.172135933625)*s2;
+    const S t8 = c1*c2;
+    const S t9 = s1*s2;
+    const S t10 = t8 - t9;
+    const S t11 = S(0.172135933625)*c1*c2 - c1*t0 - s1*t7 - S(0.011331663)*t5;
+    const S t12 = S(0.4318)*c1;
+    const S t13 = S(0.0038075187499999994)*c2 - S(0.1389138105)*s2;
+    const S t14 = -S(0.4212133435)*c2*c2 - S(0.4212133435)*s2*s2 - t13 + S(-0.269178);
+    const S t15 = qd1*t14;
+    const S t16 = -t13;
+    const S t17 = qd2*t16;
+    const S t18 = qd0*(-S(0.0141984)*c1 + c2*t4 + S(2.0623703)*s1 - s2*t11 - S(0.010956925)*t1 + t10*(-t3 - t7) + t12*(-S(0.8942100000000001)*c2 - S(0.025374999999999998)*s2) + t6*(t0 + t2) - S(0.386119878)*t8) + t15 + t17;
+    const S t19 = S(0.1389138105)*c2 + S(0.0038075187499999994)*s2;
+    const S t20 = -t19 + S(-0.023751);
+    const S t21 = qd1*t20;
+    const S t22 = -t19;
+    const S t23 = qd2*t22;
+    const S t24 = qd0*(S(5.266092704)*c1 + c2*t11 - S(0.0141984)*s1 + s2*t4 - S(1.1583596340000002)*t1 + t10*(S(0.172135933625)*c2 - t0) + t12*(S(0.025374999999999998)*c2 - S(0.8942100000000001)*s2) - S(0.772239756)*t5 + t6*(S(0.49864510712500004)*s2 - t3) + S(0.032870775)*t8 - S(0.02191385)*t9) + t21 + t23;
+    const S t25 = c1*c1;
+    const S t26 = S(0.011331663)*s1;
+    const S t27 = S(0.011331663)*c1;
+    const S t28 = c1*s1;
+    const S t29 = S(0.0038075187499999994)*c1 - S(0.1389138105)*s1;
+    const S t30 = -t29 - S(0.842426687)*t9;
+    const S t31 = -t29;
+    const S t32 = qd0*(c1*t4 - s1*t11 + t10*(-S(0.172135933625)*s1 - t27) + t12*(-S(0.8942100000000001)*c1 - S(0.025374999999999998)*s1) - S(0.386119878)*t25 - S(0.010956925)*t28 + t6*(S(0.49864510712500004)*c1 + t26)) + qd1*t30 + qd2*t31;
+    const S t33 = S(0.1389138105)*c1 + S(0.0038075187499999994)*s1;
+    const S t34 = -t33 - S(0.842426687)*t5;
+    const S t35 = -t33;
+    const S t36 = qd0*(c1*t11 + s1*t4 + t10*(S(0.172135933625)*c1 - t26) + t12*(S(0.025374999999999998)*c1 - S(0.8942100000000001)*s1) + S(0.010956925)*t25 - S(0.386119878)*t28 + t6*(S(0.49864510712500004)*s1 - t27)) + qd1*t34 + qd2*t35;
+    const S t37 = c1*qd0;
+    const S t38 = qd0*s1;
+    const S t39 = qd0*t30 + qd1*(S(2.256060004)*s2 + S(-0.772239756)) - S(0.386119878)*qd2;
+    const S t40 = qd0*t34 + qd1*(S(2.256060004)*c2 + S(0.02191385)) + S(0.010956925)*qd2;
+    const S t41 = qd0*t31 - S(0.386119878)*qd1;
+    const S t42 = qd0*t35 + S(0.010956925)*qd1;
+    c[0] = qd1*(c1*t18 - s1*t24) + qd2*(c2*t32 - s2*t36);
+    c[1] = -S(0.5)*c1*(qd0*t15 + qd0*t17 + qd0*t18) + qd1*(t14*t37 - t20*t38) + qd2*(c2*t39 - s2*t40) + (S(0.5))*s1*(qd0*t21 + qd0*t23 + qd0*t24);
+    c[2] = -S(0.5)*c2*(qd0*t32 + qd1*t39 + qd2*t41) + qd1*(t16*t37 - t22*t38) + qd2*(c2*t41 - s2*t42) + (S(0.5))*s2*(qd0*t36 + qd1*t40 + qd2*t42);
+  }
+
   // upper triangle of H(q) and h(q, qd) = C(q, qd) qd + g(q), sharing subexpressions
   template <class S>
   static void dynamics(const S* /*P: folded in*/, const S* q, const S* qd, S* H, S* h) {
