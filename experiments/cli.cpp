@@ -246,7 +246,7 @@ int cmd_dynamics(const DynamicsArgs& a, std::ostream& out) {
 }
 
 void add_dynamics(CLI::App* app, DynamicsArgs& a) {
-  app->add_option("--robot", a.robot, "a robot name (puma560) or a robot file path")->required()->type_name("NAME|FILE");
+  app->add_option("--robot", a.robot, "a robot name (puma560) or a robot file path (TOML, or URDF: *.urdf)")->required()->type_name("NAME|FILE");
   app->add_option("--backend", a.backend, "a dynamics back-end (pumasim backends)")
       ->required()
       ->type_name("NAME")

@@ -303,7 +303,8 @@ void bind_dynamics(py::module_& m) {
         "The robot's dynamics at (q, qd), as `pumasim dynamics` prints them: a dict with backend, robot, n,\n"
         "rotor_inertia_included, q, qd, mass_matrix (n x n), bias, gravity; with qdd also qdd_in and tau\n"
         "(inverse dynamics), with tau also tau_in and qdd (forward dynamics). robot: a shipped robot's name\n"
-        "(models/robots/<name>.toml) or a path; q: n numbers or a pose name of the robot file; qd: default 0.");
+        "(models/robots/<name>.toml, else <name>.urdf) or a path (a robot file, or a URDF file *.urdf); q: n\n"
+        "numbers or a pose name of the robot file; qd: default 0.");
 }
 
 // Scene: a scene file's plant as f(t, x) and its Jacobian.

@@ -10,6 +10,7 @@ PACKAGES=(
   libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
   libboost-dev                         # Boost 1.74 headers: Odeint
   libtomlplusplus-dev                  # toml++: robot and scene files
+  liburdfdom-dev                       # urdfdom 3.0: URDF robot files
   nlohmann-json3-dev                   # nlohmann-json: the JSON the programs write
   libcli11-dev                         # CLI11: the pumasim command line
   libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark

@@ -206,6 +206,14 @@ TEST(SceneRoundTrip, Overrides) {
   expect_round_trip(scene_path("energy_long_time"), {"initial.pose=\"qs\""});
 }
 
+// A scene whose robot is a URDF file (models/robots/puma560.urdf, the pose
+// qr from its side file): its resolved scene, with the path made absolute,
+// loads back to the same scene.
+TEST(SceneRoundTrip, UrdfRobot) {
+  const std::string urdf = std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/puma560.urdf";
+  expect_round_trip(scene_path("passive_arm"), {"scene.robot=\"" + urdf + "\"", "initial.pose=\"qr\""});
+}
+
 // The time-optimal scene plans without limits by default: its resolved
 // [planning] says inf, which must load back (the scene README's "inf: none").
 TEST(SceneRoundTrip, UnlimitedPlanningLoadsBack) {

@@ -20,6 +20,7 @@
 #include <sundials/sundials_config.h>
 #include <toml++/toml.h>
 
+#include "models/robot/urdf_file.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time
 
 namespace pumasim {
@@ -149,6 +150,22 @@ std::string cpu_model() {
   return "unknown";
 }
 
+namespace {
+
+// FNV-1a 64 of a file's bytes as 16 hex digits, or "" if it cannot be read.
+std::string file_fnv1a64(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return "";
+  std::ostringstream bytes;
+  bytes << f.rdbuf();
+  if (f.bad()) return "";
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
+  return hex;
+}
+
+}  // namespace
+
 RunContext run_context(const std::vector<std::string>& argv, const Scene& sc) {
   namespace fs = std::filesystem;
   RunContext c;
@@ -162,12 +179,10 @@ RunContext run_context(const std::vector<std::string>& argv, const Scene& sc) {
   std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &utc);
   c.started_utc = stamp;
   c.robot_file = fs::absolute(sc.plant.robot.source, ec).lexically_normal().string();
-  if (std::ifstream f(sc.plant.robot.source, std::ios::binary); f) {
-    std::ostringstream bytes;
-    bytes << f.rdbuf();
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
-    if (!f.bad()) c.robot_fnv1a64 = hex;
+  c.robot_fnv1a64 = file_fnv1a64(sc.plant.robot.source);
+  if (is_urdf_path(sc.plant.robot.source) && fs::exists(urdf_side_file(sc.plant.robot.source), ec)) {
+    c.robot_side_file = fs::absolute(urdf_side_file(sc.plant.robot.source), ec).lexically_normal().string();
+    c.robot_side_fnv1a64 = file_fnv1a64(urdf_side_file(sc.plant.robot.source));
   }
   return c;
 }
@@ -195,6 +210,11 @@ std::string meta_json(const RunContext& context) {
   meta["cpu_model"] = cpu_model();
   meta["robot_file"] = {{"path", context.robot_file},
                         {"fnv1a64", context.robot_fnv1a64.empty() ? Json(nullptr) : Json(context.robot_fnv1a64)}};
+  if (!context.robot_side_file.empty()) {
+    meta["robot_side_file"] = {
+        {"path", context.robot_side_file},
+        {"fnv1a64", context.robot_side_fnv1a64.empty() ? Json(nullptr) : Json(context.robot_side_fnv1a64)}};
+  }
   return meta.dump(2) + "\n";
 }
 

@@ -23,14 +23,19 @@ struct RunContext {
   std::string started_utc;        // ISO 8601, "2024-05-01T12:00:00Z"
   std::string robot_file;         // the robot file the scene loaded, absolute
   std::string robot_fnv1a64;      // FNV-1a 64 of its bytes, 16 hex digits; "" if it could not be read
+  // A URDF robot's side file (its rotor inertias, gear ratios, ...), absolute,
+  // and its hash; both "" when the robot is no URDF file or it has none.
+  std::string robot_side_file;
+  std::string robot_side_fnv1a64;
 };
 
 // The context of a run starting now: argv (the program first), the working
-// directory, the time, the scene's robot file and its hash (read now).
+// directory, the time, the scene's robot file and its hash (read now), and a
+// URDF robot's side file and its hash.
 RunContext run_context(const std::vector<std::string>& argv, const Scene& scene);
 
 // The run's context (command line, working directory, start time, robot file
-// and its hash), then the git revision (with "-dirty" when the tree had
+// and its hash; robot_side_file too for a URDF robot with a side file), then the git revision (with "-dirty" when the tree had
 // changes) and whether it was dirty, compiler, flags and build type (from the
 // build: cmake/build_info.cmake), the libraries' versions, the machine, its
 // CPU count and CPU model.

@@ -56,8 +56,17 @@ Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q) {
          homogeneous(rot_z(theta), Eigen::Vector3d(0, 0, d));
 }
 
+Eigen::Matrix4d base_transform(const RobotModel& model) { return homogeneous(model.base_R, model.base_p); }
+
+Eigen::Matrix4d tool_transform(const RobotModel& model) { return homogeneous(model.tool_R, model.tool_p); }
+
+bool has_identity_base_and_tool(const RobotModel& model) {
+  return model.base_R == Eigen::Matrix3d::Identity() && model.base_p.isZero(0) &&
+         model.tool_R == Eigen::Matrix3d::Identity() && model.tool_p.isZero(0);
+}
+
 double potential_energy(const RobotModel& model, const Eigen::VectorXd& q) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  Eigen::Matrix4d T = base_transform(model);
   double V = 0;
   for (int j = 0; j < model.dof(); ++j) {
     T = T * dh_transform(model, j, q[j]);
@@ -103,6 +112,11 @@ RobotModel lock_joints(const RobotModel& model, int n_active, const Eigen::Vecto
     m += L.mass;
     mc += L.mass * c;
   }
+  // The flange stays where the held joints put it: in DH frame n_active,
+  // the held rows' transform T, then the tool.
+  const Eigen::Matrix4d tool = T * tool_transform(model);
+  out.tool_R = tool.topLeftCorner<3, 3>();
+  out.tool_p = tool.topRightCorner<3, 1>();
   JointParams& J = out.joints[last];
   J.mass = m;
   J.com = m > 0 ? Eigen::Vector3d(mc / m) : Eigen::Vector3d::Zero();
@@ -182,11 +196,20 @@ JointFrameData joint_frames(const RobotModel& model) {
     f.I_com.push_back(I);
     f.armature.push_back(J.gear_ratio * J.gear_ratio * J.rotor_inertia);
   }
+  // Joint frame 0 is the base frame: DH frame 0 is placed in it by the base transform.
+  if (n > 0) {
+    f.p[0] = model.base_R * f.p[0] + model.base_p;
+    f.E[0] = model.base_R * f.E[0];
+  }
+  // The flange: the last DH frame (joint frame n for modified DH, n's distal
+  // frame for standard DH), then the tool transform.
   if (model.convention == DhConvention::kStandard && n > 0) {
     const JointParams& L = model.joints[n - 1];
     f.E_tool = rot_x(L.alpha);
     f.p_tool = Eigen::Vector3d(L.a, 0, distal_d(L));
   }
+  f.p_tool += f.E_tool * model.tool_p;
+  f.E_tool = f.E_tool * model.tool_R;
   return f;
 }
 

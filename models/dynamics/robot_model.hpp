@@ -1,8 +1,9 @@
 // Robot parameters: a serial chain of revolute and prismatic joints described
-// by DH rows.
+// by DH rows, between a base transform and a tool transform.
 //
 // A RobotModel is plain, immutable data in SI units. It is loaded from a robot
-// file (robot_file.hpp), generated at random (random_chain.hpp), or derived
+// file (robot_file.hpp) or a URDF file (urdf_file.hpp), generated at random
+// (random_chain.hpp), or derived
 // from another model (lock_joints, without_rotor_inertia). The dynamics
 // algorithms never read it directly: they read a Chain (chain.hpp), the same
 // data converted once to joint frames and to the algorithm's scalar type.
@@ -77,6 +78,16 @@ struct RobotModel {
   std::vector<JointParams> joints;
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  // gravitational acceleration, base frame [m/s^2]
   std::vector<NamedPose> poses;
+  // The base frame is the frame of gravity and of every Cartesian quantity
+  // (forward kinematics, Jacobian, inverse kinematics, Cartesian references).
+  // DH frame 0 sits in it at (base_R, base_p), and the flange sits in the
+  // last DH frame at (tool_R, tool_p): identity for a DH robot file (the base
+  // is DH frame 0, the flange the last DH frame); a URDF file sets both (its
+  // root link's frame is the base, its chain's last link the flange).
+  Eigen::Matrix3d base_R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d base_p = Eigen::Vector3d::Zero();  // [m]
+  Eigen::Matrix3d tool_R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d tool_p = Eigen::Vector3d::Zero();  // [m]
 
   int dof() const { return static_cast<int>(joints.size()); }
   // The pose called `name`, or nullptr.
@@ -86,7 +97,15 @@ struct RobotModel {
 // Homogeneous transform of DH row j (0-based) at joint variable q: frame j-1 -> frame j.
 Eigen::Matrix4d dh_transform(const RobotModel& model, int j, double q);
 
-// Potential energy of gravity V(q) = -sum_j m_j g . p_cj(q) [J] (a rotor turns
+// The base and tool transforms as homogeneous matrices: DH frame 0 in the
+// base frame, and the flange in the last DH frame.
+Eigen::Matrix4d base_transform(const RobotModel& model);
+Eigen::Matrix4d tool_transform(const RobotModel& model);
+// True when both are the identity (a DH robot file's).
+bool has_identity_base_and_tool(const RobotModel& model);
+
+// Potential energy of gravity V(q) = -sum_j m_j g . p_cj(q) [J], the centres
+// of mass in the base frame (a rotor turns
 // about its own axis: no potential of its own, for a ball-screw drive too).
 double potential_energy(const RobotModel& model, const Eigen::VectorXd& q);
 
@@ -97,14 +116,19 @@ RobotModel without_rotor_inertia(RobotModel model);
 // q_full[n_active..] (angles, or displacements for prismatic joints) and their
 // links are merged, as one rigid body, into link n_active-1 (their mass and
 // inertia still count, their rotors do not turn).
-// Poses are truncated to the active joints.
+// Poses are truncated to the active joints. The base stays, and so does the
+// flange: the tool transform becomes the held rows' transform at their values
+// times the tool, so that the flange's pose is the full model's with the held
+// joints at q_full (the same for both DH conventions, and for a URDF file).
 RobotModel lock_joints(const RobotModel& model, int n_active, const Eigen::VectorXd& q_full);
 
 // Joint-frame form shared by every algorithm (see chain.hpp): joint frame j has
 // its z axis on joint j and is obtained from joint frame j-1 by the fixed
 // transform (E_j, p_j) followed by Rz(q_j) (revolute) or Tz(q_j) (prismatic).
-// Inertial data are moved into these frames; `E_tool, p_tool` place the last
-// DH frame (the flange) in joint frame n. Throws std::invalid_argument for a
+// Joint frame 0 is the base frame: the base transform is folded into (E_1, p_1),
+// so gravity stays in the base frame. Inertial data are moved into these
+// frames; `E_tool, p_tool` place the flange (the last DH frame, then the tool
+// transform) in joint frame n. Throws std::invalid_argument for a
 // revolute joint with theta != 0 or a prismatic one with d != 0.
 struct JointFrameData {
   std::vector<JointType> type;

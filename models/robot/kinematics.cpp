@@ -11,6 +11,10 @@ std::string puma_ik_unsupported(const RobotModel& m) {
   if (m.convention != DhConvention::kStandard || m.dof() != 6) {
     return "the PUMA inverse kinematics needs a 6-joint standard-DH robot file";
   }
+  if (!has_identity_base_and_tool(m)) {
+    return "the PUMA inverse kinematics needs the base at DH frame 0 and the flange at the last DH frame "
+           "(no base or tool transform, as in a DH robot file)";
+  }
   for (int j = 0; j < 6; ++j) {
     const JointParams& J = m.joints[j];
     if (J.prismatic()) {

@@ -14,16 +14,16 @@
 
 namespace pumasim {
 
-// Pose of DH frame `count` (default: the flange, the last frame) for the joint
-// variables q (angles [rad], or displacements [m] for prismatic joints).
-// Allocation-free.
+// Pose in the base frame of DH frame `count`, or by default of the flange (the
+// last DH frame, then the tool transform), for the joint variables q (angles
+// [rad], or displacements [m] for prismatic joints). Allocation-free.
 template <class S, class Q>
 void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>& R,
                         Eigen::Matrix<S, 3, 1>& p, int count = -1) {
   using std::cos;
   using std::sin;
-  R.setIdentity();
-  p.setZero();
+  R = m.base_R.template cast<S>();
+  p = m.base_p.template cast<S>();
   const int upto = count < 0 ? m.dof() : count;
   for (int j = 0; j < upto; ++j) {
     const JointParams& J = m.joints[j];
@@ -43,10 +43,15 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
       R = (R * Rz).eval();
     }
   }
+  if (count < 0) {  // the flange
+    p += R * m.tool_p.template cast<S>();
+    R = (R * m.tool_R.template cast<S>()).eval();
+  }
 }
 
-// Geometric Jacobian of the flange of a robot with 6 joints (rows: linear
-// velocity, angular velocity; base frame), for the first `columns` joints
+// Geometric Jacobian of the flange (forward_kinematics' default frame) of a
+// robot with 6 joints (rows: linear velocity of the flange's origin, angular
+// velocity; base frame), for the first `columns` joints
 // (the others zero): the closed form [z_i x (p_e - o_i); z_i] for a revolute
 // joint and [z_i; 0] for a prismatic one (Siciliano et al. 2009, eq. 3.30)
 // from one kinematic pass. Allocation-free.
@@ -59,8 +64,8 @@ void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, in
   using V3 = Eigen::Matrix<S, 3, 1>;
   using M3 = Eigen::Matrix<S, 3, 3>;
   std::array<V3, 6> z, o;
-  M3 R = M3::Identity();
-  V3 p = V3::Zero();
+  M3 R = m.base_R.template cast<S>();
+  V3 p = m.base_p.template cast<S>();
   for (int j = 0; j < m.dof(); ++j) {
     const JointParams& P = m.joints[j];
     const S th = P.dh_theta(q[j]), d = P.dh_d(q[j]), ct = cos(th), st = sin(th);
@@ -80,6 +85,7 @@ void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, in
       R = (R * Rz).eval();
     }
   }
+  p += R * m.tool_p.template cast<S>();  // the flange's origin
   J.setZero();
   for (int k = 0; k < columns; ++k) {
     if (m.joints[k].prismatic()) {

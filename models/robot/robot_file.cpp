@@ -3,15 +3,17 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <set>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
 #include "models/dynamics/backend.hpp"
+#include "models/robot/link_inertia.hpp"
+#include "models/robot/urdf_file.hpp"
 
 #ifndef PUMASIM_ROBOTS_DIR
 #error "PUMASIM_ROBOTS_DIR must be defined by the build"
@@ -24,69 +26,17 @@ constexpr std::size_t kMaxRobotFileJoints = 256;
 
 Eigen::Vector3d vec3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
 
-std::string str(double x) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.6g", x);
-  return b;
-}
-
-// What a link's mass, centre of mass and inertia lack to be a rigid body's:
-// the key at fault, what it should be and what it is (key empty: nothing).
-// A body of no mass has no inertia and no centre of mass (a density >= 0
-// whose integral is zero is zero). With mass, the principal moments about the
-// centre of mass obey the triangle inequalities, each at most the sum of the
-// other two: with m >= 0 that is the pseudo-inertia matrix being positive
-// semi-definite (its 3 x 3 block about the centre of mass has eigenvalues
-// (I_j + I_k - I_i) / 2), the physical-consistency condition of Wensing, Kim
-// & Slotine, "Linear matrix inequalities for physically consistent inertial
-// parameter identification", IEEE RA-L 3(1), 2017. It implies a positive
-// semi-definite inertia (checked first, with its own message).
-struct Inconsistency {
-  std::string key, expected, got;
-};
-
-Inconsistency inertia_inconsistency(const JointParams& J, const Eigen::Vector3d& principal) {
-  if (J.mass == 0) {
-    if (!J.inertia.isZero(0)) {
-      return {"inertia", "zero inertia on a link of mass 0 (a body without mass has none)", "a non-zero inertia"};
-    }
-    if (!J.com.isZero(0)) {
-      return {"com", "[0, 0, 0] on a link of mass 0 (a body without mass has no centre of mass)",
-              "[" + str(J.com.x()) + ", " + str(J.com.y()) + ", " + str(J.com.z()) + "]"};
-    }
-    return {};
-  }
-  const double tol = 1e-12 * std::max(1.0, principal.sum());
-  for (int i = 0; i < 3; ++i) {
-    const double others = principal.sum() - principal[i];
-    if (principal[i] > others + tol) {
-      return {"inertia",
-              "principal moments about the centre of mass that obey the triangle inequalities, each at most the "
-              "sum of the other two (a rigid body's; Wensing, Kim & Slotine 2017)",
-              str(principal[i]) + " > " + str(others) + " (principal moments " + str(principal[0]) + ", " +
-                  str(principal[1]) + ", " + str(principal[2]) + " kg m^2)"};
-    }
-  }
-  return {};
-}
-
 // The inertia [Ixx, Iyy, Izz, Ixy, Iyz, Ixz] about the centre of mass:
 // positive semi-definite, and with the mass and centre of mass a rigid
-// body's (inertia_inconsistency) unless the joint says why it is not
-// (inconsistent_inertia = "why": a published set kept as published).
+// body's (inertia_problem, link_inertia.hpp) unless the joint says why it is
+// not (inconsistent_inertia = "why": a published set kept as published).
 void read_inertia(StrictTable& t, JointParams& J) {
   const auto I = t.numbers("inertia", 6);
   J.inertia << I[0], I[3], I[5],  //
       I[3], I[1], I[4],           //
       I[5], I[4], I[2];
-  const Eigen::Vector3d principal =
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(J.inertia, Eigen::EigenvaluesOnly).eigenvalues();
-  const double min_eig = principal.minCoeff();
-  if (min_eig < -1e-12 * std::max(1.0, J.inertia.norm())) {
-    t.fail("inertia", "a positive semi-definite inertia [Ixx, Iyy, Izz, Ixy, Iyz, Ixz]",
-           "a matrix with eigenvalue " + std::to_string(min_eig));
-  }
-  const Inconsistency why = inertia_inconsistency(J, principal);
+  const InertiaProblem why = inertia_problem(J);
+  if (!why.excusable) t.fail(why.key, why.expected + " [Ixx, Iyy, Izz, Ixy, Iyz, Ixz]", why.got);
   const std::string excuse = t.string_or("inconsistent_inertia", "");
   if (!why.key.empty() && excuse.empty()) {
     t.fail(why.key, why.expected + ", or inconsistent_inertia = \"why\" to keep a published set as published",
@@ -237,31 +187,47 @@ RobotModel load_robot_file(const std::string& path) {
 
 bool is_robot_path(const std::string& name_or_path) {
   return name_or_path.find('/') != std::string::npos ||
-         (name_or_path.size() > 5 && name_or_path.compare(name_or_path.size() - 5, 5, ".toml") == 0);
+         (name_or_path.size() > 5 && name_or_path.compare(name_or_path.size() - 5, 5, ".toml") == 0) ||
+         is_urdf_path(name_or_path);
 }
 
-RobotModel load_robot(const std::string& name_or_path) {
-  if (is_robot_path(name_or_path)) return load_robot_file(name_or_path);
-  const std::filesystem::path file = std::filesystem::path(robots_dir()) / (name_or_path + ".toml");
-  // The non-throwing overload: a name too long for the file system (or
-  // otherwise unusable as a file name) is an unknown robot, not an internal
-  // "filesystem error".
+namespace {
+
+RobotModel load_robot_path(const std::string& path) {
+  return is_urdf_path(path) ? load_urdf_file(path) : load_robot_file(path);
+}
+
+// The shipped robots' names: robot files <name>.toml (not a URDF's side file
+// <name>.urdf.toml) and URDF files <name>.urdf.
+std::string shipped_robots() {
+  std::set<std::string> names;
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) {
-    // The shipped names, sorted (directory order is the file system's).
-    std::vector<std::string> names;
-    if (std::filesystem::is_directory(robots_dir())) {
-      for (const auto& e : std::filesystem::directory_iterator(robots_dir())) {
-        if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
-      }
+  for (const auto& e : std::filesystem::directory_iterator(robots_dir(), ec)) {
+    const std::filesystem::path& p = e.path();
+    if (p.extension() == ".urdf" || (p.extension() == ".toml" && p.stem().extension() != ".urdf")) {
+      names.insert(p.stem().string());
     }
-    std::sort(names.begin(), names.end());
-    std::string known;
-    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
-    throw ConfigError("unknown robot '" + name_or_path + "'; expected a robot file path or one of: " +
-                      (known.empty() ? "(none found in " + robots_dir() + ")" : known));
   }
-  return load_robot_file(file.string());
+  std::string known;
+  for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+  return known;
+}
+
+}  // namespace
+
+RobotModel load_robot(const std::string& name_or_path) {
+  if (is_robot_path(name_or_path)) return load_robot_path(name_or_path);
+  // A shipped robot: its robot file, else its URDF file. The non-throwing
+  // overload: a name too long for the file system (or otherwise unusable as
+  // a file name) is an unknown robot, not an internal "filesystem error".
+  std::error_code ec;
+  for (const char* ext : {".toml", ".urdf"}) {
+    const std::filesystem::path file = std::filesystem::path(robots_dir()) / (name_or_path + ext);
+    if (std::filesystem::exists(file, ec)) return load_robot_path(file.string());
+  }
+  const std::string known = shipped_robots();
+  throw ConfigError("unknown robot '" + name_or_path + "'; expected a robot file path or one of: " +
+                    (known.empty() ? "(none found in " + robots_dir() + ")" : known));
 }
 
 }  // namespace pumasim

@@ -16,9 +16,11 @@ RobotModel load_robot_file(const std::string& path);
 // -1 when H(q) is positive definite (to 1e-12 of its largest diagonal entry).
 int joint_without_inertia(const RobotModel& model, const Eigen::VectorXd& q);
 
-// `name_or_path` is a path when it contains '/' or ends in ".toml"
+// `name_or_path` is a path when it contains '/' or ends in ".toml" or ".urdf"
 // (is_robot_path); otherwise the shipped robot file <robots dir>/<name>.toml
-// ("puma560").
+// ("puma560"), or the shipped URDF file <robots dir>/<name>.urdf when there
+// is no robot file of that name. A path ending in ".urdf" is a URDF file
+// (urdf_file.hpp), any other a robot file.
 RobotModel load_robot(const std::string& name_or_path);
 bool is_robot_path(const std::string& name_or_path);
 

@@ -1,0 +1,598 @@
+#include "models/robot/urdf_file.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <Eigen/Geometry>
+
+#include "models/robot/link_inertia.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/robot/strict_toml.hpp"
+
+namespace pumasim {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+// As for robot files (robot_file.cpp): a bound before any per-joint work.
+constexpr std::size_t kMaxUrdfJoints = 256;
+// Two joint axes whose directions' cross product is below this are parallel
+// (rounding in a URDF's rotations is ~1e-16); below it a DH form treats them
+// as parallel, and the rebuilt frames are checked against the URDF's to
+// kRebuildTolerance (relative to the robot's size) all the same.
+constexpr double kParallel = 1e-9;
+constexpr double kRebuildTolerance = 1e-9;
+constexpr double kTwoPi = 6.283185307179586;
+
+// A rigid transform: the rotation R and origin p of a frame in another.
+struct Frame {
+  Mat3 R = Mat3::Identity();
+  Vec3 p = Vec3::Zero();
+  Frame operator*(const Frame& b) const { return {R * b.R, R * b.p + p}; }
+  Frame inverse() const { return {R.transpose(), -(R.transpose() * p)}; }
+};
+
+Frame frame_of(const urdf::Pose& pose) {
+  const urdf::Rotation& r = pose.rotation;
+  const Eigen::Quaterniond q(r.w, r.x, r.y, r.z);
+  return {q.normalized().toRotationMatrix(), Vec3(pose.position.x, pose.position.y, pose.position.z)};
+}
+
+std::string num(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
+std::string vec_str(const Vec3& v) {
+  char b[96];
+  std::snprintf(b, sizeof b, "(%.6g %.6g %.6g)", v.x(), v.y(), v.z());
+  return b;
+}
+
+bool finite(const urdf::Pose& p) {
+  return std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
+         std::isfinite(p.rotation.x) && std::isfinite(p.rotation.y) && std::isfinite(p.rotation.z) &&
+         std::isfinite(p.rotation.w);
+}
+
+// The URDF's path and text, to name the line of a joint or link in messages
+// (urdfdom keeps no line numbers): the line of the element's start tag.
+class UrdfText {
+ public:
+  UrdfText(std::string path, std::string text) : path_(std::move(path)), text_(std::move(text)) {}
+  const std::string& path() const { return path_; }
+  const std::string& text() const { return text_; }
+
+  // "file:line: joint 'name': " (the line left out when the tag is not found).
+  std::string where(const std::string& tag, const std::string& name) const {
+    const std::string open = "<" + tag;
+    for (std::size_t at = text_.find(open); at != std::string::npos; at = text_.find(open, at + 1)) {
+      const std::size_t end = text_.find('>', at);
+      const std::string head = text_.substr(at, end == std::string::npos ? std::string::npos : end - at);
+      if (head.size() > open.size() && !std::isspace(static_cast<unsigned char>(head[open.size()]))) continue;
+      if (head.find("name=\"" + name + "\"") == std::string::npos &&
+          head.find("name='" + name + "'") == std::string::npos) {
+        continue;
+      }
+      const auto line = 1 + std::count(text_.begin(), text_.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+      return path_ + ":" + std::to_string(line) + ": " + tag + " '" + name + "': ";
+    }
+    return path_ + ": " + tag + " '" + name + "': ";
+  }
+
+  [[noreturn]] void fail(const std::string& tag, const std::string& name, const std::string& expected,
+                         const std::string& got) const {
+    throw ConfigError(where(tag, name) + "expected " + expected + ", got " + got);
+  }
+
+ private:
+  std::string path_, text_;
+};
+
+// urdfdom reports through console_bridge; its messages are collected while
+// it parses (one parse at a time: the handler is global).
+class CollectedLog : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
+    messages += (messages.empty() ? "" : "; ") + text;
+  }
+  std::string messages;
+};
+
+urdf::ModelInterfaceSharedPtr parse_urdf(const UrdfText& t) {
+  static std::mutex one_at_a_time;
+  const std::lock_guard<std::mutex> lock(one_at_a_time);
+  CollectedLog log;
+  console_bridge::useOutputHandler(&log);
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(t.text());
+  } catch (const std::exception& e) {
+    log.messages += std::string(log.messages.empty() ? "" : "; ") + e.what();
+    model.reset();
+  }
+  console_bridge::restorePreviousOutputHandler();
+  if (!model) {
+    throw ConfigError(t.path() + ": URDF error: expected a URDF document that urdfdom reads, got: " +
+                      (log.messages.empty() ? "(urdfdom gave no message)" : log.messages));
+  }
+  return model;
+}
+
+// Every joint one of a serial chain's kinds, each link the child of one joint
+// at most (two: a closed loop), no mimic joint, no damping or friction.
+void check_joints(const urdf::ModelInterface& m, const UrdfText& t) {
+  std::map<std::string, std::string> parent_joint;  // child link -> joint
+  for (const auto& [name, j] : m.joints_) {
+    if (j->type == urdf::Joint::FLOATING || j->type == urdf::Joint::PLANAR || j->type == urdf::Joint::UNKNOWN) {
+      t.fail("joint", name, "a revolute, continuous, prismatic or fixed joint (pumasim simulates fixed-base serial chains)",
+             j->type == urdf::Joint::FLOATING ? "type=\"floating\"" : j->type == urdf::Joint::PLANAR ? "type=\"planar\"" : "an unknown type");
+    }
+    if (j->mimic) {
+      t.fail("joint", name, "a joint with its own variable (pumasim has no coupled joints)",
+             "<mimic joint=\"" + j->mimic->joint_name + "\">");
+    }
+    if (j->dynamics && (j->dynamics->damping != 0.0 || j->dynamics->friction != 0.0)) {
+      t.fail("joint", name, "no <dynamics> damping or friction (pumasim's friction belongs to the scene's drive, "
+             "[friction]; remove it here)",
+             "damping=\"" + num(j->dynamics->damping) + "\" friction=\"" + num(j->dynamics->friction) + "\"");
+    }
+    if (!finite(j->parent_to_joint_origin_transform)) t.fail("joint", name, "a finite <origin>", "a non-finite number");
+    const auto [it, first] = parent_joint.emplace(j->child_link_name, name);
+    if (!first) {
+      t.fail("link", j->child_link_name, "a serial chain: each link the child of one joint",
+             "the child of joints '" + it->second + "' and '" + name + "' (a closed loop)");
+    }
+  }
+}
+
+// One rigid body: the links joined by fixed joints to the child link of a
+// moving joint (or to the root: the ground), each with its frame in the
+// body's frame (the first link's), and the moving joint that leaves it.
+struct Cluster {
+  std::vector<std::pair<const urdf::Link*, Frame>> links;
+  const urdf::Joint* next = nullptr;
+  Frame next_origin;  // the next joint's frame at q = 0, in this body's frame
+  std::string next_from;
+};
+
+Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const UrdfText& t) {
+  Cluster c;
+  std::vector<std::pair<const urdf::Link*, Frame>> todo{{&first, Frame{}}};
+  while (!todo.empty()) {
+    const auto [link, T] = todo.back();
+    todo.pop_back();
+    c.links.push_back({link, T});
+    for (const auto& j : link->child_joints) {
+      const Frame Tj = T * frame_of(j->parent_to_joint_origin_transform);
+      if (j->type == urdf::Joint::FIXED) {
+        todo.push_back({m.links_.at(j->child_link_name).get(), Tj});
+        continue;
+      }
+      if (c.next) {
+        t.fail("joint", j->name, "a serial chain: one moving joint leaving each rigid body",
+               "joints '" + c.next->name + "' (from link '" + c.next_from + "') and '" + j->name + "' (from link '" +
+                   link->name + "') both leaving the body of link '" + first.name + "' (a tree)");
+      }
+      c.next = j.get();
+      c.next_origin = Tj;
+      c.next_from = link->name;
+    }
+  }
+  return c;
+}
+
+// The chain from the root: clusters[0] is the ground, clusters[k] the body
+// moved by joints[k - 1].
+struct UrdfChain {
+  std::vector<Cluster> clusters;
+  std::vector<const urdf::Joint*> joints;
+};
+
+UrdfChain walk(const urdf::ModelInterface& m, const UrdfText& t) {
+  UrdfChain c;
+  const urdf::Link* link = m.getRoot().get();
+  std::size_t visited = 0;
+  for (;;) {
+    c.clusters.push_back(gather(m, *link, t));
+    visited += c.clusters.back().links.size();
+    const urdf::Joint* next = c.clusters.back().next;
+    if (!next) break;
+    if (c.joints.size() == kMaxUrdfJoints) {
+      t.fail("joint", next->name, "at most " + std::to_string(kMaxUrdfJoints) + " moving joints", "more");
+    }
+    c.joints.push_back(next);
+    link = m.links_.at(next->child_link_name).get();
+  }
+  if (c.joints.empty()) {
+    throw ConfigError(t.path() + ": robot '" + m.getName() +
+                      "': expected at least one revolute, continuous or prismatic joint, got none");
+  }
+  if (visited != m.links_.size()) {
+    std::set<std::string> seen;
+    for (const Cluster& cl : c.clusters) {
+      for (const auto& l : cl.links) seen.insert(l.first->name);
+    }
+    for (const auto& [name, l] : m.links_) {
+      if (!seen.count(name)) {
+        t.fail("link", name, "a link connected to the root link '" + m.getRoot()->name + "'", "one that is not");
+      }
+    }
+  }
+  return c;
+}
+
+// Mass, centre of mass and inertia about it of a cluster's links, in the
+// body's frame: the parallel-axis theorem about the common centre of mass.
+JointParams body_inertia(const Cluster& c, const UrdfText& t) {
+  struct Part {
+    double m;
+    Vec3 c;
+    Mat3 I;
+  };
+  std::vector<Part> parts;
+  double mass = 0;
+  Vec3 first_moment = Vec3::Zero();
+  for (const auto& [link, T] : c.links) {
+    const urdf::Inertial* in = link->inertial.get();
+    if (!in) continue;  // no <inertial>: a link without mass
+    Mat3 I;
+    I << in->ixx, in->ixy, in->ixz, in->ixy, in->iyy, in->iyz, in->ixz, in->iyz, in->izz;
+    if (!finite(in->origin) || !I.allFinite() || !std::isfinite(in->mass)) {
+      t.fail("link", link->name, "a finite <inertial>", "a non-finite number");
+    }
+    if (in->mass < 0) t.fail("link", link->name, "a mass >= 0", num(in->mass));
+    const Frame F = T * frame_of(in->origin);
+    parts.push_back({in->mass, F.p, F.R * I * F.R.transpose()});
+    mass += in->mass;
+    first_moment += in->mass * F.p;
+  }
+  JointParams J;
+  J.mass = mass;
+  J.com = mass > 0 ? Vec3(first_moment / mass) : Vec3::Zero();
+  for (const Part& p : parts) {
+    const Vec3 d = p.c - J.com;
+    J.inertia += p.I + p.m * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
+  }
+  return J;
+}
+
+// ---------------------------------------------------------------- DH form
+
+struct AxisLine {
+  Vec3 o, u;  // a point on the axis and its unit direction, in the base frame
+};
+
+// A unit vector normal to u: hint without its component along u, or, when
+// that vanishes, the base x or y axis without theirs.
+Vec3 normal_to(const Vec3& u, const Vec3& hint) {
+  const Vec3 x = hint - hint.dot(u) * u;
+  if (x.norm() > 1e-6) return x.normalized();
+  const Vec3 ex = Vec3::UnitX() - u.x() * u, ey = Vec3::UnitY() - u.y() * u;
+  return (ex.norm() >= ey.norm() ? ex : ey).normalized();
+}
+
+// Modified DH frame k at q = 0 (Craig): z on axis k; x on the common normal
+// to axis k+1 and the origin at its foot on axis k. Parallel axes (and the
+// last axis) have no unique normal: the origin is then the point of axis k
+// nearest the previous frame's origin (the URDF joint's origin for k = 0),
+// so that d_k = 0, and x the normal towards axis k+1 through it, or the
+// previous x (coincident axes, the last axis; the base x axis for k = 0).
+std::vector<Frame> dh_frames(const std::vector<AxisLine>& L) {
+  const std::size_t n = L.size();
+  std::vector<Frame> D(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& u = L[k].u;
+    const Vec3 ref = k == 0 ? L[0].o : D[k - 1].p;
+    Vec3 O = L[k].o + (ref - L[k].o).dot(u) * u;
+    Vec3 hint = k == 0 ? Vec3(Vec3::UnitX()) : Vec3(D[k - 1].R.col(0));
+    if (k + 1 < n) {
+      const Vec3& v = L[k + 1].u;
+      const Vec3 w = u.cross(v);
+      if (w.norm() > kParallel) {  // skew or intersecting: the common normal, from the closest points
+        const Vec3 r = L[k].o - L[k + 1].o;
+        const double b = u.dot(v), d = u.dot(r), e = v.dot(r), den = 1 - b * b;
+        O = L[k].o + ((b * e - d) / den) * u;
+        const Vec3 gap = L[k + 1].o + ((e - b * d) / den) * v - O;
+        hint = gap.dot(w) < 0 && gap.norm() > 1e-12 ? Vec3(-w) : w;
+      } else {
+        const Vec3 gap = L[k + 1].o - O, across = gap - gap.dot(u) * u;
+        if (across.norm() > 1e-12) hint = across;
+      }
+    }
+    const Vec3 x = normal_to(u, hint);
+    D[k].R.col(0) = x;
+    D[k].R.col(1) = u.cross(x);
+    D[k].R.col(2) = u;
+    D[k].p = O;
+  }
+  return D;
+}
+
+// The DH rows between consecutive frames: row 0 is the identity (DH frame 0
+// is frame 1 at q = 0, placed by the base transform).
+void dh_rows(const std::vector<Frame>& D, RobotModel& model) {
+  for (std::size_t k = 1; k < D.size(); ++k) {
+    const Frame& P = D[k - 1];
+    const Frame& C = D[k];
+    JointParams& J = model.joints[k];
+    J.alpha = std::atan2(P.R.col(2).cross(C.R.col(2)).dot(P.R.col(0)), P.R.col(2).dot(C.R.col(2)));
+    J.a = (C.p - P.p).dot(P.R.col(0));
+    const double along = (C.p - P.p).dot(C.R.col(2));
+    const double angle = std::atan2(P.R.col(0).cross(C.R.col(0)).dot(C.R.col(2)), P.R.col(0).dot(C.R.col(0)));
+    if (J.prismatic()) {
+      J.theta = angle;
+      J.offset = along;
+    } else {
+      J.d = along;
+      J.offset = angle;
+    }
+  }
+  model.base_R = D[0].R;
+  model.base_p = D[0].p;
+}
+
+// The DH rows rebuild the frames they came from (a check of the conversion:
+// nearly parallel axes, taken as parallel, are the one way they could not).
+void check_rebuilt(const RobotModel& model, const std::vector<Frame>& D, const std::vector<AxisLine>& L,
+                   const UrdfChain& c, const UrdfText& t) {
+  double size = 1.0;
+  for (const AxisLine& l : L) size = std::max(size, l.o.norm());
+  Eigen::Matrix4d T = base_transform(model);
+  for (std::size_t k = 0; k < D.size(); ++k) {
+    T = T * dh_transform(model, static_cast<int>(k), 0.0);
+    const double dR = (T.topLeftCorner<3, 3>() - D[k].R).norm();
+    const double dp = (T.topRightCorner<3, 1>() - D[k].p).norm();
+    if (dR > kRebuildTolerance || dp > kRebuildTolerance * size) {
+      t.fail("joint", c.joints[k]->name,
+             "joint axes that a modified DH form describes to " + num(kRebuildTolerance) + " (relative)",
+             "a frame off by " + num(dR) + " (rotation), " + num(dp) +
+                 " m: the axes before it are nearly parallel (angle below " + num(kParallel) + " rad, taken as 0)");
+    }
+  }
+}
+
+// ---------------------------------------------------------------- the model
+
+// Joint k's type and limits: revolute [rad] and prismatic [m] from <limit>,
+// within +-4 pi for a revolute one as in robot files; continuous: none.
+void read_joint(const urdf::Joint& j, const UrdfText& t, JointParams& J) {
+  J.type = j.type == urdf::Joint::PRISMATIC ? JointType::kPrismatic : JointType::kRevolute;
+  if (j.type == urdf::Joint::CONTINUOUS) {
+    J.q_min = -std::numeric_limits<double>::infinity();
+    J.q_max = std::numeric_limits<double>::infinity();
+    return;
+  }
+  const double lo = j.limits->lower, hi = j.limits->upper;
+  const bool revolute = j.type == urdf::Joint::REVOLUTE;
+  const double bound = revolute ? 4 * M_PI : std::numeric_limits<double>::infinity();
+  if (!(std::isfinite(lo) && std::isfinite(hi) && lo < hi && lo >= -bound && hi <= bound)) {
+    t.fail("joint", j.name,
+           std::string("<limit> with finite lower < upper") + (revolute ? ", within +-4 pi rad" : "") +
+               " (a joint without limits is type=\"continuous\")",
+           "lower=\"" + num(lo) + "\" upper=\"" + num(hi) + "\"");
+  }
+  J.q_min = lo;
+  J.q_max = hi;
+}
+
+// The joints' axes at q = 0 in the base frame, and each body's URDF frame
+// there (bodies[0]: the root link's, the identity).
+void place_axes(const UrdfChain& c, const UrdfText& t, std::vector<AxisLine>& L, std::vector<Frame>& bodies) {
+  bodies.assign(1, Frame{});
+  for (std::size_t k = 0; k < c.joints.size(); ++k) {
+    const urdf::Joint& j = *c.joints[k];
+    const Vec3 axis(j.axis.x, j.axis.y, j.axis.z);
+    if (!axis.allFinite() || axis.norm() < 1e-12) t.fail("joint", j.name, "a non-zero <axis xyz>", vec_str(axis));
+    const Frame F = bodies.back() * c.clusters[k].next_origin;  // joint frame = child link frame at q = 0
+    L.push_back({F.p, F.R * axis.normalized()});
+    bodies.push_back(F);
+  }
+}
+
+// ---------------------------------------------------------------- side file
+
+struct SideFile {
+  std::string path;  // empty: none
+  Vec3 gravity{0.0, 0.0, -9.81};
+  std::string flange;
+  std::map<std::string, std::pair<double, double>> drive;  // joint -> (rotor inertia, gear ratio)
+  std::map<std::string, std::string> excuse;                // joint -> inconsistent_inertia
+  std::vector<NamedPose> poses;
+};
+
+void read_side_joint(StrictTable& jt, const std::string& name, SideFile& s) {
+  const double rotor = jt.number("rotor_inertia", Bounds::non_negative());
+  const double gear = jt.number("gear_ratio");
+  if (gear == 0.0) jt.fail("gear_ratio", "a non-zero number", "0");
+  s.drive[name] = {rotor, gear};
+  if (jt.has("inconsistent_inertia")) s.excuse[name] = jt.string("inconsistent_inertia");
+  jt.finish();
+}
+
+std::string listed(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// The side file, checked against the URDF's moving joints and the links
+// fixed to the last one (flange candidates).
+SideFile read_side_file(const std::string& urdf_path, const std::vector<std::string>& joints,
+                        const std::vector<std::string>& flanges) {
+  SideFile s;
+  std::error_code ec;
+  if (!std::filesystem::exists(urdf_side_file(urdf_path), ec)) return s;
+  s.path = urdf_side_file(urdf_path);
+  const toml::table doc = parse_toml_file(s.path);
+  StrictTable root(doc, s.path, "");
+  if (auto robot = root.optional_table("robot")) {
+    if (auto g = robot->optional_numbers("gravity", 3)) s.gravity = Vec3((*g)[0], (*g)[1], (*g)[2]);
+    s.flange = robot->string_or("flange", "");
+    if (!s.flange.empty() && std::find(flanges.begin(), flanges.end(), s.flange) == flanges.end()) {
+      robot->fail("flange", "a link fixed to the last moving joint's link of " + urdf_path + " (" + listed(flanges) + ")",
+                  "'" + s.flange + "'");
+    }
+    robot->finish();
+  }
+  if (auto table = root.optional_table("joint")) {
+    for (const std::string& name : table->keys()) {
+      if (std::find(joints.begin(), joints.end(), name) == joints.end()) {
+        table->fail(name, "a table named after a moving joint of " + urdf_path + " (" + listed(joints) + ")",
+                    "'" + name + "'");
+      }
+      StrictTable jt = table->table(name);
+      read_side_joint(jt, name, s);
+    }
+    table->finish();
+  }
+  if (auto poses = root.optional_table("poses")) {
+    const int n = static_cast<int>(joints.size());
+    for (const std::string& name : poses->keys()) {
+      const auto q = poses->numbers(name, n);
+      s.poses.push_back({name, Eigen::Map<const Eigen::VectorXd>(q.data(), n)});
+    }
+    poses->finish();
+  }
+  root.finish();
+  return s;
+}
+
+// The flange: the side file's link (read_side_file checked that it is fixed
+// to the last body), or the end of the fixed joints after the last moving
+// joint as long as they do not branch. Its frame in the last body's frame.
+Frame flange_frame(const UrdfChain& c, const SideFile& s) {
+  const Cluster& last = c.clusters.back();
+  for (const auto& [link, T] : last.links) {
+    if (!s.flange.empty() && link->name == s.flange) return T;
+  }
+  const urdf::Link* link = last.links.front().first;
+  Frame T;
+  while (link->child_joints.size() == 1) {
+    T = T * frame_of(link->child_joints.front()->parent_to_joint_origin_transform);
+    link = link->child_links.front().get();
+  }
+  return T;
+}
+
+// Each body a rigid body's mass and inertia, or the side file's excuse.
+void check_bodies(const RobotModel& model, const UrdfChain& c, const SideFile& s, const UrdfText& t) {
+  for (std::size_t k = 0; k < c.joints.size(); ++k) {
+    const std::string& name = c.joints[k]->name;
+    const InertiaProblem why = inertia_problem(model.joints[k]);
+    const bool excused = s.excuse.count(name) > 0;
+    const std::string body = "the body it moves (link '" + c.joints[k]->child_link_name + "' and the links fixed to it) ";
+    if (!why.key.empty() && (!why.excusable || !excused)) {
+      t.fail("joint", name, body + "with " + why.expected +
+                                (why.excusable ? ", or inconsistent_inertia = \"why\" in [joint." + name + "] of " +
+                                                     urdf_side_file(t.path()) + " to keep it"
+                                               : ""),
+             why.got);
+    }
+    if (why.key.empty() && excused) {
+      throw ConfigError(s.path + ": joint." + name +
+                        ".inconsistent_inertia: expected no such key on a joint whose body is a rigid body's, got \"" +
+                        s.excuse.at(name) + "\"");
+    }
+  }
+}
+
+// Every joint has inertia at the zero pose and at each named pose (as for
+// robot files, robot_file.cpp): H(q) is invertible there.
+void check_joints_have_inertia(const RobotModel& model, const UrdfChain& c, const UrdfText& t) {
+  std::vector<NamedPose> poses = model.poses;
+  poses.insert(poses.begin(), NamedPose{"zero (q = 0)", Eigen::VectorXd::Zero(model.dof())});
+  for (const NamedPose& p : poses) {
+    const int j = joint_without_inertia(model, p.q);
+    if (j < 0) continue;
+    const std::string& name = c.joints[static_cast<std::size_t>(j)]->name;
+    t.fail("joint", name,
+           "a rotor inertia > 0 ([joint." + name + "] of " + urdf_side_file(t.path()) +
+               "), or links that give it inertia at every pose",
+           "none, and at pose " + p.name + " it moves no mass: the joint-space inertia H(q) is singular");
+  }
+}
+
+// The model: joints with their limits and drives, the DH form of their axes,
+// each body's inertia moved into its DH frame, the flange as the tool.
+RobotModel build_model(const urdf::ModelInterface& m, const UrdfChain& c, const SideFile& s, const UrdfText& t) {
+  RobotModel model;
+  model.name = m.getName();
+  model.source = t.path();
+  model.convention = DhConvention::kModified;
+  model.gravity = s.gravity;
+  model.poses = s.poses;
+  model.joints.resize(c.joints.size());
+  for (std::size_t k = 0; k < c.joints.size(); ++k) {
+    read_joint(*c.joints[k], t, model.joints[k]);
+    if (const auto it = s.drive.find(c.joints[k]->name); it != s.drive.end()) {
+      model.joints[k].rotor_inertia = it->second.first;
+      model.joints[k].gear_ratio = it->second.second;
+    }
+  }
+  std::vector<AxisLine> L;
+  std::vector<Frame> bodies;
+  place_axes(c, t, L, bodies);
+  const std::vector<Frame> D = dh_frames(L);
+  dh_rows(D, model);
+  check_rebuilt(model, D, L, c, t);
+  for (std::size_t k = 0; k < c.joints.size(); ++k) {
+    // Body k's URDF frame in its DH frame (both move with joint k: a constant).
+    const Frame X = D[k].inverse() * bodies[k + 1];
+    const JointParams b = body_inertia(c.clusters[k + 1], t);
+    JointParams& J = model.joints[k];
+    J.mass = b.mass;
+    J.com = b.mass > 0 ? Vec3(X.R * b.com + X.p) : Vec3::Zero();
+    J.inertia = X.R * b.inertia * X.R.transpose();
+  }
+  const Frame tool = D.back().inverse() * bodies.back() * flange_frame(c, s);
+  model.tool_R = tool.R;
+  model.tool_p = tool.p;
+  return model;
+}
+
+}  // namespace
+
+bool is_urdf_path(const std::string& path) {
+  return path.size() > 5 && path.compare(path.size() - 5, 5, ".urdf") == 0;
+}
+
+std::string urdf_side_file(const std::string& urdf_path) { return urdf_path + ".toml"; }
+
+RobotModel load_urdf_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot open file (expected a readable URDF file)");
+  std::ostringstream text;
+  text << in.rdbuf();  // an empty file inserts nothing: urdfdom then says what it expected
+  const UrdfText t(path, text.str());
+  const urdf::ModelInterfaceSharedPtr m = parse_urdf(t);
+  check_joints(*m, t);
+  const UrdfChain chain = walk(*m, t);
+  std::vector<std::string> names, flanges;
+  for (const urdf::Joint* j : chain.joints) names.push_back(j->name);
+  for (const auto& l : chain.clusters.back().links) flanges.push_back(l.first->name);
+  const SideFile side = read_side_file(path, names, flanges);
+  RobotModel model = build_model(*m, chain, side, t);
+  check_bodies(model, chain, side, t);
+  check_joints_have_inertia(model, chain, t);
+  return model;
+}
+
+}  // namespace pumasim

@@ -1,0 +1,713 @@
+// URDF robot files (models/robot/urdf_file.hpp): the shipped PUMA 560 URDF
+// (written by scripts/robot_to_urdf.py from models/robots/puma560.toml) is
+// the robot file's model to 1e-10 (H, h, g, the flange's pose and Jacobian,
+// potential energy, locked joints, `pumasim dynamics`, a scene's Cartesian
+// reference); so is the polar R-P arm (tests/robots/rp_polar.urdf, the same
+// script) and random chains written as URDF with arbitrary axes, a base and a
+// tool transform; small hand-written URDFs against closed forms (a fixed
+// joint merged, a prismatic joint, an axis off z under a rotated origin, the
+// axis sign, a link without <inertial>, a continuous joint); and every
+// refusal (a tree, a closed loop, floating and planar joints, ...) naming the
+// file, the line and what was found, with exit status 2 from the command line.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include "experiments/cli.hpp"
+#include "experiments/simulation/run_documents.hpp"
+#include "models/dynamics/backend.hpp"
+#include "models/reference/numerical_ik.hpp"
+#include "models/robot/kinematics.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/robot/urdf_file.hpp"
+#include "models/scene/scene.hpp"
+#include "tests/helpers.hpp"
+
+#ifndef PUMASIM_TEST_ROBOTS_DIR
+#error "PUMASIM_TEST_ROBOTS_DIR must be defined by the build"
+#endif
+
+namespace pumasim {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::rel_err;
+
+// The issue's bound for the URDF model against the robot file's.
+constexpr double kSameModel = 1e-10;
+// Closed forms against the model: a few hundred roundings of O(1) numbers.
+constexpr double kClosedForm = 1e-12;
+
+const std::string kPumaUrdf = std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/puma560.urdf";
+
+fs::path scratch() {
+  static const fs::path d = [] {
+    const fs::path p = fs::temp_directory_path() / ("pumasim_urdf_" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+// Writes name.urdf (and its side file when `side` is given) under scratch().
+std::string write_urdf(const std::string& name, const std::string& xml, const std::string& side = "") {
+  const fs::path p = scratch() / (name + ".urdf");
+  std::ofstream(p) << xml;
+  fs::remove(urdf_side_file(p.string()));
+  if (!side.empty()) std::ofstream(urdf_side_file(p.string())) << side;
+  return p.string();
+}
+
+std::string robot(const std::string& body) { return "<?xml version=\"1.0\"?>\n<robot name=\"t\">\n" + body + "</robot>\n"; }
+
+std::string link(const std::string& name, const std::string& inertial = "") {
+  return inertial.empty() ? "<link name=\"" + name + "\"/>\n"
+                          : "<link name=\"" + name + "\">\n" + inertial + "</link>\n";
+}
+
+std::string inertial(double m, const std::string& xyz, const std::string& rpy, const std::string& ixx_iyy_izz) {
+  std::istringstream s(ixx_iyy_izz);
+  std::string a, b, c;
+  s >> a >> b >> c;
+  return "<inertial><origin xyz=\"" + xyz + "\" rpy=\"" + rpy + "\"/><mass value=\"" + std::to_string(m) +
+         "\"/><inertia ixx=\"" + a + "\" iyy=\"" + b + "\" izz=\"" + c +
+         "\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>\n";
+}
+
+std::string joint(const std::string& name, const std::string& type, const std::string& parent, const std::string& child,
+                  const std::string& xyz = "0 0 0", const std::string& rpy = "0 0 0", const std::string& axis = "0 0 1",
+                  const std::string& extra = "<limit lower=\"-3\" upper=\"3\" effort=\"0\" velocity=\"0\"/>") {
+  return "<joint name=\"" + name + "\" type=\"" + type + "\">\n  <parent link=\"" + parent + "\"/><child link=\"" +
+         child + "\"/>\n  <origin xyz=\"" + xyz + "\" rpy=\"" + rpy + "\"/>\n" +
+         (type == "fixed" ? "" : "  <axis xyz=\"" + axis + "\"/>\n  " + extra + "\n") + "</joint>\n";
+}
+
+// URDF's rpy: R = Rz(yaw) Ry(pitch) Rx(roll) (fixed axes x, y, z).
+Eigen::Matrix3d rpy(double r, double p, double y) {
+  return (Eigen::AngleAxisd(y, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(p, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(r, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Matrix<double, 6, 1> six(const Eigen::VectorXd& v) { return v.head<6>(); }
+
+// Every quantity of two models of one robot at random states: H, h, g from
+// every back-end that describes both, the flange's pose, potential energy,
+// and for 6 joints the geometric Jacobian.
+void expect_same_robot(const RobotModel& a, const RobotModel& b, int states, std::uint64_t seed) {
+  ASSERT_EQ(a.dof(), b.dof());
+  const int n = a.dof();
+  Rng rng(seed);
+  for (int s = 0; s < states; ++s) {
+    const Eigen::VectorXd q = rng.uniform_vector(n, -M_PI, M_PI), qd = rng.uniform_vector(n, -2, 2);
+    for (const auto& info : testing::supported(a)) {
+      if (!info.why_unsupported(b).empty()) continue;
+      auto ba = info.make(a), bb = info.make(b);
+      const auto A = testing::evaluate(*ba, q, qd, qd, qd), B = testing::evaluate(*bb, q, qd, qd, qd);
+      EXPECT_LT(rel_err(A.H, B.H), kSameModel) << info.name << " H, state " << s;
+      EXPECT_LT(rel_err(A.h, B.h), kSameModel) << info.name << " h, state " << s;
+      EXPECT_LT(rel_err(A.g, B.g), kSameModel) << info.name << " g, state " << s;
+      EXPECT_LT(rel_err(A.qdd, B.qdd), kSameModel) << info.name << " forward dynamics, state " << s;
+    }
+    Eigen::Matrix3d Ra, Rb;
+    Eigen::Vector3d pa, pb;
+    forward_kinematics<double>(a, q, Ra, pa);
+    forward_kinematics<double>(b, q, Rb, pb);
+    EXPECT_LT((Ra - Rb).norm(), kSameModel) << "flange orientation, state " << s;
+    EXPECT_LT((pa - pb).norm(), kSameModel) << "flange position, state " << s;
+    EXPECT_NEAR(potential_energy(a, q), potential_energy(b, q), kSameModel * (1 + std::abs(potential_energy(a, q))));
+    if (n == 6) {
+      Eigen::Matrix<double, 6, 6> Ja, Jb;
+      geometric_jacobian(a, six(q), 6, Ja);
+      geometric_jacobian(b, six(q), 6, Jb);
+      EXPECT_LT(rel_err(Ja, Jb), kSameModel) << "Jacobian, state " << s;
+    }
+  }
+}
+
+// ---------------------------------------------------------------- the PUMA 560
+
+TEST(UrdfPuma, IsTheRobotFilesModel) {
+  const RobotModel toml = load_robot("puma560"), urdf = load_robot(kPumaUrdf);
+  EXPECT_EQ(urdf.name, "puma560");
+  EXPECT_EQ(urdf.convention, DhConvention::kModified);
+  expect_same_robot(toml, urdf, 20, 560);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(urdf.joints[j].q_min, toml.joints[j].q_min) << j;
+    EXPECT_EQ(urdf.joints[j].q_max, toml.joints[j].q_max) << j;
+    EXPECT_EQ(urdf.joints[j].gear_ratio, toml.joints[j].gear_ratio) << j;
+    EXPECT_EQ(urdf.joints[j].rotor_inertia, toml.joints[j].rotor_inertia) << j;
+  }
+  EXPECT_EQ(urdf.gravity, toml.gravity);
+  ASSERT_EQ(urdf.poses.size(), toml.poses.size());
+  for (const NamedPose& p : toml.poses) EXPECT_EQ(urdf.pose(p.name)->q, p.q) << p.name;
+}
+
+// Locked joints: the same reduced robot, whose flange is the full robot's
+// with the held joints at their angles.
+TEST(UrdfPuma, LockedJointsAreTheRobotFilesToo) {
+  const RobotModel toml = load_robot("puma560"), urdf = load_robot(kPumaUrdf);
+  const Eigen::VectorXd held = toml.pose("qn")->q;
+  const RobotModel reduced = lock_joints(toml, 3, held);
+  expect_same_robot(reduced, lock_joints(urdf, 3, held), 10, 3);
+  Eigen::VectorXd q = held;
+  q.head<3>() = Eigen::Vector3d(0.3, -0.4, 1.2);
+  Eigen::Matrix3d R, Rr;
+  Eigen::Vector3d p, pr;
+  forward_kinematics<double>(toml, q, R, p);
+  forward_kinematics<double>(reduced, q.head<3>(), Rr, pr);
+  EXPECT_LT((R - Rr).norm(), kClosedForm);
+  EXPECT_LT((p - pr).norm(), kClosedForm);
+}
+
+// The closed-form inverse kinematics needs the robot file's standard DH rows:
+// on the URDF model it says why not (a scene then uses the numerical one).
+TEST(UrdfPuma, TheClosedFormInverseKinematicsRefusesIt) {
+  EXPECT_NE(puma_ik_unsupported(load_robot(kPumaUrdf)), "");
+}
+
+nlohmann::json dynamics_json(const std::string& robot_arg) {
+  std::ostringstream out, err;
+  const int status = run_cli({"dynamics", "--robot", robot_arg, "--backend", "crba", "--q=qn",
+                              "--qd=0.3,-0.2,0.5,1,-1,2", "--tau=1,2,3,0.1,0.2,0.3"},
+                             out, err);
+  EXPECT_EQ(status, kExitOk) << err.str();
+  return nlohmann::json::parse(out.str());
+}
+
+TEST(UrdfPuma, PumasimDynamicsPrintsTheSame) {
+  const nlohmann::json a = dynamics_json("puma560"), b = dynamics_json(kPumaUrdf);
+  for (const char* key : {"bias", "gravity", "qdd"}) {
+    for (int i = 0; i < 6; ++i) EXPECT_NEAR(a[key][i].get<double>(), b[key][i].get<double>(), kSameModel) << key;
+  }
+  for (int i = 0; i < 6; ++i) {
+    for (int k = 0; k < 6; ++k) {
+      EXPECT_NEAR(a["mass_matrix"][i][k].get<double>(), b["mass_matrix"][i][k].get<double>(), kSameModel);
+    }
+  }
+}
+
+// A scene with the URDF robot: its Cartesian reference (numerical inverse
+// kinematics now, converged to an error of 1e-12 m: DlsOptions) puts the
+// robot file's flange on the path, in one base frame.
+TEST(UrdfPuma, ASceneFollowsThePathWithIt) {
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
+  const Scene sc = load_scene(scene, {"scene.robot=\"" + fs::absolute(kPumaUrdf).lexically_normal().string() + "\""},
+                              {"reference.arm", "reference.elbow"});  // the closed form's branch
+  ASSERT_TRUE(sc.plant.reference);
+  EXPECT_EQ(sc.plant.robot.source, fs::absolute(kPumaUrdf).lexically_normal().string());
+  const RobotModel toml = load_robot("puma560");
+  for (double t : {0.0, 3.0, 11.5, 24.0}) {
+    ReferenceSample r;
+    sc.plant.reference->eval(t, r);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+    forward_kinematics<double>(toml, r.q, R, p);
+    EXPECT_LT((p - r.p).norm(), 1e-11) << "t = " << t;
+  }
+}
+
+// A run's meta.json names the side file with its hash (it holds the drive);
+// a robot file's run has none.
+TEST(UrdfPuma, MetaJsonHashesTheSideFile) {
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/passive_arm.toml";
+  const std::string urdf = fs::absolute(kPumaUrdf).lexically_normal().string();
+  const RunContext c = run_context({"pumasim"}, load_scene(scene, {"scene.robot=\"" + urdf + "\""}));
+  EXPECT_EQ(c.robot_file, urdf);
+  EXPECT_EQ(c.robot_side_file, urdf + ".toml");
+  std::ifstream f(urdf + ".toml", std::ios::binary);
+  std::ostringstream bytes;
+  bytes << f.rdbuf();
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
+  EXPECT_EQ(c.robot_side_fnv1a64, hex);
+  EXPECT_NE(meta_json(c).find("\"robot_side_file\""), std::string::npos);
+  const RunContext t = run_context({"pumasim"}, load_scene(scene));
+  EXPECT_EQ(t.robot_side_file, "");
+  EXPECT_EQ(meta_json(t).find("robot_side_file"), std::string::npos);
+}
+
+// ---------------------------------------------------------------- written from other models
+
+// The polar R-P arm written by scripts/robot_to_urdf.py: a prismatic joint.
+TEST(UrdfConversion, PolarArmFromTheScript) {
+  const std::string dir = PUMASIM_TEST_ROBOTS_DIR;
+  expect_same_robot(load_robot(dir + "/rp_polar.toml"), load_robot(dir + "/rp_polar.urdf"), 20, 2);
+}
+
+// `m` as URDF text, independently of the loader: each joint frame of
+// joint_frames (robot_model.hpp) turned by a rotation A_j into the URDF link
+// frame, so the URDF axis is A_j^T z (no coordinate axis) and every origin
+// has a general rpy; inertial data and the next origin in the turned frame.
+std::string urdf_of(const RobotModel& m, const std::vector<Eigen::Matrix3d>& A) {
+  const JointFrameData f = joint_frames(m);
+  const auto origin = [](const Eigen::Matrix3d& R, const Eigen::Vector3d& p) {
+    const Eigen::Vector3d ypr = R.eulerAngles(2, 1, 0);
+    char b[256];
+    std::snprintf(b, sizeof b, "<origin xyz=\"%.17g %.17g %.17g\" rpy=\"%.17g %.17g %.17g\"/>", p.x(), p.y(), p.z(),
+                  ypr[2], ypr[1], ypr[0]);
+    return std::string(b);
+  };
+  std::string s = "<?xml version=\"1.0\"?>\n<robot name=\"" + m.name + "\">\n<link name=\"l0\"/>\n";
+  Eigen::Matrix3d prev = Eigen::Matrix3d::Identity();
+  for (int j = 0; j < m.dof(); ++j) {
+    const Eigen::Vector3d axis = A[j].transpose() * Eigen::Vector3d::UnitZ();
+    std::string l = "l";
+    l += std::to_string(j + 1);
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "<axis xyz=\"%.17g %.17g %.17g\"/>", axis.x(), axis.y(), axis.z());
+    s += "<joint name=\"j" + std::to_string(j + 1) + "\" type=\"" + (f.type[j] == JointType::kPrismatic ? "prismatic" : "revolute") +
+         "\"><parent link=\"l" + std::to_string(j) + "\"/><child link=\"" + l + "\"/>" +
+         origin(prev.transpose() * f.E[j] * A[j], prev.transpose() * f.p[j]) + buf +
+         "<limit lower=\"-3.141592653589793\" upper=\"3.141592653589793\" effort=\"0\" velocity=\"0\"/></joint>\n";
+    const Eigen::Vector3d c = A[j].transpose() * f.com[j];
+    const Eigen::Matrix3d I = A[j].transpose() * f.I_com[j] * A[j];
+    std::snprintf(buf, sizeof buf,
+                  "<inertial>%s<mass value=\"%.17g\"/><inertia ixx=\"%.17g\" iyy=\"%.17g\" izz=\"%.17g\" ixy=\"%.17g\" "
+                  "ixz=\"%.17g\" iyz=\"%.17g\"/></inertial>",
+                  origin(Eigen::Matrix3d::Identity(), c).c_str(), f.mass[j], I(0, 0), I(1, 1), I(2, 2), I(0, 1),
+                  I(0, 2), I(1, 2));
+    s += "<link name=\"" + l + "\">" + buf + "</link>\n";
+    prev = A[j];
+  }
+  s += "<joint name=\"tool\" type=\"fixed\"><parent link=\"l" + std::to_string(m.dof()) +
+       "\"/><child link=\"flange\"/>" + origin(prev.transpose() * f.E_tool, prev.transpose() * f.p_tool) +
+       "</joint>\n<link name=\"flange\"/>\n</robot>\n";
+  return s;
+}
+
+std::string side_of(const RobotModel& m) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "[robot]\ngravity = [" << m.gravity.x() << ", " << m.gravity.y() << ", " << m.gravity.z() << "]\n";
+  for (int j = 0; j < m.dof(); ++j) {
+    s << "[joint.j" << j + 1 << "]\nrotor_inertia = " << m.joints[j].rotor_inertia
+      << "\ngear_ratio = " << m.joints[j].gear_ratio << "\n";
+  }
+  return s.str();
+}
+
+Eigen::Matrix3d random_rotation(Rng& rng) {
+  return Eigen::Quaterniond(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))
+      .normalized()
+      .toRotationMatrix();
+}
+
+// Random chains (both conventions, revolute and prismatic joints, skew axes)
+// with a random base and tool transform and gravity, as URDF: the same robot.
+TEST(UrdfConversion, RandomChainsWithBaseAndTool) {
+  int count = 0;
+  for (const auto conv : {DhConvention::kStandard, DhConvention::kModified}) {
+    for (const char* types : {"R", "RPR"}) {
+      for (const int n : {1, 2, 6}) {
+        RobotModel m = random_chain(n, 40 + n, conv, types);
+        Rng rng(7 + n);
+        m.base_R = random_rotation(rng), m.base_p = rng.uniform_vector(3, -1, 1);
+        m.tool_R = random_rotation(rng), m.tool_p = rng.uniform_vector(3, -0.2, 0.2);
+        m.gravity = Eigen::Vector3d(rng.uniform(-3, 3), rng.uniform(-3, 3), -9.81);
+        for (auto& J : m.joints) J.q_min = -M_PI, J.q_max = M_PI;
+        std::vector<Eigen::Matrix3d> A;
+        for (int j = 0; j < n; ++j) A.push_back(random_rotation(rng));
+        const RobotModel u = load_robot(write_urdf("random" + std::to_string(++count), urdf_of(m, A), side_of(m)));
+        SCOPED_TRACE(m.source + " " + to_string(conv));
+        expect_same_robot(m, u, 5, n);
+      }
+    }
+  }
+}
+
+// The Jacobian of a URDF robot with a base and a tool transform is the
+// derivative of its flange's pose (central differences, step 1e-6: error
+// O(h^2) ~ 1e-12 of O(1) second derivatives, plus rounding 1e-16 / h).
+TEST(UrdfConversion, JacobianIsTheFlangesVelocity) {
+  RobotModel m = random_chain(6, 5, DhConvention::kStandard);
+  Rng rng(5);
+  m.base_R = random_rotation(rng), m.base_p = rng.uniform_vector(3, -1, 1);
+  m.tool_R = random_rotation(rng), m.tool_p = rng.uniform_vector(3, -0.2, 0.2);
+  std::vector<Eigen::Matrix3d> A;
+  for (int j = 0; j < 6; ++j) A.push_back(random_rotation(rng));
+  const RobotModel u = load_robot(write_urdf("jacobian", urdf_of(m, A), side_of(m)));
+  const Eigen::Matrix<double, 6, 1> q = six(rng.uniform_vector(6, -M_PI, M_PI));
+  Eigen::Matrix<double, 6, 6> J;
+  geometric_jacobian(u, q, 6, J);
+  const double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    Eigen::Matrix<double, 6, 1> qp = q, qm = q;
+    qp[k] += h, qm[k] -= h;
+    Eigen::Matrix3d Rp, Rm, R;
+    Eigen::Vector3d pp, pm, p;
+    forward_kinematics<double>(u, qp, Rp, pp);
+    forward_kinematics<double>(u, qm, Rm, pm);
+    forward_kinematics<double>(u, q, R, p);
+    EXPECT_LT(((pp - pm) / (2 * h) - J.block<3, 1>(0, k)).norm(), 1e-8) << k;
+    const Eigen::Matrix3d W = (Rp - Rm) / (2 * h) * R.transpose();  // skew(omega)
+    EXPECT_LT((Eigen::Vector3d(W(2, 1), W(0, 2), W(1, 0)) - J.block<3, 1>(3, k)).norm(), 1e-8) << k;
+  }
+}
+
+// The numerical inverse kinematics reaches a pose given in the URDF's base
+// frame (not DH frame 0).
+TEST(UrdfConversion, NumericalInverseKinematicsInTheBaseFrame) {
+  RobotModel m = random_chain(6, 9, DhConvention::kModified);
+  Rng rng(9);
+  m.base_R = random_rotation(rng), m.base_p = rng.uniform_vector(3, -1, 1);
+  std::vector<Eigen::Matrix3d> A;
+  for (int j = 0; j < 6; ++j) A.push_back(random_rotation(rng));
+  const RobotModel u = load_robot(write_urdf("ik", urdf_of(m, A), side_of(m)));
+  const Eigen::Matrix<double, 6, 1> target = six(rng.uniform_vector(6, -1, 1));
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  forward_kinematics<double>(m, target, R, p);  // the pose from the original model
+  Eigen::Matrix<double, 6, 1> q = target + six(rng.uniform_vector(6, -0.05, 0.05));
+  const IkSolveResult res = dls_ik(u, 6, p, &R, q, DlsOptions{});
+  ASSERT_TRUE(res.converged) << res.error;
+  Eigen::Matrix3d Rq;
+  Eigen::Vector3d pq;
+  forward_kinematics<double>(u, q, Rq, pq);
+  EXPECT_LT((pq - p).norm(), 1e-9);
+  EXPECT_LT((Rq - R).norm(), 1e-9);
+}
+
+// ---------------------------------------------------------------- closed forms
+
+// A fixed joint merges its child into the parent body: link 1 (2 kg at
+// (0.1, 0, 0), diag(0.01, 0.02, 0.03)) and, fixed at (0.5, 0, 0.2) turned by
+// Rz(pi/2), link 2 (1 kg at (0.1, 0, 0) of its frame: (0.5, 0.1, 0.2) of
+// link 1's; diag(0.004, 0.005, 0.006) turned: diag(0.005, 0.004, 0.006)).
+// One joint about z through the origin, so DH frame 1 is link 1's frame.
+TEST(UrdfClosedForm, FixedJointMergedByTheParallelAxisTheorem) {
+  const std::string xml =
+      robot(link("base") + joint("j1", "revolute", "base", "l1") +
+            link("l1", inertial(2.0, "0.1 0 0", "0 0 0", "0.01 0.02 0.03")) +
+            joint("fix", "fixed", "l1", "l2", "0.5 0 0.2", "0 0 1.5707963267948966") +
+            link("l2", inertial(1.0, "0.1 0 0", "0 0 0", "0.004 0.005 0.006")));
+  const RobotModel m = load_robot(write_urdf("fixed", xml, "[robot]\ngravity = [0.0, -9.81, 0.0]\n"));
+  ASSERT_EQ(m.dof(), 1);
+  const Eigen::Vector3d c1(0.1, 0, 0), c2(0.5, 0.1, 0.2), c = (2.0 * c1 + 1.0 * c2) / 3.0;
+  const Eigen::Vector3d d1 = c1 - c, d2 = c2 - c;
+  const Eigen::Matrix3d I3 = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d I = Eigen::Vector3d(0.01, 0.02, 0.03).asDiagonal().toDenseMatrix() +
+                            Eigen::Vector3d(0.005, 0.004, 0.006).asDiagonal().toDenseMatrix() +
+                            2.0 * (d1.squaredNorm() * I3 - d1 * d1.transpose()) +
+                            1.0 * (d2.squaredNorm() * I3 - d2 * d2.transpose());
+  EXPECT_DOUBLE_EQ(m.joints[0].mass, 3.0);
+  EXPECT_LT((m.joints[0].com - c).norm(), kClosedForm);
+  EXPECT_LT((m.joints[0].inertia - I).norm(), kClosedForm);
+  // H: the moment about the axis, sum of Izz + m (x^2 + y^2) = 0.03 + 2 (0.01)
+  // + 0.006 + 1 (0.25 + 0.01) = 0.316; g with gravity -9.81 along y:
+  // dV/dq of V = 9.81 sum m y(q), y = x0 sin q + y0 cos q: 9.81 (0.7 cos q - 0.1 sin q).
+  auto b = make_backend("crba", m);
+  for (double q : {0.0, 0.4, -2.0}) {
+    Eigen::VectorXd qv(1), g(1);
+    qv[0] = q;
+    Eigen::MatrixXd Hm(1, 1);
+    b->mass_matrix(qv, Hm);
+    b->gravity(qv, g);
+    EXPECT_NEAR(Hm(0, 0), 0.316, kClosedForm) << q;
+    EXPECT_NEAR(g[0], 9.81 * (0.7 * std::cos(q) - 0.1 * std::sin(q)), kClosedForm) << q;
+  }
+}
+
+// A prismatic joint along a tilted axis (1, 0, 1)/sqrt 2 from (0.2, 0, 0.1):
+// H = m + Z^2 Im, g = m 9.81 u_z (holding the body against gravity along the
+// axis), and the flange (the link's frame) moves along the axis by q.
+TEST(UrdfClosedForm, PrismaticJoint) {
+  const std::string xml = robot(
+      link("base") +
+      joint("slide", "prismatic", "base", "l1", "0.2 0 0.1", "0 0 0", "1 0 1",
+            "<limit lower=\"0\" upper=\"0.5\" effort=\"0\" velocity=\"0\"/>") +
+      link("l1", inertial(3.0, "0 0 0.05", "0 0 0", "0.01 0.01 0.01")));
+  const RobotModel m = load_robot(
+      write_urdf("prismatic", xml, "[joint.slide]\nrotor_inertia = 1e-5\ngear_ratio = 628.3185307179586\n"));
+  ASSERT_EQ(m.dof(), 1);
+  EXPECT_TRUE(m.joints[0].prismatic());
+  EXPECT_EQ(m.joints[0].q_min, 0.0);
+  EXPECT_EQ(m.joints[0].q_max, 0.5);
+  const Eigen::Vector3d u = Eigen::Vector3d(1, 0, 1).normalized();
+  auto b = make_backend("crba", m);
+  for (double q : {0.0, 0.3}) {
+    Eigen::VectorXd qv(1), g(1);
+    qv[0] = q;
+    Eigen::MatrixXd H(1, 1);
+    b->mass_matrix(qv, H);
+    b->gravity(qv, g);
+    EXPECT_NEAR(H(0, 0), 3.0 + 628.3185307179586 * 628.3185307179586 * 1e-5, kClosedForm);
+    EXPECT_NEAR(g[0], 3.0 * 9.81 * u.z(), kClosedForm);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+    forward_kinematics<double>(m, qv, R, p);
+    EXPECT_LT((p - (Eigen::Vector3d(0.2, 0, 0.1) + q * u)).norm(), kClosedForm);
+    EXPECT_LT((R - Eigen::Matrix3d::Identity()).norm(), kClosedForm);
+  }
+}
+
+// A revolute joint whose axis (1, 2, 2)/3 is no coordinate axis, under an
+// origin at (0.1, -0.2, 0.3) turned by rpy (0.3, -0.5, 0.7): the flange (a
+// fixed link at (0.5, 0, 0), rpy (0.1, 0.2, 0.3)) by Rodrigues' rotation; a
+// point mass m at c (link frame): H = m |u x c|^2, g = 9.81 m (u x r)_z with
+// r its offset from the axis' origin in the base frame (its velocity per qd).
+TEST(UrdfClosedForm, AxisOffZUnderARotatedOrigin) {
+  const std::string xml =
+      robot(link("base") + joint("j1", "revolute", "base", "l1", "0.1 -0.2 0.3", "0.3 -0.5 0.7", "1 2 2") +
+            link("l1", inertial(2.0, "0.4 0.1 -0.2", "0 0 0", "0 0 0")) +
+            joint("tool", "fixed", "l1", "flange", "0.5 0 0", "0.1 0.2 0.3") + link("flange"));
+  const RobotModel m = load_robot(write_urdf("offaxis", xml));
+  const Eigen::Matrix3d R0 = rpy(0.3, -0.5, 0.7), Rt = rpy(0.1, 0.2, 0.3);
+  const Eigen::Vector3d o(0.1, -0.2, 0.3), ul = Eigen::Vector3d(1, 2, 2) / 3.0, c(0.4, 0.1, -0.2);
+  auto b = make_backend("crba", m);
+  for (double q : {0.0, 1.1, -2.5}) {
+    Eigen::VectorXd qv(1), g(1);
+    qv[0] = q;
+    const Eigen::Matrix3d Rq = R0 * Eigen::AngleAxisd(q, ul).toRotationMatrix();
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+    forward_kinematics<double>(m, qv, R, p);
+    EXPECT_LT((R - Rq * Rt).norm(), kClosedForm) << q;
+    EXPECT_LT((p - (o + Rq * Eigen::Vector3d(0.5, 0, 0))).norm(), kClosedForm) << q;
+    Eigen::MatrixXd H(1, 1);
+    b->mass_matrix(qv, H);
+    b->gravity(qv, g);
+    EXPECT_NEAR(H(0, 0), 2.0 * ul.cross(c).squaredNorm(), kClosedForm) << q;
+    EXPECT_NEAR(g[0], 9.81 * 2.0 * (R0 * ul).cross(Rq * c).z(), kClosedForm) << q;
+  }
+}
+
+// Fixed links that branch after the last moving joint: the flange is where
+// they branch (link l1 here), unless the side file names one of them.
+TEST(UrdfClosedForm, FlangeWhereTheFixedLinksBranchOrNamed) {
+  const std::string xml =
+      robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0.3") +
+            link("l1", inertial(2.0, "0.4 0.1 -0.2", "0 0 0", "0.01 0.01 0.01")) +
+            joint("tool", "fixed", "l1", "flange", "0.5 0 0", "0.1 0.2 0.3") + link("flange") +
+            joint("cam", "fixed", "l1", "camera", "0 0.2 0") + link("camera"));
+  const Eigen::VectorXd q = Eigen::VectorXd::Constant(1, 0.8);
+  const Eigen::Matrix3d Rq = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  forward_kinematics<double>(load_robot(write_urdf("branching", xml)), q, R, p);
+  EXPECT_LT((R - Rq).norm(), kClosedForm);
+  EXPECT_LT((p - Eigen::Vector3d(0, 0, 0.3)).norm(), kClosedForm);
+  forward_kinematics<double>(load_robot(write_urdf("named", xml, "[robot]\nflange = \"flange\"\n")), q, R, p);
+  EXPECT_LT((R - Rq * rpy(0.1, 0.2, 0.3)).norm(), kClosedForm);
+  EXPECT_LT((p - (Eigen::Vector3d(0, 0, 0.3) + Rq * Eigen::Vector3d(0.5, 0, 0))).norm(), kClosedForm);
+}
+
+// The axis (0, 0, -1) turns the other way: q on it is -q on (0, 0, 1), so
+// the flange's pose is the same at (-q1, q2), and H and g change sign with
+// the first row and column (H' = S H S, g' = S g, S = diag(-1, 1)).
+TEST(UrdfClosedForm, ANegativeAxisFlipsTheJointVariable) {
+  const auto two = [](const std::string& axis) {
+    return robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0.3", "0 0 0", axis) +
+                 link("l1", inertial(2.0, "0.2 0.1 0", "0 0 0", "0.02 0.03 0.04")) +
+                 joint("j2", "revolute", "l1", "l2", "0.4 0 0", "1.5707963267948966 0 0", "0 0 1") +
+                 link("l2", inertial(1.0, "0.3 0 0.05", "0 0 0", "0.01 0.02 0.02")));
+  };
+  const RobotModel neg = load_robot(write_urdf("negative", two("0 0 -1")));
+  const RobotModel pos = load_robot(write_urdf("positive", two("0 0 1")));
+  auto bn = make_backend("crba", neg), bp = make_backend("crba", pos);
+  Rng rng(3);
+  for (int s = 0; s < 5; ++s) {
+    const Eigen::VectorXd q = rng.uniform_vector(2, -3, 3);
+    Eigen::VectorXd qf = q;
+    qf[0] = -q[0];
+    Eigen::Matrix3d Rn, Rp;
+    Eigen::Vector3d pn, pp;
+    forward_kinematics<double>(neg, q, Rn, pn);
+    forward_kinematics<double>(pos, qf, Rp, pp);
+    EXPECT_LT((Rn - Rp).norm(), kClosedForm);
+    EXPECT_LT((pn - pp).norm(), kClosedForm);
+    Eigen::MatrixXd Hn(2, 2), Hp(2, 2);
+    Eigen::VectorXd gn(2), gp(2);
+    bn->mass_matrix(q, Hn), bp->mass_matrix(qf, Hp);
+    bn->gravity(q, gn), bp->gravity(qf, gp);
+    const Eigen::Matrix2d S = Eigen::Vector2d(-1, 1).asDiagonal();
+    EXPECT_LT((Hn - S * Hp * S).norm(), kClosedForm);
+    EXPECT_LT((gn - S * gp).norm(), kClosedForm);
+  }
+}
+
+// A link without <inertial> has no mass: with the rotor of the side file
+// alone, H = Z^2 Im exactly; without a rotor the joint moves nothing and is refused.
+TEST(UrdfClosedForm, MissingInertialIsAMasslessLink) {
+  const std::string xml = robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1"));
+  const RobotModel m = load_robot(write_urdf("massless", xml, "[joint.j1]\nrotor_inertia = 2e-4\ngear_ratio = 50.0\n"));
+  EXPECT_EQ(m.joints[0].mass, 0.0);
+  EXPECT_TRUE(m.joints[0].inertia.isZero(0));
+  Eigen::MatrixXd H(1, 1);
+  make_backend("crba", m)->mass_matrix(Eigen::VectorXd::Zero(1), H);
+  EXPECT_NEAR(H(0, 0), 50.0 * 50.0 * 2e-4, kClosedForm);
+  try {
+    load_robot(write_urdf("massless_no_rotor", xml));
+    FAIL() << "a joint that moves no mass was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("moves no mass"), std::string::npos) << e.what();
+  }
+}
+
+// A continuous joint has no limits; a revolute joint's are read.
+TEST(UrdfClosedForm, ContinuousJointHasNoLimits) {
+  const std::string xml = robot(link("base") +
+                                joint("j1", "continuous", "base", "l1", "0 0 0", "0 0 0", "0 0 1", "") +
+                                link("l1", inertial(1.0, "0.1 0 0", "0 0 0", "0.01 0.01 0.01")) +
+                                joint("j2", "revolute", "l1", "l2", "0.3 0 0", "0 0 0", "0 0 1",
+                                      "<limit lower=\"-1.25\" upper=\"2.5\" effort=\"0\" velocity=\"0\"/>") +
+                                link("l2", inertial(1.0, "0.1 0 0", "0 0 0", "0.01 0.01 0.01")));
+  const RobotModel m = load_robot(write_urdf("continuous", xml));
+  EXPECT_EQ(m.joints[0].q_min, -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(m.joints[0].q_max, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(m.joints[1].q_min, -1.25);
+  EXPECT_EQ(m.joints[1].q_max, 2.5);
+}
+
+// ---------------------------------------------------------------- refusals
+
+// The URDF is refused with every fragment in the message, which starts with
+// the file's path; the command line exits with status 2 on it.
+void expect_refused(const std::string& name, const std::string& xml, const std::vector<std::string>& fragments,
+                    const std::string& side = "") {
+  const std::string path = write_urdf(name, xml, side);
+  try {
+    load_robot(path);
+    ADD_FAILURE() << name << ": accepted";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path, 0), 0u) << what;
+    for (const auto& f : fragments) EXPECT_NE(what.find(f), std::string::npos) << f << " in: " << what;
+  }
+  std::ostringstream out, err;
+  EXPECT_EQ(run_cli({"dynamics", "--robot", path, "--backend", "crba", "--q=0"}, out, err), kExitBadInput) << name;
+}
+
+const std::string kInertial = inertial(1.0, "0.1 0 0", "0 0 0", "0.01 0.01 0.01");
+
+TEST(UrdfRefused, ATree) {
+  expect_refused("tree",
+                 robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
+                       joint("j2", "revolute", "l1", "l2") + link("l2", kInertial) +
+                       joint("j3", "revolute", "l1", "l3") + link("l3", kInertial)),
+                 {"tree.urdf:", "joints 'j2'", "'j3'", "(a tree)", "serial chain"});
+  // A branch behind a fixed joint is a tree too.
+  expect_refused("tree_behind_fixed",
+                 robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
+                       joint("j2", "revolute", "l1", "l2") + link("l2", kInertial) +
+                       joint("f", "fixed", "l1", "bracket") + link("bracket") +
+                       joint("j3", "prismatic", "bracket", "l3") + link("l3", kInertial)),
+                 {"(a tree)", "from link 'bracket'"});
+}
+
+TEST(UrdfRefused, AClosedLoop) {
+  expect_refused("loop",
+                 robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
+                       joint("j2", "revolute", "base", "l2") + link("l2", kInertial) +
+                       joint("j3", "revolute", "l1", "l3") + joint("j4", "revolute", "l2", "l3") +
+                       link("l3", kInertial)),
+                 {"link 'l3'", "closed loop", "'j3'", "'j4'"});
+}
+
+TEST(UrdfRefused, FloatingPlanarAndMimicJoints) {
+  expect_refused("floating", robot(link("base") + joint("f", "floating", "base", "l1") + link("l1", kInertial)),
+                 {"joint 'f'", "type=\"floating\""});
+  expect_refused("planar", robot(link("base") + joint("p", "planar", "base", "l1") + link("l1", kInertial)),
+                 {"joint 'p'", "type=\"planar\""});
+  expect_refused("mimic",
+                 robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
+                       joint("j2", "revolute", "l1", "l2", "0 0 0", "0 0 0", "0 0 1",
+                             "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/><mimic joint=\"j1\"/>") +
+                       link("l2", kInertial)),
+                 {"joint 'j2'", "mimic"});
+}
+
+TEST(UrdfRefused, BadValues) {
+  expect_refused("limits", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
+                                                      "<limit effort=\"1\" velocity=\"1\"/>") +
+                                 link("l1", kInertial)),
+                 {"joint 'j1'", "lower < upper", "lower=\"0\" upper=\"0\""});
+  expect_refused("zero_axis", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 0") +
+                                    link("l1", kInertial)),
+                 {"joint 'j1'", "non-zero <axis xyz>"});
+  expect_refused("negative_mass", robot(link("base") + joint("j1", "revolute", "base", "l1") +
+                                        link("l1", inertial(-1.0, "0 0 0", "0 0 0", "0.01 0.01 0.01"))),
+                 {"link 'l1'", "a mass >= 0"});
+  expect_refused("damping",
+                 robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
+                                            "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>"
+                                            "<dynamics damping=\"0.5\"/>") +
+                       link("l1", kInertial)),
+                 {"joint 'j1'", "damping", "[friction]"});
+  expect_refused("no_joint", robot(link("base")), {"at least one revolute"});
+  expect_refused("not_urdf", "<robot><link/>", {"URDF error", "urdfdom"});
+  // Principal moments 0.1, 0.1, 0.3: no rigid body's, unless the side file says why.
+  const std::string bad = robot(link("base") + joint("j1", "revolute", "base", "l1") +
+                                link("l1", inertial(1.0, "0 0 0", "0 0 0", "0.1 0.1 0.3")));
+  expect_refused("inconsistent", bad, {"joint 'j1'", "triangle inequalities", "inconsistent_inertia"});
+  EXPECT_EQ(load_robot(write_urdf("excused", bad,
+                                  "[joint.j1]\nrotor_inertia = 0.0\ngear_ratio = 1.0\n"
+                                  "inconsistent_inertia = \"kept as published\"\n"))
+                .dof(),
+            1);
+}
+
+// The side file is read strictly: the file, the line and the key.
+TEST(UrdfRefused, SideFileErrors) {
+  const std::string xml = robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial));
+  const auto side_refused = [&](const std::string& name, const std::string& side,
+                                const std::vector<std::string>& fragments) {
+    const std::string path = write_urdf(name, xml, side);
+    try {
+      load_robot(path);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(urdf_side_file(path), 0), 0u) << what;
+      for (const auto& f : fragments) EXPECT_NE(what.find(f), std::string::npos) << f << " in: " << what;
+    }
+  };
+  side_refused("side_joint", "[joint.elbow]\nrotor_inertia = 0.0\ngear_ratio = 1.0\n",
+               {":1:", "joint.elbow", "a moving joint", "(j1)"});
+  side_refused("side_key", "[joint.j1]\nrotor_inertia = 0.0\ngear_ratio = 1.0\ntorque_constant = 0.2\n",
+               {":4:", "torque_constant"});
+  side_refused("side_gear", "[joint.j1]\nrotor_inertia = 0.0\n", {"gear_ratio"});
+  side_refused("side_flange", "[robot]\nflange = \"nowhere\"\n", {"robot.flange", "l1", "'nowhere'"});
+  side_refused("side_pose", "[poses]\nhome = [0.0, 1.0]\n", {":2:", "poses.home", "an array of 1 numbers"});
+}
+
+// A name without a path is a shipped robot: its robot file, else its URDF
+// (the side file's name is no robot's).
+TEST(UrdfShipped, ANameFindsAUrdfWithoutRobotFile) {
+  const fs::path dir = scratch() / "robots";
+  fs::create_directories(dir);
+  fs::copy_file(kPumaUrdf, dir / "arm.urdf", fs::copy_options::overwrite_existing);
+  fs::copy_file(urdf_side_file(kPumaUrdf), urdf_side_file((dir / "arm.urdf").string()),
+                fs::copy_options::overwrite_existing);
+  const char* old = std::getenv("PUMASIM_ROBOTS_DIR");
+  const std::string saved = old ? old : "";
+  ::setenv("PUMASIM_ROBOTS_DIR", dir.c_str(), 1);
+  EXPECT_EQ(load_robot("arm").dof(), 6);
+  try {
+    load_robot("hand");
+    ADD_FAILURE() << "an unknown robot was found";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("one of: arm"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("arm.urdf"), std::string::npos) << e.what();
+  }
+  if (old) {
+    ::setenv("PUMASIM_ROBOTS_DIR", saved.c_str(), 1);
+  } else {
+    ::unsetenv("PUMASIM_ROBOTS_DIR");
+  }
+}
+
+}  // namespace
+}  // namespace pumasim
