@@ -395,6 +395,14 @@ def load_run(run_dir):
                read_trajectory(run_dir, check=False))
 
 
+def revision_line(meta):
+    """A sentence naming the program that made a run (its meta.json as a dict):
+    revision, uncommitted changes, compiler, build type, start time."""
+    dirty = " with uncommitted changes" if meta.get("git_dirty") else ""
+    return (f"Runs made by pumasim at git revision `{meta.get('git_revision')}`{dirty} "
+            f"({meta.get('compiler')}, {meta.get('build_type')}), started {meta.get('started_utc')}.")
+
+
 def list_in_marker(run_dir, names):
     """Adds names (files the caller wrote into run_dir) to its marker, so that
     `pumasim run --force` may replace the folder with them; does nothing when

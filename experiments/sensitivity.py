@@ -4,11 +4,13 @@
     /usr/bin/python3 experiments/sensitivity.py [--jobs N] [--quick]
 
 The slow experiment (experiments/scenes/paper_slow.toml: 3 joints, 24 s, the
-paper's stick-slip rule, AB2 at the paper's 0.5 ms) has eight inputs without a
-PUMA 560 source: the PIV bandwidth (the gains come from scripts/design_piv.py
-at that bandwidth), the armature inductance La and resistance R, the
-amplifier's output resistance R0 and gain K_A, the friction rule's "zero
-speed" band, the held wrist pose and the viscous coefficients B. Each is
+paper's stick-slip rule, AB2 at the paper's 0.5 ms) has seven inputs without a
+PUMA 560 source that this study varies: the PIV bandwidth (the gains come from
+scripts/design_piv.py at that bandwidth), the armature inductance La and
+resistance R, the amplifier's output resistance R0 and gain K_A, the friction
+rule's "zero speed" band and the held wrist pose; and the viscous
+coefficients B (from the Robotics Toolbox, varied as well). Not varied, and
+unsourced too: the PIV damping (0.8), the path and the speed profile. Each is
 varied alone over a range around the scene's value (the others at theirs),
 then all together on a Latin hypercube (log-uniform within the same ranges,
 fixed seed). For every point two runs: AB2 at 0.5 ms (the paper's method and
@@ -174,6 +176,10 @@ def main():
         write(rows, check_mm)
 
 
+def scene_run_meta():
+    return pumasim_io.read_meta(os.path.join(WORK, "scene", f"ab2-{PAPER_DT!r}"))
+
+
 def fmt(x, d=3):
     return "–" if isinstance(x, float) and math.isnan(x) else f"{x:.{d}f}"
 
@@ -200,7 +206,11 @@ def write(rows, check_mm):
         f"converged run (rk4 at {CONVERGED_DT:g} s, which differs from rk4 at {CHECK_DT:g} s by {check_mm:.2g} mm at",
         "the scene's point). *Integration error*: the maximum wrist-centre distance between the two runs. The",
         "ranges are chosen (a factor of about 2–4 around the scene's value; the bandwidth's 8–30 Hz as the",
-        "issue's); changing La, R, R0 or K_A keeps the PIV gains designed for the scene's values.",
+        "issue's); changing La, R, R0 or K_A keeps the PIV gains designed for the scene's values (so R and K_A",
+        "also act partly as a change of bandwidth). Not varied, and unsourced too: the PIV damping (0.8), the",
+        "path and the speed profile. B is sourced (Robotics Toolbox) and varied as well.",
+        "",
+        pumasim_io.revision_line(scene_run_meta()),
         "",
         f"At the scene's values: tracking error {fmt(scene['ab2_tracking_error_mm'])} mm (converged"
         f" {fmt(scene['converged_tracking_error_mm'])} mm), path deviation {fmt(scene['ab2_path_deviation_mm'])} mm,"

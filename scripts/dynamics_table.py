@@ -150,8 +150,9 @@ def like_for_like(rows, robots):
     if not pumas:
         return out
     w("## The paper's claim, like for like\n")
-    w("Forward dynamics of the PUMA 560, six joints and the wrist held at zero (the paper's "
-      "experiment, n = 3). Each row compares back-ends of one kind. *generic*: they serve any arm "
+    w("Forward dynamics of the PUMA 560: all six joints (n = 6), and the first three with the wrist "
+      "held at zero (n = 3: the joints the paper's experiment moves; its dynamics module, the paper "
+      "says, takes all six into account). Each row compares back-ends of one kind. *generic*: they serve any arm "
       "and multiply by the PUMA's zero parameters like by any other (`lagrange-euler` is the textbook "
       "Lagrange-Euler formulation, the paper's reference [10]). *generated*: made for the PUMA by "
       "the same SymPy pipeline (`scripts/generate_lagrange.py` for Lagrange, "
