@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "experiments/simulation/run_recorder.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/robot/robot_file.hpp"
@@ -203,6 +204,26 @@ TEST(Prismatic, RandomChainPatternKeepsTheOtherJoints) {
     }
   }
   EXPECT_THROW(random_chain(3, 1, DhConvention::kStandard, "RX"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pumasim
+
+namespace pumasim {
+namespace {
+
+// trajectory.csv's units follow the joint type: the Stanford arm's boom
+// (joint 3, prismatic) in m and m/s, its revolute joints in rad and rad/s,
+// every PIV integral motor-side (rad s).
+TEST(Prismatic, TrajectoryUnitsFollowTheJointType) {
+  const RobotModel stanford = load_robot("stanford");
+  ASSERT_TRUE(stanford.joints[2].prismatic());
+  EXPECT_EQ(unit_of_state("q3", &stanford), "m");
+  EXPECT_EQ(unit_of_state("qd3", &stanford), "m/s");
+  EXPECT_EQ(unit_of_state("q2", &stanford), "rad");
+  EXPECT_EQ(unit_of_state("qd4", &stanford), "rad/s");
+  EXPECT_EQ(unit_of_state("z_piv3", &stanford), "rad s");
+  EXPECT_EQ(unit_of_state("q3"), "rad");  // without the robot: the revolute default
 }
 
 }  // namespace

@@ -9,9 +9,20 @@
 
 namespace pumasim {
 
-std::string unit_of_state(const std::string& state) {
-  if (state.rfind("qd", 0) == 0) return "rad/s";
-  if (state.rfind("q", 0) == 0) return "rad";
+namespace {
+// Joint k (1-based) from a state name "<prefix>k", if the robot has it and it is prismatic.
+bool prismatic_state(const std::string& state, std::size_t prefix, const RobotModel* robot) {
+  if (robot == nullptr || state.size() <= prefix) return false;
+  const std::string digits = state.substr(prefix);
+  if (!std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) return false;
+  const int k = std::stoi(digits);
+  return k >= 1 && k <= robot->dof() && robot->joints[static_cast<std::size_t>(k - 1)].prismatic();
+}
+}  // namespace
+
+std::string unit_of_state(const std::string& state, const RobotModel* robot) {
+  if (state.rfind("qd", 0) == 0) return prismatic_state(state, 2, robot) ? "m/s" : "rad/s";
+  if (state.rfind("q", 0) == 0) return prismatic_state(state, 1, robot) ? "m" : "rad";
   if (state.rfind("i_motor", 0) == 0) return "A";
   if (state.rfind("z_piv", 0) == 0) return "rad s";
   if (state.rfind("e_", 0) == 0) return "J";
@@ -42,9 +53,11 @@ void RunRecorder::observe(double t, const double* x) {
 std::string RunRecorder::header() const {
   std::ostringstream csv;
   csv << "t [s]";
-  for (const auto& name : plant_.layout().names) csv << "," << name << " [" << unit_of_state(name) << "]";
+  for (const auto& name : plant_.layout().names) {
+    csv << "," << name << " [" << unit_of_state(name, &cfg_.robot) << "]";
+  }
   if (cfg_.reference) {
-    for (int j = 0; j < n_; ++j) csv << ",q_ref" << j + 1 << " [rad]";
+    for (int j = 0; j < n_; ++j) csv << ",q_ref" << j + 1 << " [" << unit_of_state("q" + std::to_string(j + 1), &cfg_.robot) << "]";
   }
   csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
   if (cfg_.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";

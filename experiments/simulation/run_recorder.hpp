@@ -66,7 +66,9 @@ class RunRecorder {
   RunFigures fig_;
 };
 
-// The unit of a state component, from its name (q1 rad, qd1 rad/s, ...).
-std::string unit_of_state(const std::string& name);
+// The unit of a state component, from its name (q1 rad, qd1 rad/s, ...);
+// with the robot, a prismatic joint's q and qd in m and m/s (its PIV
+// integral stays motor-side, rad s).
+std::string unit_of_state(const std::string& name, const RobotModel* robot = nullptr);
 
 }  // namespace pumasim
