@@ -58,7 +58,6 @@ import numpy as np
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
 
-FIXED = ["euler", "rk4", "ab2", "ab3", "ab4"]
 # Theoretical orders (the registry's summaries state most of them; the
 # CVODE methods are variable-order).
 THEORY = {"euler": "1", "rk4": "4", "ab2": "2", "ab3": "3", "ab4": "4",
@@ -174,8 +173,11 @@ def ladders(a, summaries):
         adaptive, rtols = ["cvode-bdf", "odeint-dopri5"], [1e-4, 1e-6, 1e-8]
     else:
         scenes = {"smooth_line_quintic": 8.0, "smooth_line_quintic_La20mH": 8.0, "paper_slow_viscous": a.paper_t_end}
-        fixed, dts = FIXED, [2e-3 / 2 ** k for k in range(5)]
-        adaptive = [m for m in sorted(summaries) if m not in FIXED]
+        # Every fixed-step method the registry lists (its summary says so),
+        # so that a new one cannot be left out.
+        fixed = [m for m in sorted(summaries) if "fixed step" in summaries[m]]
+        dts = [2e-3 / 2 ** k for k in range(5)]
+        adaptive = [m for m in sorted(summaries) if m not in fixed]
         rtols = [10.0 ** -k for k in range(3, 10)]
     return scenes, fixed, dts, adaptive, rtols
 
