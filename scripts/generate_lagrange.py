@@ -396,8 +396,10 @@ def generate(n, robot_file=None):
     return "\n".join(head + lines + tail), stats, t_derive, t_total
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def generator_main(generate, prefix, description):
+    """The command line of a generator: writes <prefix>_{,folded_}<n>.hpp for each --dof,
+    generate(n, robot_file or None) -> (text, stats, t_derive, t_total) making each."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "dynamics", "generated"))
     ap.add_argument("--dof", type=int, nargs="*", default=[3, 6])
     ap.add_argument("--robot", default=os.path.join(os.path.dirname(__file__), "..", "models", "robots",
@@ -407,12 +409,16 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     for n, fold in [(n, f) for f in (False, True) for n in args.dof]:
         text, stats, t_derive, t_total = generate(n, args.robot if fold else None)
-        path = os.path.join(args.out, f"lagrange_puma560_{'folded_' if fold else ''}{n}.hpp")
+        path = os.path.join(args.out, f"{prefix}_{'folded_' if fold else ''}{n}.hpp")
         with open(path, "w") as f:
             f.write(text)
         print(f"n = {n}{', folded' if fold else ''}: derivation {t_derive:.1f} s, total with CSE and printing {t_total:.1f} s; "
               f"{path}: {len(text):,} bytes, {text.count(chr(10)):,} lines; "
               f"CSE temporaries: " + ", ".join(f"{k} {v}" for k, v in stats.items()), flush=True)
+
+
+def main():
+    generator_main(generate, "lagrange_puma560", __doc__.split("\n")[0])
 
 
 if __name__ == "__main__":

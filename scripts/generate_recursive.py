@@ -35,7 +35,6 @@ common subexpressions are then eliminated per kernel. Kernels:
   - dynamics: H (CRBA) and h (RNEA, qdd = 0) in one kernel, sharing
     subexpressions, as the generic CRBA back-end shares the joint rotations.
 """
-import argparse
 import os
 import sys
 import time
@@ -44,7 +43,7 @@ import sympy as sp
 from sympy.core.parameters import distribute
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from generate_lagrange import Model, emit_kernel, folded_parameters, header  # noqa: E402
+from generate_lagrange import Model, emit_kernel, folded_parameters, generator_main, header  # noqa: E402
 
 
 def link_inertia(model, j):
@@ -181,22 +180,7 @@ def generate(n, robot_file=None):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "models", "dynamics", "generated"))
-    ap.add_argument("--dof", type=int, nargs="*", default=[3, 6])
-    ap.add_argument("--robot", default=os.path.join(os.path.dirname(__file__), "..", "models", "robots",
-                                                    "puma560.toml"),
-                    help="robot file whose numbers the folded variant carries")
-    args = ap.parse_args()
-    os.makedirs(args.out, exist_ok=True)
-    for n, fold in [(n, f) for f in (False, True) for n in args.dof]:
-        text, stats, t_derive, t_total = generate(n, args.robot if fold else None)
-        path = os.path.join(args.out, f"recursive_puma560_{'folded_' if fold else ''}{n}.hpp")
-        with open(path, "w") as f:
-            f.write(text)
-        print(f"n = {n}{', folded' if fold else ''}: derivation {t_derive:.1f} s, total with CSE and printing {t_total:.1f} s; "
-              f"{path}: {len(text):,} bytes, {text.count(chr(10)):,} lines; "
-              f"CSE temporaries: " + ", ".join(f"{k} {v}" for k, v in stats.items()), flush=True)
+    generator_main(generate, "recursive_puma560", __doc__.split("\n")[0])
 
 
 if __name__ == "__main__":
