@@ -12,9 +12,9 @@ model's instantaneous sticks and a classified run's flicker count alike.
 compare(reference, run) says, over the joints:
   match              the two sequences of modes are equal (yes/no);
   first_divergence   (time [s], joint) of the earliest place where they part;
-  time errors        max and RMS |t_run - t_ref| over the matched events (the
-                     alignment of difflib.SequenceMatcher over each joint's
-                     modes; the modes at t = 0 left out);
+  time errors        max and RMS |t_run - t_ref| over the matched events (per
+                     joint, events of equal mode that are each other's
+                     nearest in time; the modes at t = 0 left out);
   missed sticks      the reference's sticks at a speed reversal (a stick
                      between slips of opposite directions) during which the
                      run never sticks that joint.
@@ -26,7 +26,6 @@ break-away from a stick has |applied| = Fs by construction (the root); its
 timing, not its outcome, is the decision there, and it is not marked.
 """
 import csv
-import difflib
 import io
 import math
 import os
@@ -85,11 +84,27 @@ def lasting(seq, min_duration=MIN_DURATION):
     return out
 
 
+def _nearest(seq, t):
+    """Index of the event of seq nearest to time t (the first of a tie)."""
+    return min(range(len(seq)), key=lambda k: abs(seq[k][1]["t"] - t))
+
+
 def _aligned(ref, run):
-    """[(i, k)] of matched events of two joint sequences (equal modes,
-    difflib's longest matching blocks)."""
-    sm = difflib.SequenceMatcher(None, [e["mode"] for e in ref], [e["mode"] for e in run], autojunk=False)
-    return [(b.a + d, b.b + d) for b in sm.get_matching_blocks() for d in range(b.size)]
+    """[(i, k)] of matched events of two joint sequences: equal modes and
+    mutual nearest neighbours in time (run event k is the nearest of its mode
+    to reference event i, and i the nearest to k), so that an event the run
+    lacks is left unmatched instead of paired with a distant one."""
+    pairs = []
+    for mode in MODES:
+        a = [(i, e) for i, e in enumerate(ref) if e["mode"] == mode]
+        b = [(k, e) for k, e in enumerate(run) if e["mode"] == mode]
+        if not a or not b:
+            continue
+        for ia, (i, e) in enumerate(a):
+            kb = _nearest(b, e["t"])
+            if _nearest(a, b[kb][1]["t"]) == ia:
+                pairs.append((i, b[kb][0]))
+    return sorted(pairs)
 
 
 def _divergence(ref, run):
