@@ -13,13 +13,14 @@ compare(reference, run) says, over the joints:
   match              the two sequences of modes are equal (yes/no);
   first_divergence   (time [s], joint) of the earliest place where they part;
   time errors        max and RMS |t_run - t_ref| over the matched events (per
-                     joint, events of equal mode that are each other's
-                     nearest in time; the modes at t = 0 left out);
+                     joint, the events before the sequences part; the modes
+                     at t = 0 left out);
   missed sticks      the reference's sticks at a speed reversal (a stick
                      between slips of opposite directions) during which the
                      run never sticks that joint.
 marginal(reference, check) marks the reference's decisions that are marginal:
-those its own cross-check (the sweep's [check] run) does not share, and
+those its own cross-check (the sweep's [check] run) does not share (at or after
+the place where the check's sequence parts from the reference's), and
 those whose torque margin is within TORQUE_MARGIN of Fs: a stick (Fs - |applied|
 just after it) and a reversal without a stick (|applied| - Fs there). A
 break-away from a stick has |applied| = Fs by construction (the root); its
@@ -84,27 +85,19 @@ def lasting(seq, min_duration=MIN_DURATION):
     return out
 
 
-def _nearest(seq, t):
-    """Index of the event of seq nearest to time t (the first of a tie)."""
-    return min(range(len(seq)), key=lambda k: abs(seq[k][1]["t"] - t))
+def _common(ref, run):
+    """How many leading events two joint sequences share (equal modes, in order)."""
+    k = 0
+    while k < min(len(ref), len(run)) and ref[k]["mode"] == run[k]["mode"]:
+        k += 1
+    return k
 
 
 def _aligned(ref, run):
-    """[(i, k)] of matched events of two joint sequences: equal modes and
-    mutual nearest neighbours in time (run event k is the nearest of its mode
-    to reference event i, and i the nearest to k), so that an event the run
-    lacks is left unmatched instead of paired with a distant one."""
-    pairs = []
-    for mode in MODES:
-        a = [(i, e) for i, e in enumerate(ref) if e["mode"] == mode]
-        b = [(k, e) for k, e in enumerate(run) if e["mode"] == mode]
-        if not a or not b:
-            continue
-        for ia, (i, e) in enumerate(a):
-            kb = _nearest(b, e["t"])
-            if _nearest(a, b[kb][1]["t"]) == ia:
-                pairs.append((i, b[kb][0]))
-    return sorted(pairs)
+    """[(i, i)] of matched events of two joint sequences: those before they
+    part (after a divergence the pairing of events is ambiguous: an event the
+    run lacks would pair with a later one, seconds away)."""
+    return [(i, i) for i in range(_common(ref, run))]
 
 
 def _divergence(ref, run):

@@ -183,7 +183,9 @@ def modes_section(summary, folder, rel):
            f"or within {m['torque_margin']:g} Fs of the static level): {marg}. Every run: `{rel}/{name}_modes.md`.",
            "", "Each treatment as finely integrated as the sweep has it (its own reference run):", ""]
     out += mode_table.treatments_table(m)
-    out += ["", "Per treatment and integrator, the cheapest run with the reference's mode sequence:", ""]
+    out += ["", f"Per treatment and integrator, how many finished runs have the reference's mode sequence (and how "
+            f"many of them have every event within {1e3 * mode_table.ON_TIME:g} ms of the reference's), and the "
+            "cheapest of the latter:", ""]
     out += mode_table.summary_table(m)
     if os.path.exists(os.path.join(folder, "filippov.md")):
         out += ["", f"The paper's rule in Filippov terms (applied torque, static level, why adaptive methods "
