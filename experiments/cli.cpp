@@ -561,7 +561,9 @@ const Command kCommands[] = {
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_check(p.check, o); }},
     {"run", "runs a scene and writes its run folder",
      "Writes DIR: trajectory.csv, stats.json, scene.resolved.toml (re-runs as it is, from any folder), meta.json "
-     "(command line, start time, build, CPU, robot file hash), all at once at the end. stdout carries stats.json "
+     "(command line, start time, build, CPU, robot file hash) and, when a joint's friction has Coulomb levels, "
+     "events.csv (its stick/slip modes: the hybrid model's events, or the accepted steps classified), all at "
+     "once at the end. stdout carries stats.json "
      "alone (pipe it to jq); stderr the progress line (on a terminal, for runs over a second), 'results: DIR/' "
      "and errors (--quiet: errors only). DIR must be new, or a pumasim run folder holding only what pumasim "
      "wrote, replaced only with --force: pumasim never deletes what it did not write. More steps than "

@@ -14,6 +14,7 @@ import glob
 import math
 import os
 
+import mode_table
 import pumasim_io
 from pumasim_io import ROOT
 
@@ -165,6 +166,35 @@ def ledger_table(rows):
     return out
 
 
+def modes_section(summary, folder, rel):
+    """Lines on the friction mode sequences and event times (a sweep whose
+    summary has them: its stuck variant's reference recorded events)."""
+    m = summary.get("modes")
+    if not m:
+        return []
+    name = summary["name"]
+    marg = ", ".join(f"joint {x['joint']} at {x['t']:.4g} s ({x['why']})" for x in m["marginal"]) or "none"
+    out = ["", "#### Mode sequences and event times", "",
+           f"Each run's stick/slip sequence (its run folder's `events.csv`: the hybrid model's events, or the "
+           f"other treatments' accepted steps classified, stuck at |w_m| <= 1e-3 rad/s where the law's stick "
+           f"branch holds) against the exact model's ({m['variant']}) reference run, {m['reference_events']} "
+           f"events, modes held under {m['min_duration_s']:g} s dropped on both sides "
+           f"(`experiments/mode_sequence.py`). Marginal decisions of that reference (its cross-check disagrees, "
+           f"or within {m['torque_margin']:g} Fs of the static level): {marg}. Every run: `{rel}/{name}_modes.md`.",
+           "", "Each treatment as finely integrated as the sweep has it (its own reference run):", ""]
+    out += mode_table.treatments_table(m)
+    out += ["", f"Per treatment and integrator, how many finished runs have the reference's mode sequence (and how "
+            f"many of them have every event within {1e3 * mode_table.ON_TIME:g} ms of the reference's), and the "
+            "cheapest of the latter:", ""]
+    out += mode_table.summary_table(m)
+    if os.path.exists(os.path.join(folder, "filippov.md")):
+        out += ["", f"The paper's rule in Filippov terms (applied torque, static level, why adaptive methods "
+                f"grind): `{rel}/filippov.md`."]
+    if summary.get("skipped_variants"):
+        out += ["", f"Left out: {', '.join(summary['skipped_variants'])}."]
+    return out
+
+
 def sweep_section(summary, folder, rel):
     """The report's section on one sweep (its summary, its CSV in folder; rel:
     folder relative to the report, for links)."""
@@ -196,6 +226,7 @@ def sweep_section(summary, folder, rel):
     out += ["", f"Wall times: {pin['pinned_runs']} of {pin['runs']} runs pinned to one CPU"
             + (f" ({', '.join(pin['methods'])})" if pin["methods"] else "") + "; each repeat's time is in the CSV."]
     out += ledger_table(rows)
+    out += modes_section(summary, folder, rel)
     out += ["", f"![{name}: {rlabel} against cost; hollow markers below the reference's accuracy]({rel}/{name}.png)",
             ""]
     if summary.get("has_cost_plot"):

@@ -79,6 +79,8 @@ import sys
 import threading
 import tomllib
 
+import mode_sequence
+import mode_table
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
 
@@ -178,22 +180,45 @@ def _variants(path, doc, s):
     variants = []
     for k, v in enumerate(doc.get("variant", [{"label": "base", "set": []}])):
         for key in v:
-            if key not in ("label", "value", "set", "reference", "check"):
+            if key not in ("label", "value", "set", "reference", "check", "methods", "if_integrator"):
                 raise SweepError(f"{path}: unknown key 'variant[{k}].{key}'")
         lab = _need(path, v, "label", str, f"variant[{k}]")
         variants.append({"label": lab, "value": v.get("value", k), "set": list(v.get("set", [])),
                          "reference": _method_of(path, v["reference"], f"variant[{k}].reference")
                          if "reference" in v else s["reference"],
-                         "check": _method_of(path, v["check"], f"variant[{k}].check") if "check" in v else s["check"]})
+                         "check": _method_of(path, v["check"], f"variant[{k}].check") if "check" in v else s["check"],
+                         # its own [[method]] list (default: the sweep's), and an integrator it needs
+                         "methods": _methods(path, {"method": v["methods"]}, f"variant[{k}].methods")
+                         if "methods" in v else None,
+                         "if_integrator": v.get("if_integrator")})
     return variants
 
 
-def _methods(path, doc):
+def _listed_integrators():
+    """The integrators `pumasim integrators` lists."""
+    p = subprocess.run([PUMASIM, "integrators"], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SweepError(f"{PUMASIM} integrators: exit status {p.returncode}: {p.stderr.strip()}")
+    return {line.split("\t")[0] for line in p.stdout.splitlines() if line.strip()}
+
+
+def _guarded(s):
+    """Leaves out, in place, the variants whose if_integrator pumasim does not
+    list (an integrator not built yet: the variant runs once it is), naming
+    them in s["skipped_variants"]."""
+    needed = [v for v in s["variants"] if v["if_integrator"]]
+    listed = _listed_integrators() if needed else set()
+    s["skipped_variants"] = [f"{v['label']} (needs the integrator {v['if_integrator']}, which this pumasim "
+                             "does not list)" for v in needed if v["if_integrator"] not in listed]
+    s["variants"] = [v for v in s["variants"] if not v["if_integrator"] or v["if_integrator"] in listed]
+
+
+def _methods(path, doc, where="method"):
     """(integrator, settings, extra options) per integrator of the [[method]]
     tables; a setting is (kind, value, pumasim options), kind 'dt' or 'rtol'."""
     methods = []
     for k, m in enumerate(_need(path, doc, "method", list, "(top level)")):
-        names = _need(path, m, "integrator", list, f"method[{k}]")
+        names = _need(path, m, "integrator", list, f"{where}[{k}]")
         if "dt" in m:
             settings = [("dt", float(d), ["--dt", repr(float(d))]) for d in m["dt"]]
         elif "rtol" in m:
@@ -201,7 +226,7 @@ def _methods(path, doc):
             settings = [("rtol", float(r), ["--rtol", repr(float(r)), "--atol", repr(float(r) * fac)])
                         for r in m["rtol"]]
         else:
-            raise SweepError(f"{path}: method[{k}]: expected 'dt' or 'rtol'")
+            raise SweepError(f"{path}: {where}[{k}]: expected 'dt' or 'rtol'")
         extra = [str(o) for o in m.get("options", [])]
         for name in names:
             methods.append((name, settings, extra))
@@ -213,6 +238,9 @@ def _reduce(s, sw):
     method, one repeat, the reduced horizon if the sweep names one."""
     s["variants"] = [s["variants"][0]] + ([s["variants"][-1]] if len(s["variants"]) > 1 else [])
     s["methods"] = [(n, st[:2], ex) for n, st, ex in s["methods"]]
+    for v in s["variants"]:
+        if v["methods"]:
+            v["methods"] = [(n, st[:2], ex) for n, st, ex in v["methods"]]
     s["repeats"] = 1
     labels = [v["label"] for v in s["variants"]]
     for key in ("limit_variant", "stuck_variant"):
@@ -234,6 +262,7 @@ def load_sweep(path, reduced):
         if s[key] and s[key] not in [v["label"] for v in s["variants"]]:
             raise SweepError(f"{path}: sweep.{key}: expected one of the variants' labels")
     s["methods"] = _methods(path, doc)
+    _guarded(s)
     if reduced:
         _reduce(s, sw)
     return s
@@ -250,7 +279,7 @@ def run_list(s):
         vdir = slug(v["label"])
         runs.append((f"{vdir}/reference", v, "reference", *v["reference"], 1))
         runs.append((f"{vdir}/check", v, "check", *v["check"], 1))
-        for name, settings, extra in s["methods"]:
+        for name, settings, extra in v["methods"] or s["methods"]:
             for kind, value, opts in settings:
                 tag = f"{name}_{kind}{value:g}" + ("_" + slug(" ".join(o.lstrip("-") for o in extra)) if extra else "")
                 runs.append((f"{vdir}/{tag}", v, tag, name, opts + extra, s["repeats"]))
@@ -434,7 +463,8 @@ def execute(s, work, run, pinning=None, wait=True):
         full, preexec, cpu = pinning.wrap(cmd) if pinning else (cmd, None, None)
         for _ in range(repeats):
             st = _run_once(full, cmd, out, preexec, lock)
-            walls.append(st["wall_time_s"])
+            # the run's wall time less its friction mode log's step classification (stats.json)
+            walls.append(st["wall_time_s"] - (st.get("mode_log_wall_time_s") or 0.0))
             if not st["ok"]:
                 break
         summary = {"id": rid, "variant": variant["label"], "value": variant["value"], "tag": tag,
@@ -690,17 +720,46 @@ def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
     return row
 
 
-def _variant_rows(s, work, v, summaries, ref, c, a):
+def _variant_rows(s, work, v, summaries, ref, c, a, modes):
     """The CSV rows of a variant's runs (not its reference and cross-check),
     sorted by run id; ref, c, a: the variant's reference trajectory, compare()
-    of its cross-check and its agreement entry."""
+    of its cross-check and its agreement entry; modes: _mode_reference()'s,
+    whose mode columns each row gets (mode_sequence.columns) when it has one."""
     rcol = MEASURES[s["rank_by"]][0]
     rows = []
     for run in run_list(s):
         if run[1] is not v or run[2] in ("reference", "check"):
             continue
         rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol]))
+        if modes:
+            events = mode_sequence.read_events(os.path.join(work, run[0])) if rows[-1]["ok"] else None
+            rows[-1].update(mode_sequence.columns(modes["events"], modes["marks"], events))
     return rows
+
+
+def _mode_reference(s, work):
+    """The friction modes' yardstick: sweep.stuck_variant's reference events,
+    its marginal decisions (mode_sequence.marginal against its cross-check),
+    and each variant's own reference compared with it (the treatment itself,
+    as finely integrated as the sweep has it); None without a stuck variant
+    or without events."""
+    if not s["stuck_variant"]:
+        return None
+    vdir = slug(s["stuck_variant"])
+    try:
+        ref = mode_sequence.read_events(os.path.join(work, vdir, "reference"))
+        if ref is None:
+            return None
+        marks = mode_sequence.marginal(ref, mode_sequence.read_events(os.path.join(work, vdir, "check")) or [])
+        treatments = {v["label"]: mode_sequence.compare(
+            ref, mode_sequence.read_events(os.path.join(work, slug(v["label"]), "reference")) or [])
+            for v in s["variants"]}
+    except mode_sequence.EventsError as e:
+        raise SweepError(f"merge: {e}")
+    return {"variant": s["stuck_variant"], "events": ref, "marks": marks, "treatments": treatments,
+            "min_duration_s": mode_sequence.MIN_DURATION, "torque_margin": mode_sequence.TORQUE_MARGIN,
+            "marginal": [{"joint": j, "t": t, "why": w} for (j, t), w in sorted(marks.items())],
+            "reference_events": len(ref)}
 
 
 def _pinning(rows):
@@ -885,6 +944,7 @@ def merge(s, work, out_dir):
     plt = _pyplot()
     rows, agreement, weak = [], {}, {}
     summaries = _complete_summaries(s, work)
+    modes = _mode_reference(s, work)
     for v in s["variants"]:
         ref, c = _reference_vs_check(work, v, summaries)
         a, too_weak = _agreement_entry(s, c, summaries[f"{slug(v['label'])}/reference"]["stats"])
@@ -892,11 +952,11 @@ def merge(s, work, out_dir):
         if too_weak:
             weak[v["label"]] = {col: {"difference": a[col], "limit": s["targets"][col] / WEAK_REFERENCE_FACTOR}
                                 for col in too_weak}
-        rows += _variant_rows(s, work, v, summaries, ref, c, a)
+        rows += _variant_rows(s, work, v, summaries, ref, c, a, modes)
     pinning = _pinning(rows)
     limit = _distance_to_limit(s, work)
     held_creep = _creep_by_variant(s, work)
-    return _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning)
+    return _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning, modes)
 
 
 def _merge_lock(work):
@@ -917,7 +977,7 @@ def _write_csv(path, text):
         f.write(text)
 
 
-def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning):
+def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning, modes=None):
     """Writes out_dir/<sweep>.csv, <sweep>.png, <sweep>_cost.png (several
     variants only) and <sweep>_summary.json together
     (pumasim_io.write_output_set: temporaries first, then renamed into place,
@@ -926,8 +986,8 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     of another merge undetected; under the sweep's merge lock. Returns the
     summary; SweepError naming the file that cannot be written."""
     name = s["name"]
-    text = pumasim_io.table_text(rows, comments=_table_comments(s, agreement, weak, limit, held_creep, pinning),
-                                 fmt=pumasim_io.fmt_6g)
+    comments = _table_comments(s, agreement, weak, limit, held_creep, pinning) + _mode_comments(s, modes)
+    text = pumasim_io.table_text(rows, comments=comments, fmt=pumasim_io.fmt_6g)
     integrators = sorted({r["integrator"] for r in rows})
     colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
     cost = _cost_to_target(s, rows, agreement, integrators)
@@ -938,6 +998,12 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     if has_cost_plot:
         files[name + "_cost.png"] = lambda p: _plot_cost(plt, s, plottable, colors, p)
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
+    summary["skipped_variants"] = s.get("skipped_variants", [])
+    if modes:
+        summary["modes"] = {k: v for k, v in modes.items() if k not in ("events", "marks")}
+        summary["modes"]["cheapest_match"] = mode_table.cheapest_matches(rows)
+        md = mode_table.markdown(s, rows, summary["modes"])
+        files[name + "_modes.md"] = lambda p: _write_csv(p, md)
     lock = _merge_lock(work)
     try:
         os.makedirs(out_dir, exist_ok=True)
@@ -948,6 +1014,23 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     finally:
         if lock:
             lock.release()
+
+
+def _mode_comments(s, modes):
+    """The CSV's comment lines on the mode columns (none without them)."""
+    if not modes:
+        return [f"variants left out: {', '.join(s['skipped_variants'])}"] if s.get("skipped_variants") else []
+    lines = [f"mode columns: each run's friction modes (events.csv) against {modes['variant']}'s reference "
+             f"({modes['reference_events']} events), modes held under {modes['min_duration_s']:g} s dropped "
+             "(experiments/mode_sequence.py): sequence match, first divergence (time, joint; divergence_marginal: "
+             "at a decision the reference's cross-check does not share or within "
+             f"{modes['torque_margin']:g} Fs of the static level), event-time error max and RMS over the matched "
+             "events, sticks at speed reversals missed / in the reference",
+             f"marginal decisions of {modes['variant']}'s reference: " +
+             (", ".join(f"joint {m['joint']} at {m['t']:.6g} s ({m['why']})" for m in modes["marginal"]) or "none")]
+    if s.get("skipped_variants"):
+        lines.append(f"variants left out: {', '.join(s['skipped_variants'])}")
+    return lines
 
 
 def _print_run(sm):

@@ -42,6 +42,7 @@ if not (c["stuck_time_s"] > 0 and c["rad"] == 0.0):
     sys.exit(f"creep of the stuck model itself: {c}")
 PY
 grep -q "Creep while stuck" build/sweeps-reduced/README.md
+grep -q "Mode sequences and event times" build/sweeps-reduced/README.md
 # Error measures: every reduced table has them, finite where the run is ok and
 # the states exist; the flags and the weak-reference verdicts follow their
 # definitions; wall-time spread and pinning are recorded.

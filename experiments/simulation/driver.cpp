@@ -113,7 +113,7 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps, Stops stops, double max_wall,
-                    const ProgressHook& progress) {
+                    const ProgressHook& progress, const Observer& on_step) {
   const auto start = Clock::now();
   StepClock clock(start);
   double next_report = progress.delay;  // [s] of wall-clock time
@@ -141,6 +141,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       res.failure = o.message;
       break;
     }
+    if (on_step) on_step(t, integrator.state());
     // Outputs inside the step, from the method's dense output; one at the
     // step's end waits until the events there are applied.
     for (double to = output_time(); before(to, t, t_end); to = output_time()) {

@@ -92,9 +92,12 @@ enum class Stops {
 // wall-clock time (0: no limit), checked whenever the loop reads the clock
 // (every few ms, see ProgressHook; one step of any method is bounded: it
 // either succeeds or fails). progress.report, when set, is called as
-// ProgressHook says; neither changes a step.
+// ProgressHook says; neither changes a step. on_step, when set, sees the
+// state at the end of every accepted step, before the events there are
+// applied (the friction mode log: experiments/simulation/mode_log.hpp); it
+// must not change the plant's discrete state.
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents,
-                    double max_wall = 0, const ProgressHook& progress = {});
+                    double max_wall = 0, const ProgressHook& progress = {}, const Observer& on_step = {});
 
 }  // namespace pumasim

@@ -20,6 +20,7 @@
 #include <sundials/sundials_config.h>
 #include <toml++/toml.h>
 
+#include "experiments/simulation/mode_log.hpp"
 #include "models/robot/urdf_file.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time
 
@@ -75,6 +76,22 @@ void statistics(Json& js, const SceneRun& run) {
   js["root_events"] = run.result.root_events;
   js["integration_wall_time_s"] = json_number(st.wall_time);
   js["wall_time_s"] = json_number(run.result.wall_time);
+  // The friction mode log (events.csv; mode_log.hpp): its rows, how they were
+  // found, and the wall time its per-step work took (inside wall_time_s).
+  js["mode_changes"] = run.mode_changes;
+  char how[160];
+  std::snprintf(how, sizeof how,
+                "accepted steps classified: stuck at |w_m| <= %g rad/s (and the law's stick branch), "
+                "modes lasting >= %g s",
+                kStickSpeed, kMinModeDuration);
+  js["mode_log"] = run.events_csv.empty()   ? "none (no joint has friction modes)"
+                   : run.modes_classified ? how
+                                          : "hybrid model's events";
+  js["mode_log_wall_time_s"] = json_number(run.mode_log_wall_time);
+  if (!run.events_csv.empty()) {  // over the accepted steps: why a method grinds at a switch
+    js["speed_sign_changes"] = run.speed_sign_changes;
+    js["shortest_step_s"] = json_number(run.shortest_step);
+  }
 }
 
 void figures(Json& js, const Scene& sc, const RunFigures& fig) {

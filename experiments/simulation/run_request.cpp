@@ -119,10 +119,12 @@ CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::option
   done.run = simulate_scene(sc, rc, progress, keep_rows);
   done.stats = stats_json(sc, rc, done.run);
   if (out) {
-    write_run_folder(*out,
-                     {{"trajectory.csv", done.run.trajectory_csv}, {"stats.json", done.stats},
-                      {"meta.json", meta_json(started)}, {"scene.resolved.toml", resolved_toml(sc)}},
-                     force);
+    std::vector<std::pair<std::string, std::string>> files{{"trajectory.csv", done.run.trajectory_csv},
+                                                           {"stats.json", done.stats},
+                                                           {"meta.json", meta_json(started)},
+                                                           {"scene.resolved.toml", resolved_toml(sc)}};
+    if (!done.run.events_csv.empty()) files.emplace_back("events.csv", done.run.events_csv);
+    write_run_folder(*out, files, force);
   }
   return done;
 }

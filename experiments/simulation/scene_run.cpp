@@ -1,8 +1,10 @@
 #include "experiments/simulation/scene_run.hpp"
 
+#include <chrono>
 #include <sstream>
 #include <stdexcept>
 
+#include "experiments/simulation/mode_log.hpp"
 #include "integrators/registry.hpp"
 
 namespace pumasim {
@@ -44,9 +46,29 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   auto integ = make_integrator(sc.integrator.name, rc.options);
   RunRecorder recorder(plant, sc.duration, sc.output_interval);
   SceneRun run;
-  run.result = run_plant(plant, *integ, sc.duration, sc.output_interval,
-                         [&](double t, const double* x) { recorder.observe(t, x); }, rc.max_steps, rc.stops,
-                         rc.max_wall, progress);
+  bool modes = false;
+  for (int j = 0; j < plant.layout().n; ++j) modes |= plant.joint_has_modes(j);
+  run.modes_classified = modes && !plant.has_mode_events();
+  ModeClassifier classifier(plant);
+  const auto observe = [&](double t, const double* x) {
+    if (t == 0.0 && run.modes_classified && classifier.changes().empty()) classifier.step(0.0, x);  // x(0)
+    recorder.observe(t, x);
+  };
+  const Observer on_step = [&](double t, const double* x) {
+    const auto start = std::chrono::steady_clock::now();
+    classifier.count(t, x);
+    if (run.modes_classified) classifier.step(t, x);
+    run.mode_log_wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  run.result = run_plant(plant, *integ, sc.duration, sc.output_interval, observe, rc.max_steps, rc.stops,
+                         rc.max_wall, progress, modes ? on_step : Observer{});
+  if (modes) {
+    const auto& changes = run.modes_classified ? classifier.changes() : plant.mode_changes();
+    run.events_csv = events_csv(plant, changes);
+    run.mode_changes = static_cast<long>(changes.size());
+    run.speed_sign_changes = classifier.speed_sign_changes();
+    run.shortest_step = classifier.shortest_step();
+  }
   run.trajectory_csv = recorder.finish();
   run.figures = recorder.figures();
   if (keep_rows) {

@@ -42,6 +42,12 @@ struct SceneRun {
   std::vector<std::string> state_names;
   std::vector<double> tolerance_scales;  // the plant's typical magnitude of each state
   std::string trajectory_csv;
+  std::string events_csv;         // the friction modes (mode_log.hpp); "" when no joint has modes
+  long mode_changes = 0;          // its rows
+  bool modes_classified = false;  // from the accepted steps (else: the hybrid model's events)
+  double mode_log_wall_time = 0;  // [s] spent classifying the steps (part of result.wall_time)
+  long speed_sign_changes = 0;    // over the accepted steps, summed over the joints (with modes only)
+  double shortest_step = 0;       // [s], the shortest accepted step (with modes only)
   RunFigures figures;
   // With keep_rows: the output rows, [t, x...] per row (state_names.size() + 1
   // numbers each), and each row's path error and deviation [m] (empty

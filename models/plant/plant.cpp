@@ -98,6 +98,7 @@ Plant::Plant(PlantConfig config)
   ds_.controller.u_held.assign(n, 0.0);
   ds_.controller.memory.assign(std::visit([](const auto& c) { return c.discrete_size(); }, controller_), 0.0);
   ds_.modes.assign(n, SlipMode::kStuck);
+  released_.assign(static_cast<std::size_t>(n), 0.0);
   ftmp_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
   jx_.resize(layout_.size);
@@ -292,6 +293,7 @@ void Plant::on_time_event(double t, double* x) {
                controller_);
   }
   settle_modes(t, x);
+  log_modes(t);
 }
 
 int Plant::num_roots() const { return friction_.has_events() ? layout_.n : 0; }
@@ -315,9 +317,52 @@ void Plant::on_root(int j, double t, double* x) {
     ds_.modes[j] = SlipMode::kStuck;
   } else {  // break-away: |applied| crossed Fs, slip in its direction
     rhs(t, x, ftmp_.data());
+    released_[static_cast<std::size_t>(j)] = applied_torque(j);  // the constraint torque that reached Fs
     ds_.modes[j] = applied_torque(j) >= 0 ? SlipMode::kPositive : SlipMode::kNegative;
   }
   settle_modes(t, x);
+  log_modes(t);
+}
+
+// The net changes since the last record, each with the applied torque that
+// decided it: for a stick, the constraint torque holding the joint after the
+// change (settle_modes' last evaluation was at the final modes); for a
+// release, the constraint torque that reached or passed Fs just before it.
+void Plant::log_modes(double t) {
+  if (!friction_.has_events() || logged_.empty()) return;  // (inside initial_state: not yet)
+  for (int j = 0; j < layout_.n; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    if (!friction_.has_events(j) || ds_.modes[k] == logged_[k]) continue;
+    const double applied = ds_.modes[k] == SlipMode::kStuck ? applied_torque(j) : released_[k];
+    mode_log_.push_back({t, j, ds_.modes[k], applied});
+    logged_[k] = ds_.modes[k];
+  }
+}
+
+bool Plant::joint_has_modes(int j) const {
+  const FrictionParams& f = friction_.params(j);
+  return friction_keys(f.model).levels && (f.static_torque > 0 || f.kinetic_torque > 0);
+}
+
+void Plant::classify_modes(double t, const double* x, double stick_speed, SlipMode* mode, double* applied,
+                           bool always_applied) {
+  bool evaluate = always_applied && friction_.needs_applied_torque();
+  for (int j = 0; j < layout_.n; ++j) {
+    const bool slow = std::abs(body_.gear_ratio(j) * x[layout_.qd + j]) <= stick_speed;
+    evaluate |= slow && needs_applied_torque(friction_.params(j).model);
+  }
+  if (evaluate) rhs(t, x, ftmp_.data());  // fills the applied torques
+  for (int j = 0; j < layout_.n; ++j) {
+    const double wm = body_.gear_ratio(j) * x[layout_.qd + j];
+    const FrictionParams& f = friction_.params(j);
+    const bool branch = needs_applied_torque(f.model);
+    applied[j] = !branch ? std::numeric_limits<double>::quiet_NaN() : evaluate ? applied_torque(j) : 0.0;
+    const bool held = !branch || std::abs(applied[j]) <= f.static_torque;
+    const double direction = wm != 0 ? wm : applied[j];
+    mode[j] = std::abs(wm) <= stick_speed && held ? SlipMode::kStuck
+              : direction >= 0                    ? SlipMode::kPositive
+                                                  : SlipMode::kNegative;
+  }
 }
 
 void Plant::settle_modes(double t, double* x) {
@@ -338,8 +383,10 @@ void Plant::settle_modes(double t, double* x) {
       if (e > excess) excess = e, worst = j;
     }
     if (worst < 0) return;
+    released_[static_cast<std::size_t>(worst)] = applied_torque(worst);  // the one past Fs
     ds_.modes[worst] = applied_torque(worst) > 0 ? SlipMode::kPositive : SlipMode::kNegative;
   }
+  rhs(t, x, ftmp_.data());  // the applied torques at the final modes (log_modes reads them)
 }
 
 // The discrete state at t = 0: no held output or integral, every hybrid
@@ -392,6 +439,7 @@ void Plant::input_currents(double* x) {
 void Plant::initial_state(double* x) {
   const int n = layout_.n;
   std::fill(x, x + layout_.size, 0.0);
+  logged_.clear();
   Eigen::VectorXd q(n);
   if (cfg_.reference) {
     cfg_.reference->eval(0.0, ds_.ref_held);
@@ -405,6 +453,9 @@ void Plant::initial_state(double* x) {
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
   if (cfg_.drive && law_input_) input_currents(x);
   settle_modes(0.0, x);  // hybrid joints start stuck unless already pushed past Fs
+  mode_log_.clear();     // the modes at t = 0, one entry per joint with events
+  logged_.assign(static_cast<std::size_t>(n), SlipMode{2});  // no mode: every joint logged
+  log_modes(0.0);
 }
 
 double Plant::mechanical_energy(const double* x, double* kinetic) {

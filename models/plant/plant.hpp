@@ -95,6 +95,19 @@ struct DriveSignals {
 // held set-point, the cached sample and the smooth piece since the last time
 // event), the sampled controller's held output and memory, and the hybrid
 // friction's stuck/slipping modes.
+// One change of a joint's friction mode (experiments/simulation/mode_log.hpp
+// writes them as events.csv): at time t, joint (0-based) entered `mode`;
+// `applied` is the applied torque that decided it [N m, motor side] (the
+// hybrid model: the constraint torque holding the joint after a stick, or the
+// one that reached Fs before a release; the laws without modes: K i - h_j / Z
+// at the step classified, NaN for a law that does not read it).
+struct ModeChange {
+  double t = 0;
+  int joint = 0;
+  SlipMode mode = SlipMode::kStuck;
+  double applied = 0;
+};
+
 struct PlantDiscreteState {
   ReferenceSample ref_held{}, ref_now{};
   double ref_time = std::numeric_limits<double>::quiet_NaN();
@@ -161,6 +174,29 @@ class Plant {
   void on_root(int joint, double t, double* x);
   void settle_modes(double t, double* x);
   SlipMode slip_mode(int joint) const { return ds_.modes[static_cast<std::size_t>(joint)]; }
+  // The hybrid model's mode changes so far, the modes at t = 0 first (one per
+  // joint with events), then each net change after a discrete update
+  // (on_root, on_time_event): a joint stuck at a speed reversal and released
+  // again by settle_modes at the same instant shows as one change, from
+  // slipping one way to the other. Empty without events. Recorded outside the
+  // right-hand side (it may allocate).
+  const std::vector<ModeChange>& mode_changes() const { return mode_log_; }
+
+  // Friction modes for laws without them (the paper's rule, Karnopp, tanh):
+  // joint j counts as stuck at (t, x) when |w_m| <= stick_speed [rad/s, motor
+  // side] and, for a law with a stick branch (the rule, Karnopp: it reads the
+  // applied torque), when that branch would hold it: |applied| <= Fs; else it
+  // slips in the direction of w_m (of the applied torque at w_m = 0).
+  // mode[j] and applied[j] (0 where not evaluated) for every joint; joint_has_modes(j)
+  // says where this means anything. Costs one right-hand side when some joint
+  // is that slow under a law with a stick branch; never called by the integrators.
+  // always_applied: evaluate the applied torques even when no joint is slow.
+  // applied[j] is NaN for a law that does not read it (tanh).
+  void classify_modes(double t, const double* x, double stick_speed, SlipMode* mode, double* applied,
+                      bool always_applied = false);
+  // Joint j's law has Coulomb levels (Fs or Fk > 0): stick and slip mean something.
+  bool joint_has_modes(int j) const;
+  bool has_mode_events() const { return friction_.has_events(); }
 
   // Stored energy at x [J]: mechanical (1/2 qd' H qd + V(q), rotor inertia
   // included) and magnetic (1/2 La i^2). With the ledger, the balance
@@ -202,6 +238,7 @@ class Plant {
   void hold_gravity(const Eigen::VectorXd& q, double* x);
   void input_currents(double* x);
   double applied_torque(int joint) const { return wd_->applied[joint]; }
+  void log_modes(double t);
 
   const PlantConfig cfg_;
   const RobotModel model_;  // the simulated joints (held links merged)
@@ -222,6 +259,9 @@ class Plant {
   std::vector<double> ft_[2];        // time_derivative scratch
   std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
   bool friction_on_ = true;          // off only inside rhs_split
+  std::vector<ModeChange> mode_log_;  // mode_changes()
+  FrictionModes logged_;              // the modes the log last recorded
+  std::vector<double> released_;     // per joint: the applied torque at its last release [N m]
 };
 
 }  // namespace pumasim
