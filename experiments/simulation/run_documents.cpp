@@ -71,6 +71,11 @@ void statistics(Json& js, const SceneRun& run) {
   js["rejected_steps"] = st.rejected_steps;
   js["nonlinear_iterations"] = st.nonlinear_iterations;
   js["restarts"] = st.restarts;
+  // Time-stepping's set-valued friction solves (moreau-jean; 0 for the others).
+  js["friction_solves"] = st.friction_solves;
+  js["friction_iterations"] = st.friction_iterations;
+  js["friction_unconverged"] = st.friction_unconverged;
+  js["friction_worst_residual"] = json_number(st.friction_worst_residual);
   js["time_events"] = run.result.time_events;
   js["root_events"] = run.result.root_events;
   js["integration_wall_time_s"] = json_number(st.wall_time);
