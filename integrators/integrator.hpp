@@ -115,7 +115,10 @@ struct IntegratorStats {
   long nonlinear_iterations = 0;
   long restarts = 0;            // resets after events
   // Set-valued friction solved per step (moreau-jean): solves, their
-  // iterations in all, how many missed their stopping rule, the worst residual.
+  // iterations in all (projected Gauss-Seidel sweeps), how many missed the
+  // iteration's stopping rule or ended inconsistent (the plant's solve then
+  // answers from an enumeration of the modes, when k <= 8), and the worst
+  // residual of the returned impulses (relative, see stick_solve.hpp).
   long friction_solves = 0;
   long friction_iterations = 0;
   long friction_unconverged = 0;
