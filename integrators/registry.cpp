@@ -101,7 +101,7 @@ namespace {
 // output is ARKODE's Hermite interpolant, degree 3 by default).
 constexpr auto F = IntegratorKind::kFixedStep;
 constexpr auto A = IntegratorKind::kAdaptive;
-constexpr std::array<IntegratorInfo, 18> kIntegrators{{
+constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2, 1},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4, 3},
@@ -134,6 +134,8 @@ constexpr std::array<IntegratorInfo, 18> kIntegrators{{
      "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
      "step; no events; order 1, fixed step", &detail::make_moreau_jean, F, 1, false, true, 1,
      std::numeric_limits<double>::infinity(), 1, 0},
+    {"moreau-jean-075", "moreau-jean with theta = 3/4: less numerical damping, A-stable; order 1, fixed step",
+     &detail::make_moreau_jean_075, F, 1, false, true, 1, std::numeric_limits<double>::infinity(), 1, 0},
     {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
      false, false, 0, 0.0, 4, 0},
     {"odeint-rodas4p",
