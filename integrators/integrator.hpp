@@ -15,6 +15,21 @@
 
 namespace pumasim {
 
+// One row of a system's set-valued friction (OdeSystem::set_valued_row).
+struct SetValuedRow {
+  int velocity = 0;            // the state component of the speed
+  double scale = 1.0;          // the law's speed is scale * x[velocity] (a gear ratio: motor speed)
+  double static_level = 0.0;   // s >= kinetic_level (a torque or force)
+  double kinetic_level = 0.0;
+};
+
+// How one coupled set-valued solve went (OdeSystem::solve_set_valued).
+struct SetValuedSolve {
+  int iterations = 0;      // sweeps of the iterative method
+  double residual = 0.0;   // relative violation of the law by the returned r
+  bool converged = true;   // the iteration met its stopping rule
+};
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;
@@ -53,6 +68,25 @@ class OdeSystem {
   // Root functions g(t, x): the integrators that find roots stop where one changes sign.
   virtual int num_roots() const { return 0; }
   virtual void roots(double /*t*/, const double* /*x*/, double* /*g*/) {}
+
+  // Set-valued friction, for time-stepping (moreau-jean). A system with
+  // set_valued_rows() = k > 0 is f = f_smooth + sum_c B_c(x) r_c, where each
+  // r_c obeys a Coulomb law on the speed v_c = scale_c x[velocity_c]: stuck
+  // (v_c = 0, |r_c| <= static_level_c) or slipping (r_c = -sign(v_c)
+  // kinetic_level_c). Its root functions, if any, are then the event-driven
+  // treatment of the same friction, which time-stepping replaces.
+  virtual int set_valued_rows() const { return 0; }
+  virtual SetValuedRow set_valued_row(int /*c*/) const { return {}; }
+  // f_smooth and its Jacobian (the defaults: f and jacobian).
+  virtual void rhs_smooth(double t, const double* x, double* f) { rhs(t, x, f); }
+  virtual void jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J) { jacobian(t, x, J); }
+  // B(x), column-major, size() x set_valued_rows().
+  virtual void set_valued_directions(double /*t*/, const double* /*x*/, double* /*B*/) {}
+  // The coupled problem v = b + W r (W row-major k x k) under the rows'
+  // laws with the levels s >= kin given (a step's impulses): r, and how the
+  // solve went.
+  virtual SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s,
+                                          const double* kin, double* r);
 };
 
 struct IntegratorSettings;  // models/scene/scene.hpp: name, dt, rtol, atol
@@ -80,6 +114,15 @@ struct IntegratorStats {
   long rejected_steps = 0;
   long nonlinear_iterations = 0;
   long restarts = 0;            // resets after events
+  // Set-valued friction solved per step (moreau-jean): solves, their
+  // iterations in all (projected Gauss-Seidel sweeps), how many missed the
+  // iteration's stopping rule or ended inconsistent (the plant's solve then
+  // answers from an enumeration of the modes, when k <= 8), and the worst
+  // residual of the returned impulses (relative, see stick_solve.hpp).
+  long friction_solves = 0;
+  long friction_iterations = 0;
+  long friction_unconverged = 0;
+  double friction_worst_residual = 0.0;
   double wall_time = 0.0;       // [s], of advance_to and step_toward calls
 };
 
@@ -89,6 +132,9 @@ struct IntegratorCapabilities {
   bool implicit = false;
   bool uses_jacobian = false;
   bool finds_roots = false;  // locates roots; fixed-step methods check signs per step
+  // Treats a system's set-valued friction itself (OdeSystem::set_valued_rows:
+  // moreau-jean), not through the system's root functions and modes.
+  bool set_valued_friction = false;
 };
 
 struct Outcome {

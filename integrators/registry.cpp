@@ -26,6 +26,10 @@ void OdeSystem::jacobian(double t, const double* x, Eigen::MatrixXd& J) {
   }
 }
 
+SetValuedSolve OdeSystem::solve_set_valued(int, const double*, const double*, const double*, const double*, double*) {
+  throw std::logic_error("this system has no set-valued friction solve");
+}
+
 Outcome Integrator::advance_to(double t) {
   const auto start = std::chrono::steady_clock::now();
   Outcome out;
@@ -97,7 +101,7 @@ namespace {
 // output is ARKODE's Hermite interpolant, degree 3 by default).
 constexpr auto F = IntegratorKind::kFixedStep;
 constexpr auto A = IntegratorKind::kAdaptive;
-constexpr std::array<IntegratorInfo, 17> kIntegrators{{
+constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2, 1},
     {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
     {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4, 3},
@@ -123,6 +127,15 @@ constexpr std::array<IntegratorInfo, 17> kIntegrators{{
     {"etd-rk4", "Cox-Matthews exponential RK, order 4: the diagonal linear part exact (RK4 without one); fixed step",
      &detail::make_etd_rk4, F, 4, false, false, 4, 2.785293563405282, 3, 0},
     {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1, 0},
+    // Moreau-Jean: linearly implicit theta = 1, stable on the whole negative
+    // real axis (real_stability: infinity); one f_smooth per step (a
+    // difference Jacobian's m + 1 more are counted when the system has no exact one).
+    {"moreau-jean", "Moreau-Jean time-stepping: linearly implicit theta-method (theta = 1) on the state, set-valued "
+     "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
+     "step; no events; order 1, fixed step", &detail::make_moreau_jean, F, 1, false, true, 1,
+     std::numeric_limits<double>::infinity(), 1, 0},
+    {"moreau-jean-075", "moreau-jean with theta = 3/4: less numerical damping, A-stable; order 1, fixed step",
+     &detail::make_moreau_jean_075, F, 1, false, true, 1, std::numeric_limits<double>::infinity(), 1, 0},
     {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
      false, false, 0, 0.0, 4, 0},
     {"odeint-rodas4p",

@@ -20,6 +20,8 @@ std::unique_ptr<Integrator> make_arkode_dirk(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_arkode_imex(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_bdf(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_adams(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_moreau_jean(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_moreau_jean_075(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rosenbrock4(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rodas4p(const IntegratorOptions&);

@@ -99,6 +99,21 @@ TEST(NoAllocation, PlantRightHandSide) {
     const long before = g_allocations.load();
     for (int k = 1; k <= 5; ++k) plant.rhs(0.01 * k, x.data(), f.data());
     EXPECT_EQ(g_allocations.load() - before, 0) << name;
+    // Moreau-Jean's per-step plant calls: f_smooth, the impulse directions B
+    // and the coupled stick/slip solve (on B's first rows as a stand-in W).
+    std::vector<double> B(static_cast<std::size_t>(plant.size() * plant.set_valued_joints()) + 1);
+    plant.rhs_smooth(0.0, x.data(), f.data());
+    const long before_smooth = g_allocations.load();
+    for (int k = 1; k <= 5; ++k) plant.rhs_smooth(0.01 * k, x.data(), f.data());
+    plant.set_valued_directions(x.data(), B.data());
+    EXPECT_EQ(g_allocations.load() - before_smooth, 0) << name << " (rhs_smooth, set_valued_directions)";
+    const int kc = plant.set_valued_joints();
+    std::vector<double> W(static_cast<std::size_t>(kc * kc) + 1, 0.0), b(kc + 1, 1.0), r(kc + 1);
+    std::vector<int> mode(kc + 1);
+    for (int c = 0; c < kc; ++c) W[c * kc + c] = 1.0;
+    const long before_solve = g_allocations.load();
+    plant.solve_stick({kc, W.data(), b.data(), b.data(), b.data(), nullptr}, r.data(), mode.data());
+    EXPECT_EQ(g_allocations.load() - before_solve, 0) << name << " (stick solve)";
   }
 }
 

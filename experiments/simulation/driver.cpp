@@ -94,6 +94,21 @@ bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool t
 
 }  // namespace
 
+SetValuedRow PlantSystem::set_valued_row(int c) const {
+  const int j = p_.set_valued_joint(c);
+  const FrictionParams& f = p_.config().friction[static_cast<std::size_t>(j)];
+  // A law with Fs < Fk holds up to Fk (else a joint at rest could neither
+  // stick nor slip consistently): s = max(Fs, Fk), as in the hybrid model's solve.
+  return {p_.layout().qd + j, p_.config().robot.joints[static_cast<std::size_t>(j)].gear_ratio,
+          std::max(f.static_torque, f.kinetic_torque), f.kinetic_torque};
+}
+
+SetValuedSolve PlantSystem::solve_set_valued(int k, const double* W, const double* b, const double* s,
+                                             const double* kin, double* r) {
+  const StickResult res = p_.solve_stick({k, W, b, s, kin, nullptr}, r, mode_.data());
+  return {res.iterations, res.residual, res.converged && res.consistent};
+}
+
 std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) {
   const int n = sys.size();
   std::vector<double> f(static_cast<std::size_t>(n));

@@ -19,7 +19,7 @@ namespace pumasim {
 // The plant as an OdeSystem: exact Jacobian, named states, friction roots.
 class PlantSystem final : public OdeSystem {
  public:
-  explicit PlantSystem(Plant& p) : p_(p) {}
+  explicit PlantSystem(Plant& p) : p_(p), mode_(static_cast<std::size_t>(p.size())) {}
   int size() const override { return p_.size(); }
   void rhs(double t, const double* x, double* xdot) override { p_.rhs(t, x, xdot); }
   void jacobian(double t, const double* x, Eigen::MatrixXd& J) override { p_.jacobian_exact(t, x, J); }
@@ -31,9 +31,18 @@ class PlantSystem final : public OdeSystem {
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
   int num_roots() const override { return p_.num_roots(); }
   void roots(double t, const double* x, double* g) override { p_.roots(t, x, g); }
+  // Set-valued friction for time-stepping (Plant::rhs_smooth and the rest).
+  int set_valued_rows() const override { return p_.set_valued_joints(); }
+  SetValuedRow set_valued_row(int c) const override;
+  void rhs_smooth(double t, const double* x, double* f) override { p_.rhs_smooth(t, x, f); }
+  void jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J) override { p_.jacobian_smooth(t, x, J); }
+  void set_valued_directions(double, const double* x, double* B) override { p_.set_valued_directions(x, B); }
+  SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s, const double* kin,
+                                  double* r) override;
 
  private:
   Plant& p_;
+  std::vector<int> mode_;  // the solve's modes (not used by the caller)
 };
 
 struct RunResult {

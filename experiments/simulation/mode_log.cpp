@@ -4,10 +4,11 @@
 
 namespace pumasim {
 
-ModeClassifier::ModeClassifier(Plant& plant, double stick_speed, double min_duration)
+ModeClassifier::ModeClassifier(Plant& plant, double stick_speed, double min_duration, bool speed_only)
     : plant_(plant),
       stick_speed_(stick_speed),
       min_duration_(min_duration),
+      speed_only_(speed_only),
       now_(static_cast<std::size_t>(plant.layout().n)),
       applied_(static_cast<std::size_t>(plant.layout().n)),
       joints_(static_cast<std::size_t>(plant.layout().n)),
@@ -25,14 +26,14 @@ void ModeClassifier::count(double t, const double* x) {
 }
 
 void ModeClassifier::step(double t, const double* x) {
-  plant_.classify_modes(t, x, stick_speed_, now_.data(), applied_.data());
+  plant_.classify_modes(t, x, stick_speed_, now_.data(), applied_.data(), false, speed_only_);
   // A new candidate records the applied torque at its first step: evaluated then, even where no joint is slow.
   bool fresh = false;
   for (std::size_t j = 0; j < joints_.size(); ++j) {
     const int m = static_cast<int>(now_[j]);
     fresh |= m != joints_[j].confirmed && m != joints_[j].candidate;
   }
-  if (fresh) plant_.classify_modes(t, x, stick_speed_, now_.data(), applied_.data(), true);
+  if (fresh) plant_.classify_modes(t, x, stick_speed_, now_.data(), applied_.data(), true, speed_only_);
   for (std::size_t j = 0; j < joints_.size(); ++j) {
     Joint& s = joints_[j];
     const int m = static_cast<int>(now_[j]);

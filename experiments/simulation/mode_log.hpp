@@ -28,7 +28,10 @@ inline constexpr double kMinModeDuration = 1e-3;  // [s]: shorter stick or slip 
 // Follows a run's accepted steps and keeps the mode changes that last.
 class ModeClassifier {
  public:
-  ModeClassifier(Plant& plant, double stick_speed = kStickSpeed, double min_duration = kMinModeDuration);
+  // speed_only: stuck when |w_m| <= stick_speed alone (the integrator solved
+  // the friction law itself: moreau-jean); the applied torque is then NaN.
+  ModeClassifier(Plant& plant, double stick_speed = kStickSpeed, double min_duration = kMinModeDuration,
+                 bool speed_only = false);
   // The state at the end of an accepted step (or the initial state at t = 0).
   void step(double t, const double* x);
   const std::vector<ModeChange>& changes() const { return changes_; }
@@ -43,6 +46,7 @@ class ModeClassifier {
  private:
   Plant& plant_;
   double stick_speed_, min_duration_;
+  bool speed_only_;
   std::vector<SlipMode> now_;  // this step's classification
   std::vector<double> applied_;
   struct Joint {

@@ -72,6 +72,11 @@ void statistics(Json& js, const SceneRun& run) {
   js["rejected_steps"] = st.rejected_steps;
   js["nonlinear_iterations"] = st.nonlinear_iterations;
   js["restarts"] = st.restarts;
+  // Time-stepping's set-valued friction solves (moreau-jean; 0 for the others).
+  js["friction_solves"] = st.friction_solves;
+  js["friction_iterations"] = st.friction_iterations;
+  js["friction_unconverged"] = st.friction_unconverged;
+  js["friction_worst_residual"] = json_number(st.friction_worst_residual);
   js["time_events"] = run.result.time_events;
   js["root_events"] = run.result.root_events;
   js["integration_wall_time_s"] = json_number(st.wall_time);
@@ -79,11 +84,11 @@ void statistics(Json& js, const SceneRun& run) {
   // The friction mode log (events.csv; mode_log.hpp): its rows, how they were
   // found, and the wall time its per-step work took (inside wall_time_s).
   js["mode_changes"] = run.mode_changes;
-  char how[160];
+  char how[240];
   std::snprintf(how, sizeof how,
-                "accepted steps classified: stuck at |w_m| <= %g rad/s (and the law's stick branch), "
-                "modes lasting >= %g s",
-                kStickSpeed, kMinModeDuration);
+                "accepted steps classified: stuck at |w_m| <= %g rad/s%s, modes lasting >= %g s", kStickSpeed,
+                run.speed_only ? " (the speed alone: the integrator's own friction solve)" : " (and the law's stick branch)",
+                kMinModeDuration);
   js["mode_log"] = run.events_csv.empty()   ? "none (no joint has friction modes)"
                    : run.modes_classified ? how
                                           : "hybrid model's events";

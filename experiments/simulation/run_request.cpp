@@ -67,6 +67,16 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
   if (io.exact_jacobian && !info.make(IntegratorOptions{})->capabilities().uses_jacobian) {
     throw std::invalid_argument("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
   }
+  if (sc.integrator.name.starts_with("moreau-jean") && sc.plant.energy_ledger) {
+    for (const FrictionParams& f : sc.plant.friction) {
+      if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {
+        throw std::invalid_argument(
+            sc.integrator.name + ": the energy ledger does not count the friction impulses' loss (set-valued friction, "
+            "model " + std::string(to_string(f.model)) + "); expected energy_ledger = false, or a smooth law "
+            "(tanh, viscous, none)");
+      }
+    }
+  }
   if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) {
     throw std::invalid_argument("--dt, --rtol, --atol: expected numbers > 0");
   }

@@ -48,8 +48,13 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   SceneRun run;
   bool modes = false;
   for (int j = 0; j < plant.layout().n; ++j) modes |= plant.joint_has_modes(j);
-  run.modes_classified = modes && !plant.has_mode_events();
-  ModeClassifier classifier(plant);
+  // Time-stepping with set-valued friction leaves the hybrid model's modes
+  // alone: its modes are those of its steps, classified by speed (a stuck
+  // joint's speed is exactly 0 after the step's impulse).
+  const bool time_stepping = integ->capabilities().set_valued_friction;
+  run.modes_classified = modes && (!plant.has_mode_events() || time_stepping);
+  run.speed_only = run.modes_classified && time_stepping;
+  ModeClassifier classifier(plant, kStickSpeed, kMinModeDuration, time_stepping);
   const auto observe = [&](double t, const double* x) {
     if (t == 0.0 && run.modes_classified && classifier.changes().empty()) classifier.step(0.0, x);  // x(0)
     recorder.observe(t, x);

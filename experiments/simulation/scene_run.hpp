@@ -45,6 +45,7 @@ struct SceneRun {
   std::string events_csv;         // the friction modes (mode_log.hpp); "" when no joint has modes
   long mode_changes = 0;          // its rows
   bool modes_classified = false;  // from the accepted steps (else: the hybrid model's events)
+  bool speed_only = false;        // classified by speed alone (time-stepping: moreau-jean)
   double mode_log_wall_time = 0;  // [s] spent classifying the steps (part of result.wall_time)
   long speed_sign_changes = 0;    // over the accepted steps, summed over the joints (with modes only)
   double shortest_step = 0;       // [s], the shortest accepted step (with modes only)

@@ -100,6 +100,13 @@ Plant::Plant(PlantConfig config)
   ds_.modes.assign(n, SlipMode::kStuck);
   released_.assign(static_cast<std::size_t>(n), 0.0);
   ftmp_.resize(layout_.size);
+  for (int j = 0; j < n; ++j) {
+    if (friction_.set_valued(j)) sv_joint_.push_back(j);
+  }
+  stick_.reserve(n);
+  cand_.resize(n), cand_mode_.resize(n), cw_.resize(static_cast<std::size_t>(n) * n);
+  cb_.resize(n), cs_.resize(n), ck_.resize(n), cr_.resize(n), col_.resize(n);
+  may_stick_ = std::make_unique<bool[]>(static_cast<std::size_t>(n));
   for (auto& v : ft_) v.resize(layout_.size);
   jx_.resize(layout_.size);
   jf_.resize(layout_.size);
@@ -158,17 +165,20 @@ void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
 // hybrid model holds a joint).
 template <class S>
 void Plant::friction_and_accelerations(Workspace<S>& w) {
-  const bool need_bias = friction_on_ && friction_.needs_applied_torque();
+  const bool all = friction_part_ == FrictionPart::kAll;
+  const bool need_bias = all && friction_.needs_applied_torque();
   if (need_bias) w.backend->bias(w.q, w.qd, w.h);
   for (int j = 0; j < layout_.n; ++j) {
     const double Z = body_.gear_ratio(j);
     const S wm = S(Z) * w.qd[j];
     w.applied[j] = need_bias ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
-    const S tf = friction_on_ ? friction_.torque(j, wm, w.applied[j], ds_.modes) : S(0);
+    S tf(0);
+    if (all) tf = friction_.torque(j, wm, w.applied[j], ds_.modes);
+    if (friction_part_ == FrictionPart::kSmooth) tf = friction_.smooth_torque(j, wm);
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
-  if (friction_on_ && friction_.has_events()) {
+  if (all && friction_.has_events()) {
     body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, ds_.modes); });
   } else {
     body_.accelerations(w);
@@ -193,9 +203,9 @@ void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_
 
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
   eval(t, x, fi, *wd_);  // the whole f
-  friction_on_ = false;
+  friction_part_ = FrictionPart::kNone;
   eval(t, x, fe, *wd_);  // f without friction
-  friction_on_ = true;
+  friction_part_ = FrictionPart::kAll;
   for (int k = 0; k < layout_.size; ++k) fi[k] -= fe[k];  // the friction's part
   if (layout_.i >= 0) {
     for (int j = 0; j < layout_.n; ++j) {  // the current equation: all implicit
@@ -312,15 +322,13 @@ void Plant::roots(double t, const double* x, double* g) {
 }
 
 void Plant::on_root(int j, double t, double* x) {
-  if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick
+  if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick (the solve may release it)
     x[layout_.qd + j] = 0.0;
     ds_.modes[j] = SlipMode::kStuck;
-  } else {  // break-away: |applied| crossed Fs, slip in its direction
-    rhs(t, x, ftmp_.data());
-    released_[static_cast<std::size_t>(j)] = applied_torque(j);  // the constraint torque that reached Fs
-    ds_.modes[j] = applied_torque(j) >= 0 ? SlipMode::kPositive : SlipMode::kNegative;
+    solve_modes(t, x, -1);
+  } else {  // break-away: |applied| reached Fs; it slips, in the direction the solve finds
+    solve_modes(t, x, j);
   }
-  settle_modes(t, x);
   log_modes(t);
 }
 
@@ -345,17 +353,17 @@ bool Plant::joint_has_modes(int j) const {
 }
 
 void Plant::classify_modes(double t, const double* x, double stick_speed, SlipMode* mode, double* applied,
-                           bool always_applied) {
-  bool evaluate = always_applied && friction_.needs_applied_torque();
+                           bool always_applied, bool speed_only) {
+  bool evaluate = always_applied && friction_.needs_applied_torque() && !speed_only;
   for (int j = 0; j < layout_.n; ++j) {
     const bool slow = std::abs(body_.gear_ratio(j) * x[layout_.qd + j]) <= stick_speed;
-    evaluate |= slow && needs_applied_torque(friction_.params(j).model);
+    evaluate |= slow && needs_applied_torque(friction_.params(j).model) && !speed_only;
   }
   if (evaluate) rhs(t, x, ftmp_.data());  // fills the applied torques
   for (int j = 0; j < layout_.n; ++j) {
     const double wm = body_.gear_ratio(j) * x[layout_.qd + j];
     const FrictionParams& f = friction_.params(j);
-    const bool branch = needs_applied_torque(f.model);
+    const bool branch = needs_applied_torque(f.model) && !speed_only;
     applied[j] = !branch ? std::numeric_limits<double>::quiet_NaN() : evaluate ? applied_torque(j) : 0.0;
     const bool held = !branch || std::abs(applied[j]) <= f.static_torque;
     const double direction = wm != 0 ? wm : applied[j];
@@ -365,28 +373,86 @@ void Plant::classify_modes(double t, const double* x, double stick_speed, SlipMo
   }
 }
 
-void Plant::settle_modes(double t, double* x) {
+void Plant::settle_modes(double t, double* x) { solve_modes(t, x, -1); }
+
+// W = Z (H^-1)_CC Z over the k joints cand_ (H in wd_ from the last
+// evaluation), and b = W applied_C.
+void Plant::stick_operator(int k) {
+  wd_->chol.factor(wd_->H);
+  for (int a = 0; a < k; ++a) {
+    const int ja = cand_[a];
+    col_.setZero();
+    col_[ja] = body_.gear_ratio(ja);
+    wd_->chol.solve_in_place(col_);
+    for (int c = 0; c < k; ++c) cw_[c * k + a] = body_.gear_ratio(cand_[c]) * col_[cand_[c]];
+  }
+  for (int a = 0; a < k; ++a) {
+    cb_[a] = 0.0;
+    for (int c = 0; c < k; ++c) cb_[a] += cw_[a * k + c] * applied_torque(cand_[c]);
+  }
+}
+
+// The coupled mode solve over the joints at rest (the stuck ones; `breaking`
+// among them may only slip), at acceleration level (see num_roots above). A
+// mode switch (or a controller sample) changes every held joint's torque at
+// once through H, so their modes are one problem; the greedy release it
+// replaces (the largest excess first, one at a time) can end in modes that
+// are not consistent (tests/test_moreau_jean.cpp).
+void Plant::solve_modes(double t, double* x, int breaking) {
   if (!friction_.has_events()) return;
-  // A mode switch (or a controller sample) changes every stuck joint's applied
-  // torque at once through H; release, one at a time, the stuck joint whose
-  // applied torque exceeds Fs the most, until the modes are consistent. Each
-  // pass releases one joint, so at most n passes. Without this a root
-  // function could start past its zero after a restart and never cross it
-  // (a joint stuck for the rest of the run).
-  for (int pass = 0; pass <= layout_.n; ++pass) {
-    rhs(t, x, ftmp_.data());
-    int worst = -1;
-    double excess = 0.0;
-    for (int j = 0; j < layout_.n; ++j) {
-      if (!friction_.stuck(j, ds_.modes)) continue;
-      const double e = std::abs(applied_torque(j)) - friction_.params(j).static_torque;
-      if (e > excess) excess = e, worst = j;
-    }
-    if (worst < 0) return;
-    released_[static_cast<std::size_t>(worst)] = applied_torque(worst);  // the one past Fs
-    ds_.modes[worst] = applied_torque(worst) > 0 ? SlipMode::kPositive : SlipMode::kNegative;
+  rhs(t, x, ftmp_.data());  // the held joints' applied torques, and H
+  int k = 0;
+  for (int j = 0; j < layout_.n; ++j) {
+    if (friction_.stuck(j, ds_.modes)) cand_[k++] = j;
+  }
+  if (k == 0) return;
+  stick_operator(k);
+  for (int a = 0; a < k; ++a) {
+    const FrictionParams& f = friction_.params(cand_[a]);
+    cs_[a] = std::max(f.static_torque, f.kinetic_torque);
+    ck_[a] = f.kinetic_torque;
+    may_stick_[a] = cand_[a] != breaking;
+  }
+  const StickProblem p{k, cw_.data(), cb_.data(), cs_.data(), ck_.data(), may_stick_.get()};
+  stick_result_ = stick_.solve(p, cr_.data(), cand_mode_.data());
+  for (int a = 0; a < k; ++a) {
+    const int m = cand_mode_[a];
+    const auto j = static_cast<std::size_t>(cand_[a]);
+    if (m != 0) released_[j] = applied_torque(cand_[a]);  // the constraint torque it was released at
+    ds_.modes[j] = m == 0 ? SlipMode::kStuck : (m > 0 ? SlipMode::kPositive : SlipMode::kNegative);
   }
   rhs(t, x, ftmp_.data());  // the applied torques at the final modes (log_modes reads them)
+}
+
+void Plant::rhs_smooth(double t, const double* x, double* xdot) {
+  friction_part_ = FrictionPart::kSmooth;
+  eval(t, x, xdot, *wd_);
+  friction_part_ = FrictionPart::kAll;
+}
+
+void Plant::jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J) {
+  struct Restore {  // even on a throw
+    FrictionPart& p;
+    ~Restore() { p = FrictionPart::kAll; }
+  } restore{friction_part_};
+  friction_part_ = FrictionPart::kSmooth;
+  jacobian_exact(t, x, J);
+}
+
+void Plant::set_valued_directions(const double* x, double* B) {
+  const int m = layout_.size, k = set_valued_joints();
+  std::fill(B, B + static_cast<std::ptrdiff_t>(m) * k, 0.0);
+  if (k == 0) return;
+  body_.load(layout_, x, *wd_);
+  wd_->backend->mass_matrix(wd_->q, wd_->H);
+  wd_->chol.factor(wd_->H);
+  for (int c = 0; c < k; ++c) {
+    const int j = sv_joint_[static_cast<std::size_t>(c)];
+    col_.setZero();
+    col_[j] = body_.gear_ratio(j);
+    wd_->chol.solve_in_place(col_);
+    for (int i = 0; i < layout_.n; ++i) B[static_cast<std::ptrdiff_t>(c) * m + layout_.qd + i] = col_[i];
+  }
 }
 
 // The discrete state at t = 0: no held output or integral, every hybrid

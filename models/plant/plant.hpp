@@ -42,6 +42,7 @@
 #include "models/plant/blocks/motor.hpp"
 #include "models/plant/blocks/rigid_body.hpp"
 #include "models/plant/controller/registry.hpp"
+#include "models/plant/friction/stick_solve.hpp"
 #include "models/plant/state_layout.hpp"
 #include "models/plant/workspace.hpp"
 #include "models/reference/trajectory.hpp"
@@ -166,9 +167,17 @@ class Plant {
 
   // Root functions (hybrid friction, one per joint): zero at a slipping joint's
   // speed reversal and at a stuck joint's break-away. on_root switches the
-  // joint's mode (a slipping joint's speed is set to exactly zero in x), then
-  // settle_modes releases every stuck joint now pushed past its static torque,
-  // so that after any discrete change each stuck joint's root function is >= 0.
+  // joint's mode (a slipping joint's speed is set to exactly zero in x, and
+  // it is stuck), then the coupled stick solve (friction/stick_solve.hpp) sets
+  // the modes of every joint at rest at once: the stuck ones, and a joint at
+  // its break-away, which may only slip. settle_modes does that solve alone
+  // (after a controller sample, or at the start). The problem is at
+  // acceleration level, on the motor side: W = Z (H^-1)_CC Z over the joints
+  // C at rest, b = W tau_applied,C (the torques their friction resists when
+  // all of them are held; then a_C = b + W r, r the friction torque on the
+  // joints), levels max(Fs, Fk) and Fk. After it each stuck joint's root
+  // function is >= 0 (when Fs >= Fk) and each slipping joint at rest
+  // accelerates in its slip direction (or not at all).
   int num_roots() const;
   void roots(double t, const double* x, double* g);
   void on_root(int joint, double t, double* x);
@@ -192,11 +201,35 @@ class Plant {
   // is that slow under a law with a stick branch; never called by the integrators.
   // always_applied: evaluate the applied torques even when no joint is slow.
   // applied[j] is NaN for a law that does not read it (tanh).
+  // speed_only: the speed alone decides (no stick branch, applied NaN): for
+  // time-stepping, whose step solved the friction law (a stuck joint's speed 0).
   void classify_modes(double t, const double* x, double stick_speed, SlipMode* mode, double* applied,
-                      bool always_applied = false);
+                      bool always_applied = false, bool speed_only = false);
   // Joint j's law has Coulomb levels (Fs or Fk > 0): stick and slip mean something.
   bool joint_has_modes(int j) const;
   bool has_mode_events() const { return friction_.has_events(); }
+  // The last coupled stick solve's report (settle_modes, on_root).
+  const StickResult& last_stick_solve() const { return stick_result_; }
+
+  // Time-stepping with set-valued friction (moreau-jean, OdeSystem's
+  // set-valued interface): f = f_smooth + sum_c B_c r_c over the joints whose
+  // law has a set-valued Coulomb part with a level > 0 (hybrid, paper,
+  // karnopp: set_valued_joint(c)); r_c the friction torque on joint c's motor
+  // shaft, acting on the joint (stuck: its motor speed 0 and |r_c| <= Fs;
+  // slipping: r_c = -Fk sign(w_m)). f_smooth: f with those laws' Coulomb part
+  // left out (B w_m stays) and no stuck-joint constraint; the other laws'
+  // torques (tanh, viscous) whole. The paper's and Karnopp's zero-speed bands
+  // play no part there. Allocation-free.
+  void rhs_smooth(double t, const double* x, double* xdot);
+  // d f_smooth / dx, exactly (dual numbers).
+  void jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J);
+  int set_valued_joints() const { return static_cast<int>(sv_joint_.size()); }
+  int set_valued_joint(int c) const { return sv_joint_[static_cast<std::size_t>(c)]; }
+  // B_c at x, column-major (size() x set_valued_joints()): a unit friction
+  // torque on joint c's shaft changes qdd by H^-1 e_c Z_c, nothing else.
+  void set_valued_directions(const double* x, double* B);
+  // The coupled solve itself (friction/stick_solve.hpp).
+  StickResult solve_stick(const StickProblem& p, double* r, int* mode) { return stick_.solve(p, r, mode); }
 
   // Stored energy at x [J]: mechanical (1/2 qd' H qd + V(q), rotor inertia
   // included) and magnetic (1/2 La i^2). With the ledger, the balance
@@ -239,6 +272,8 @@ class Plant {
   void input_currents(double* x);
   double applied_torque(int joint) const { return wd_->applied[joint]; }
   void log_modes(double t);
+  void solve_modes(double t, double* x, int breaking);
+  void stick_operator(int k);
 
   const PlantConfig cfg_;
   const RobotModel model_;  // the simulated joints (held links merged)
@@ -258,10 +293,20 @@ class Plant {
   std::vector<double> ftmp_;        // f for roots, drive_signals and settle_modes
   std::vector<double> ft_[2];        // time_derivative scratch
   std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
-  bool friction_on_ = true;          // off only inside rhs_split
   std::vector<ModeChange> mode_log_;  // mode_changes()
   FrictionModes logged_;              // the modes the log last recorded
   std::vector<double> released_;     // per joint: the applied torque at its last release [N m]
+  // Which friction f includes: all of it; none (inside rhs_split); the smooth
+  // part (rhs_smooth, jacobian_smooth).
+  enum class FrictionPart { kAll, kNone, kSmooth } friction_part_ = FrictionPart::kAll;
+  // The coupled stick solve (hybrid model's modes; time-stepping through PlantSystem).
+  StickSolver stick_;
+  StickResult stick_result_;
+  std::vector<int> sv_joint_;        // joints with set-valued friction
+  std::vector<int> cand_, cand_mode_;  // the joints at rest in a mode solve, their modes
+  std::vector<double> cw_, cb_, cs_, ck_, cr_;  // its W (row-major), b, levels, r
+  std::unique_ptr<bool[]> may_stick_;
+  Eigen::VectorXd col_;              // a column of H^-1
 };
 
 }  // namespace pumasim

@@ -25,6 +25,8 @@ class FrictionBlock {
       // at once, and CVODE took 1e-23 s steps at t = 1e-20 s until its budget.
       joint_events_.push_back(has_stick_slip_events(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0));
       events_ |= joint_events_.back();
+      law_set_valued_.push_back(is_set_valued(f.model));
+      joint_set_valued_.push_back(law_set_valued_.back() && (f.static_torque > 0 || f.kinetic_torque > 0));
     }
   }
   const FrictionParams& params(int j) const { return p_[static_cast<std::size_t>(j)]; }
@@ -38,6 +40,17 @@ class FrictionBlock {
     return has_events(j) && modes[static_cast<std::size_t>(j)] == SlipMode::kStuck;
   }
 
+  // Joint j's law has a set-valued Coulomb part with a level > 0 (what
+  // time-stepping solves as impulses; its B w_m stays in smooth_torque).
+  bool set_valued(int j) const { return joint_set_valued_[static_cast<std::size_t>(j)]; }
+  // The smooth part of the friction torque: B w_m for the laws with a
+  // set-valued part (hybrid, paper, karnopp), the whole torque of the others.
+  template <class S>
+  S smooth_torque(int j, const S& wm) const {
+    if (law_set_valued_[static_cast<std::size_t>(j)]) return S(params(j).viscous) * wm;
+    return friction_torque(params(j), wm, S(0), SlipMode::kPositive);
+  }
+
   template <class S>
   S torque(int j, const S& wm, const S& applied, const FrictionModes& modes) const {
     return friction_torque(params(j), wm, applied, modes[static_cast<std::size_t>(j)]);
@@ -46,6 +59,7 @@ class FrictionBlock {
  private:
   const std::vector<FrictionParams> p_;
   std::vector<bool> joint_events_;  // per joint: its law has stick/slip events
+  std::vector<bool> law_set_valued_, joint_set_valued_;  // per joint: the law's, and with a level > 0
   bool needs_applied_ = false;
   bool events_ = false;
 };

@@ -17,6 +17,7 @@ struct HybridFriction {
   static constexpr const char* kName = "hybrid";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = true;
+  static constexpr bool kSetValued = true;
   static constexpr FrictionKeys kKeys{true, true, false, false};
 
   template <class S>

@@ -10,6 +10,7 @@ struct NoFriction {
   static constexpr const char* kName = "none";
   static constexpr bool kNeedsAppliedTorque = false;  // the torque to resist at rest (needs h)
   static constexpr bool kStickSlipEvents = false;     // stuck/slipping modes switched by root functions
+  static constexpr bool kSetValued = false;  // a set-valued Coulomb part (Fs, Fk) for time-stepping
   static constexpr FrictionKeys kKeys{};
 
   template <class S>

@@ -5,6 +5,8 @@
 //   kName                its name in scene files
 //   kNeedsAppliedTorque  it reads the torque it must resist at rest (the plant then computes h)
 //   kStickSlipEvents     its stuck/slipping modes switch at root functions (the hybrid model)
+//   kSetValued           its Coulomb part is the set-valued law (stuck up to Fs, else Fk against
+//                        the motion) that time-stepping (moreau-jean) solves; B w_m stays smooth
 //   kKeys                the [friction] keys it reads and its default band (law.hpp)
 //   torque<S>(params, w_m, applied, mode)   the friction torque on the motor shaft [N m]
 // Dispatch is a compile-time chain of comparisons over the list: no virtual
@@ -82,6 +84,12 @@ inline bool needs_applied_torque(FrictionModel m) {
 inline bool has_stick_slip_events(FrictionModel m) {
   bool r = false;
   FrictionLaws::visit(m, [&](auto law) { r = decltype(law)::kStickSlipEvents; });
+  return r;
+}
+
+inline bool is_set_valued(FrictionModel m) {
+  bool r = false;
+  FrictionLaws::visit(m, [&](auto law) { r = decltype(law)::kSetValued; });
   return r;
 }
 

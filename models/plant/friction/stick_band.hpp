@@ -29,6 +29,7 @@ struct PaperRuleFriction {
   static constexpr const char* kName = "paper";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr bool kSetValued = true;
   static constexpr FrictionKeys kKeys{true, true, true, false, 1e-6};  // ABS(V) = 0, nearly
 
   template <class S>
@@ -41,6 +42,7 @@ struct KarnoppFriction {
   static constexpr const char* kName = "karnopp";
   static constexpr bool kNeedsAppliedTorque = true;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr bool kSetValued = true;
   static constexpr FrictionKeys kKeys{true, true, true, false, 1e-3};  // a finite band
 
   template <class S>

@@ -13,6 +13,7 @@ struct TanhFriction {
   static constexpr const char* kName = "tanh";
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr bool kSetValued = false;
   static constexpr FrictionKeys kKeys{true, true, false, true};
 
   template <class S>

@@ -10,6 +10,7 @@ struct ViscousFriction {
   static constexpr const char* kName = "viscous";
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;
+  static constexpr bool kSetValued = false;
   static constexpr FrictionKeys kKeys{true, false, false, false};
 
   template <class S>
