@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "models/dynamics/chain.hpp"
+#include "models/plant/profile.hpp"
 
 namespace pumasim {
 
@@ -109,6 +110,7 @@ Plant::~Plant() = default;
 const ReferenceSample& Plant::current_reference(double t) {
   if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ds_.ref_held;
   if (t != ds_.ref_time) {
+    PUMASIM_PROFILE_PART(kReference);
     cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
     ds_.ref_time = t;
   }
@@ -119,6 +121,7 @@ const ReferenceSample& Plant::reference_at(double t) { return current_reference(
 
 template <class S>
 void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
+  PUMASIM_PROFILE_PART(kController);
   if (cfg_.controller == ControllerMode::kContinuous) {
     const ControllerClock clock{t, ds_.controller.piece, ds_.extend_piece};
     std::visit([&](const auto& c) { c.output(clock, current_reference(t), x, layout_, w); }, controller_);
@@ -134,6 +137,7 @@ void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
 // puts in the power u qd.
 template <class S>
 void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
+  PUMASIM_PROFILE_PART(kDrive);
   for (int j = 0; j < layout_.n; ++j) {
     if (!cfg_.drive) {
       w.tm[j] = torque_input_ ? w.u[j] / S(body_.gear_ratio(j)) : S(0);
@@ -158,7 +162,11 @@ void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
 template <class S>
 void Plant::friction_and_accelerations(Workspace<S>& w) {
   const bool need_bias = friction_on_ && friction_.needs_applied_torque();
-  if (need_bias) w.backend->bias(w.q, w.qd, w.h);
+  if (need_bias) {
+    PUMASIM_PROFILE_PART(kDynamics);
+    w.backend->bias(w.q, w.qd, w.h);
+  }
+  PUMASIM_PROFILE_PART(kFriction);
   for (int j = 0; j < layout_.n; ++j) {
     const double Z = body_.gear_ratio(j);
     const S wm = S(Z) * w.qd[j];
@@ -167,6 +175,7 @@ void Plant::friction_and_accelerations(Workspace<S>& w) {
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
+  PUMASIM_PROFILE_PART(kDynamics);
   if (friction_on_ && friction_.has_events()) {
     body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, ds_.modes); });
   } else {
@@ -184,11 +193,15 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
   body_.store(layout_, w, xdot);
   ledger_.store(layout_, w, xdot);
   if (cfg_.controller == ControllerMode::kContinuous) {
+    PUMASIM_PROFILE_PART(kController);
     std::visit([&](const auto& c) { c.rates(current_reference(t), x, layout_, w, xdot); }, controller_);
   }
 }
 
-void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
+void Plant::rhs(double t, const double* x, double* xdot) {
+  PUMASIM_PROFILE_CONTEXT(kRhs);
+  eval(t, x, xdot, *wd_);
+}
 
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
   eval(t, x, fi, *wd_);  // the whole f
@@ -213,6 +226,7 @@ void Plant::linear_diagonal(double* lambda) const {
 }
 
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
+  PUMASIM_PROFILE_CONTEXT(kJacobian);
   const int m = layout_.size;
   J.resize(m, m);
   std::vector<Dual>&xx = jx_, &ff = jf_;
@@ -277,6 +291,7 @@ double Plant::next_time_event(double t) const {
 }
 
 void Plant::on_time_event(double t, double* x) {
+  PUMASIM_PROFILE_CONTEXT(kEvents);
   if (cfg_.controller == ControllerMode::kNone) return;
   ds_.controller.piece = std::visit([t](const auto& c) { return c.piece_after(t); }, controller_);
   if (cfg_.reference) {  // the reference's smooth piece from here on
@@ -297,6 +312,7 @@ void Plant::on_time_event(double t, double* x) {
 int Plant::num_roots() const { return friction_.has_events() ? layout_.n : 0; }
 
 void Plant::roots(double t, const double* x, double* g) {
+  PUMASIM_PROFILE_CONTEXT(kRoots);
   rhs(t, x, ftmp_.data());  // fills the applied torques
   for (int j = 0; j < layout_.n; ++j) {
     if (!friction_.has_events(j)) {
@@ -310,6 +326,7 @@ void Plant::roots(double t, const double* x, double* g) {
 }
 
 void Plant::on_root(int j, double t, double* x) {
+  PUMASIM_PROFILE_CONTEXT(kEvents);
   if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick
     x[layout_.qd + j] = 0.0;
     ds_.modes[j] = SlipMode::kStuck;
@@ -322,6 +339,7 @@ void Plant::on_root(int j, double t, double* x) {
 
 void Plant::settle_modes(double t, double* x) {
   if (!friction_.has_events()) return;
+  PUMASIM_PROFILE_CONTEXT(kEvents);
   // A mode switch (or a controller sample) changes every stuck joint's applied
   // torque at once through H; release, one at a time, the stuck joint whose
   // applied torque exceeds Fs the most, until the modes are consistent. Each
