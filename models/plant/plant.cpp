@@ -100,9 +100,14 @@ Plant::Plant(PlantConfig config)
   ds_.controller.memory.assign(std::visit([](const auto& c) { return c.discrete_size(); }, controller_), 0.0);
   ds_.modes.assign(n, SlipMode::kStuck);
   ftmp_.resize(layout_.size);
+  x_last_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
   jx_.resize(layout_.size);
   jf_.resize(layout_.size);
+  if (cfg_.tabulate_reference && cfg_.reference && cfg_.reference->has_path() &&
+      cfg_.reference->interpolation() == Interpolation::kCartesian) {
+    ref_table_ = std::make_unique<ReferenceTable>(*cfg_.reference);
+  }
 }
 
 Plant::~Plant() = default;
@@ -111,7 +116,11 @@ const ReferenceSample& Plant::current_reference(double t) {
   if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ds_.ref_held;
   if (t != ds_.ref_time) {
     PUMASIM_PROFILE_PART(kReference);
-    cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    if (ref_table_) {
+      ref_table_->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    } else {
+      cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    }
     ds_.ref_time = t;
   }
   return ds_.ref_now;
@@ -200,10 +209,22 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
 
 void Plant::rhs(double t, const double* x, double* xdot) {
   PUMASIM_PROFILE_CONTEXT(kRhs);
+  last_valid_ = false;
   eval(t, x, xdot, *wd_);
+  // Remembered for roots(): f of the continued piece (time_derivative) is
+  // not quite f at (t, x).
+  if (ds_.extend_piece || !friction_on_) return;
+  t_last_ = t;
+  std::copy(x, x + layout_.size, x_last_.begin());
+  last_valid_ = true;
+}
+
+bool Plant::applied_current(double t, const double* x) const {
+  return last_valid_ && t == t_last_ && std::equal(x, x + layout_.size, x_last_.begin());
 }
 
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
+  last_valid_ = false;
   eval(t, x, fi, *wd_);  // the whole f
   friction_on_ = false;
   eval(t, x, fe, *wd_);  // f without friction
@@ -292,6 +313,7 @@ double Plant::next_time_event(double t) const {
 
 void Plant::on_time_event(double t, double* x) {
   PUMASIM_PROFILE_CONTEXT(kEvents);
+  last_valid_ = false;
   if (cfg_.controller == ControllerMode::kNone) return;
   ds_.controller.piece = std::visit([t](const auto& c) { return c.piece_after(t); }, controller_);
   if (cfg_.reference) {  // the reference's smooth piece from here on
@@ -311,9 +333,14 @@ void Plant::on_time_event(double t, double* x) {
 
 int Plant::num_roots() const { return friction_.has_events() ? layout_.n : 0; }
 
+// Only a stuck joint's function needs f's work: its applied torque, from the
+// constrained dynamics at (t, x) (the last f's when that was at the same
+// (t, x) under the same modes); a slipping joint's is its speed.
 void Plant::roots(double t, const double* x, double* g) {
   PUMASIM_PROFILE_CONTEXT(kRoots);
-  rhs(t, x, ftmp_.data());  // fills the applied torques
+  bool stuck = false;
+  for (int j = 0; j < layout_.n; ++j) stuck = stuck || (friction_.has_events(j) && ds_.modes[j] == SlipMode::kStuck);
+  if (stuck && !applied_current(t, x)) rhs(t, x, ftmp_.data());  // fills the applied torques
   for (int j = 0; j < layout_.n; ++j) {
     if (!friction_.has_events(j)) {
       g[j] = 1.0;
@@ -327,6 +354,7 @@ void Plant::roots(double t, const double* x, double* g) {
 
 void Plant::on_root(int j, double t, double* x) {
   PUMASIM_PROFILE_CONTEXT(kEvents);
+  last_valid_ = false;
   if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick
     x[layout_.qd + j] = 0.0;
     ds_.modes[j] = SlipMode::kStuck;
@@ -356,6 +384,7 @@ void Plant::settle_modes(double t, double* x) {
       if (e > excess) excess = e, worst = j;
     }
     if (worst < 0) return;
+    last_valid_ = false;
     ds_.modes[worst] = applied_torque(worst) > 0 ? SlipMode::kPositive : SlipMode::kNegative;
   }
 }
@@ -457,6 +486,7 @@ void Plant::tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) c
 }
 
 void Plant::drive_signals(double t, const double* x, DriveSignals* out) {
+  last_valid_ = false;
   eval(t, x, ftmp_.data(), *wd_);
   for (int j = 0; j < layout_.n; ++j) {
     out[j] = {wd_->u[j], wd_->ea[j], cfg_.drive ? wd_->tm[j] / motor_.params(j).torque_constant : 0.0};
