@@ -98,9 +98,10 @@ class AdamsBashforth final : public FixedStep {
     grid_ = full ? h : dt();
     const double* b = full ? adams_bashforth_weights(k_) : coefficients(h / grid_);
     const double w = full ? h : grid_;
+    const History f = history();
     for (int i = 0; i < m; ++i) {
       double s = 0;
-      for (int j = 0; j < k_; ++j) s += b[j] * ring_[(head_ - j + k_) % k_][i];
+      for (int j = 0; j < k_; ++j) s += b[j] * f[j][i];
       x_[i] += w * s;
     }
   }
@@ -110,14 +111,23 @@ class AdamsBashforth final : public FixedStep {
     if (bootstrap_) return rk4_extension(th, ring_[head_].data(), out);
     const double* b = coefficients(th * h_ / grid_);
     const double w = grid_ / h_;
+    const History f = history();
     for (std::size_t i = 0; i < x_.size(); ++i) {
       double s = 0;
-      for (int j = 0; j < k_; ++j) s += b[j] * ring_[(head_ - j + k_) % k_][i];
+      for (int j = 0; j < k_; ++j) s += b[j] * f[j][i];
       out[i] = w * s;
     }
   }
 
  private:
+  // f at the last k_ grid points, newest first (the ring's order resolved
+  // once per step, not per component).
+  using History = std::array<const double*, 4>;
+  History history() const {
+    History f{};
+    for (int j = 0; j < k_; ++j) f[j] = ring_[(head_ - j + k_) % k_].data();
+    return f;
+  }
   // beta_j(th), j = 0..k-1; at th = 1 the step's coefficients above (a test
   // checks it).
   const double* coefficients(double th) const {

@@ -1,11 +1,13 @@
 #include "experiments/simulation/driver.hpp"
 
 #include "integrators/time_rule.hpp"
+#include "models/plant/profile.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -92,6 +94,19 @@ bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool t
   return true;
 }
 
+#ifdef PUMASIM_PROFILE
+// The cost breakdown of the run (models/plant/profile.hpp), into the file
+// named by PUMASIM_PROFILE_OUT (scripts/cost_breakdown.py reads it).
+void write_profile() {
+  const char* path = std::getenv("PUMASIM_PROFILE_OUT");
+  if (!path) return;
+  if (std::FILE* f = std::fopen(path, "w")) {
+    profile::write(f);
+    std::fclose(f);
+  }
+}
+#endif
+
 }  // namespace
 
 SetValuedRow PlantSystem::set_valued_row(int c) const {
@@ -129,6 +144,9 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps, Stops stops, double max_wall,
                     const ProgressHook& progress, const Observer& on_step) {
+#ifdef PUMASIM_PROFILE
+  profile::reset();
+#endif
   const auto start = Clock::now();
   StepClock clock(start);
   double next_report = progress.delay;  // [s] of wall-clock time
@@ -160,6 +178,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     // Outputs inside the step, from the method's dense output; one at the
     // step's end waits until the events there are applied.
     for (double to = output_time(); before(to, t, t_end); to = output_time()) {
+      PUMASIM_PROFILE_CONTEXT(kOutput);
       integrator.dense_state(to, xo.data());
       if (observe) observe(to, xo.data());
       ++k_out;
@@ -189,14 +208,21 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     const bool time_event_now = !before(t, t_event, t_end) && (stop_at_events || !before(t, output_time(), t_end));
     if (!output_now && !time_event_now && o.status != Outcome::kRoot) continue;
     x.assign(xs, xs + plant.size());
-    if (apply_events(plant, o, t, t_end, time_event_now, t_event, x.data(), res)) integrator.reset(sys, t, x.data());
+    if (apply_events(plant, o, t, t_end, time_event_now, t_event, x.data(), res)) {
+      PUMASIM_PROFILE_CONTEXT(kEvents);
+      integrator.reset(sys, t, x.data());
+    }
     if (output_now) {
+      PUMASIM_PROFILE_CONTEXT(kOutput);
       if (observe) observe(t, x.data());
       ++k_out;
     }
   }
   res.t_final = t;
   res.wall_time = seconds(Clock::now() - start);
+#ifdef PUMASIM_PROFILE
+  write_profile();
+#endif
   return res;
 }
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "models/dynamics/chain.hpp"
+#include "models/plant/profile.hpp"
 
 namespace pumasim {
 
@@ -107,9 +108,14 @@ Plant::Plant(PlantConfig config)
   cand_.resize(n), cand_mode_.resize(n), cw_.resize(static_cast<std::size_t>(n) * n);
   cb_.resize(n), cs_.resize(n), ck_.resize(n), cr_.resize(n), col_.resize(n);
   may_stick_ = std::make_unique<bool[]>(static_cast<std::size_t>(n));
+  x_last_.resize(layout_.size);
   for (auto& v : ft_) v.resize(layout_.size);
   jx_.resize(layout_.size);
   jf_.resize(layout_.size);
+  if (cfg_.tabulate_reference && cfg_.reference && cfg_.reference->has_path() &&
+      cfg_.reference->interpolation() == Interpolation::kCartesian) {
+    ref_table_ = std::make_unique<ReferenceTable>(*cfg_.reference);
+  }
 }
 
 Plant::~Plant() = default;
@@ -117,7 +123,12 @@ Plant::~Plant() = default;
 const ReferenceSample& Plant::current_reference(double t) {
   if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ds_.ref_held;
   if (t != ds_.ref_time) {
-    cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    PUMASIM_PROFILE_PART(kReference);
+    if (ref_table_) {
+      ref_table_->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    } else {
+      cfg_.reference->eval(t, ds_.ref_now, ds_.ref_segment, ds_.extend_piece);
+    }
     ds_.ref_time = t;
   }
   return ds_.ref_now;
@@ -127,6 +138,7 @@ const ReferenceSample& Plant::reference_at(double t) { return current_reference(
 
 template <class S>
 void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
+  PUMASIM_PROFILE_PART(kController);
   if (cfg_.controller == ControllerMode::kContinuous) {
     const ControllerClock clock{t, ds_.controller.piece, ds_.extend_piece};
     std::visit([&](const auto& c) { c.output(clock, current_reference(t), x, layout_, w); }, controller_);
@@ -142,6 +154,7 @@ void Plant::controller_output(double t, const S* x, Workspace<S>& w) {
 // puts in the power u qd.
 template <class S>
 void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
+  PUMASIM_PROFILE_PART(kDrive);
   for (int j = 0; j < layout_.n; ++j) {
     if (!cfg_.drive) {
       w.tm[j] = torque_input_ ? w.u[j] / S(body_.gear_ratio(j)) : S(0);
@@ -167,7 +180,11 @@ template <class S>
 void Plant::friction_and_accelerations(Workspace<S>& w) {
   const bool all = friction_part_ == FrictionPart::kAll;
   const bool need_bias = all && friction_.needs_applied_torque();
-  if (need_bias) w.backend->bias(w.q, w.qd, w.h);
+  if (need_bias) {
+    PUMASIM_PROFILE_PART(kDynamics);
+    w.backend->bias(w.q, w.qd, w.h);
+  }
+  PUMASIM_PROFILE_PART(kFriction);
   for (int j = 0; j < layout_.n; ++j) {
     const double Z = body_.gear_ratio(j);
     const S wm = S(Z) * w.qd[j];
@@ -178,6 +195,7 @@ void Plant::friction_and_accelerations(Workspace<S>& w) {
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
+  PUMASIM_PROFILE_PART(kDynamics);
   if (all && friction_.has_events()) {
     body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, ds_.modes); });
   } else {
@@ -195,13 +213,29 @@ void Plant::eval(double t, const S* x, S* xdot, Workspace<S>& w) {
   body_.store(layout_, w, xdot);
   ledger_.store(layout_, w, xdot);
   if (cfg_.controller == ControllerMode::kContinuous) {
+    PUMASIM_PROFILE_PART(kController);
     std::visit([&](const auto& c) { c.rates(current_reference(t), x, layout_, w, xdot); }, controller_);
   }
 }
 
-void Plant::rhs(double t, const double* x, double* xdot) { eval(t, x, xdot, *wd_); }
+void Plant::rhs(double t, const double* x, double* xdot) {
+  PUMASIM_PROFILE_CONTEXT(kRhs);
+  last_valid_ = false;
+  eval(t, x, xdot, *wd_);
+  // Remembered for roots(): f of the continued piece (time_derivative) is
+  // not quite f at (t, x).
+  if (ds_.extend_piece || friction_part_ != FrictionPart::kAll) return;
+  t_last_ = t;
+  std::copy(x, x + layout_.size, x_last_.begin());
+  last_valid_ = true;
+}
+
+bool Plant::applied_current(double t, const double* x) const {
+  return last_valid_ && t == t_last_ && std::equal(x, x + layout_.size, x_last_.begin());
+}
 
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
+  last_valid_ = false;
   eval(t, x, fi, *wd_);  // the whole f
   friction_part_ = FrictionPart::kNone;
   eval(t, x, fe, *wd_);  // f without friction
@@ -224,6 +258,7 @@ void Plant::linear_diagonal(double* lambda) const {
 }
 
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
+  PUMASIM_PROFILE_CONTEXT(kJacobian);
   const int m = layout_.size;
   J.resize(m, m);
   std::vector<Dual>&xx = jx_, &ff = jf_;
@@ -288,6 +323,8 @@ double Plant::next_time_event(double t) const {
 }
 
 void Plant::on_time_event(double t, double* x) {
+  PUMASIM_PROFILE_CONTEXT(kEvents);
+  last_valid_ = false;
   if (cfg_.controller == ControllerMode::kNone) return;
   ds_.controller.piece = std::visit([t](const auto& c) { return c.piece_after(t); }, controller_);
   if (cfg_.reference) {  // the reference's smooth piece from here on
@@ -308,8 +345,14 @@ void Plant::on_time_event(double t, double* x) {
 
 int Plant::num_roots() const { return friction_.has_events() ? layout_.n : 0; }
 
+// Only a stuck joint's function needs f's work: its applied torque, from the
+// constrained dynamics at (t, x) (the last f's when that was at the same
+// (t, x) under the same modes); a slipping joint's is its speed.
 void Plant::roots(double t, const double* x, double* g) {
-  rhs(t, x, ftmp_.data());  // fills the applied torques
+  PUMASIM_PROFILE_CONTEXT(kRoots);
+  bool stuck = false;
+  for (int j = 0; j < layout_.n; ++j) stuck = stuck || (friction_.has_events(j) && ds_.modes[j] == SlipMode::kStuck);
+  if (stuck && !applied_current(t, x)) rhs(t, x, ftmp_.data());  // fills the applied torques
   for (int j = 0; j < layout_.n; ++j) {
     if (!friction_.has_events(j)) {
       g[j] = 1.0;
@@ -322,6 +365,8 @@ void Plant::roots(double t, const double* x, double* g) {
 }
 
 void Plant::on_root(int j, double t, double* x) {
+  PUMASIM_PROFILE_CONTEXT(kEvents);
+  last_valid_ = false;
   if (ds_.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick (the solve may release it)
     x[layout_.qd + j] = 0.0;
     ds_.modes[j] = SlipMode::kStuck;
@@ -400,6 +445,7 @@ void Plant::stick_operator(int k) {
 // are not consistent (tests/test_moreau_jean.cpp).
 void Plant::solve_modes(double t, double* x, int breaking) {
   if (!friction_.has_events()) return;
+  PUMASIM_PROFILE_CONTEXT(kEvents);
   rhs(t, x, ftmp_.data());  // the held joints' applied torques, and H
   int k = 0;
   for (int j = 0; j < layout_.n; ++j) {
@@ -421,10 +467,12 @@ void Plant::solve_modes(double t, double* x, int breaking) {
     if (m != 0) released_[j] = applied_torque(cand_[a]);  // the constraint torque it was released at
     ds_.modes[j] = m == 0 ? SlipMode::kStuck : (m > 0 ? SlipMode::kPositive : SlipMode::kNegative);
   }
+  last_valid_ = false;
   rhs(t, x, ftmp_.data());  // the applied torques at the final modes (log_modes reads them)
 }
 
 void Plant::rhs_smooth(double t, const double* x, double* xdot) {
+  last_valid_ = false;  // wd_ holds this evaluation, not the last f
   friction_part_ = FrictionPart::kSmooth;
   eval(t, x, xdot, *wd_);
   friction_part_ = FrictionPart::kAll;
@@ -556,6 +604,7 @@ void Plant::tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) c
 }
 
 void Plant::drive_signals(double t, const double* x, DriveSignals* out) {
+  last_valid_ = false;
   eval(t, x, ftmp_.data(), *wd_);
   for (int j = 0; j < layout_.n; ++j) {
     out[j] = {wd_->u[j], wd_->ea[j], cfg_.drive ? wd_->tm[j] / motor_.params(j).torque_constant : 0.0};

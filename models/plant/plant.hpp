@@ -45,6 +45,7 @@
 #include "models/plant/friction/stick_solve.hpp"
 #include "models/plant/state_layout.hpp"
 #include "models/plant/workspace.hpp"
+#include "models/reference/reference_table.hpp"
 #include "models/reference/trajectory.hpp"
 #include "models/robot/drive.hpp"
 
@@ -64,6 +65,10 @@ struct PlantConfig {
   std::vector<FrictionParams> friction;
   ControllerParams controller_params;  // the law (controller/registry.hpp) and its parameters per joint
   std::shared_ptr<const Reference> reference;  // what a controller follows
+  // A Cartesian path's continuously followed reference from per-piece
+  // Chebyshev interpolants (reference_table.hpp) instead of the inverse
+  // kinematics at every time; false: the exact reference everywhere.
+  bool tabulate_reference = true;
   Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
   // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
   // (electrical input e_a i, or a torque input's mechanical tau qd; copper
@@ -289,8 +294,16 @@ class Plant {
   StateLayout layout_;
   std::unique_ptr<Workspace<double>> wd_;
   std::unique_ptr<Workspace<Dual>> wj_;
+  std::unique_ptr<ReferenceTable> ref_table_;  // with tabulate_reference, on a Cartesian path
   PlantDiscreteState ds_;
   std::vector<double> ftmp_;        // f for roots, drive_signals and settle_modes
+  // The (t, x) of the last rhs() whose workspace (wd_: the applied torques)
+  // is still that of f there under the current discrete state; roots()
+  // reuses it. Invalidated by every other evaluation and every event.
+  std::vector<double> x_last_;
+  double t_last_ = 0;
+  bool last_valid_ = false;
+  bool applied_current(double t, const double* x) const;
   std::vector<double> ft_[2];        // time_derivative scratch
   std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
   std::vector<ModeChange> mode_log_;  // mode_changes()

@@ -1,0 +1,92 @@
+// One right-hand side of the plant beside its back-end's forward dynamics, in
+// the same run (issue 17's target: f of the 6-joint plant at most twice the
+// forward dynamics' time). Per scene: fd/<scene> times the scene's back-end
+// on the simulated arm (held links merged) at the initial state's q, qd and a
+// fixed torque; rhs/<scene> times Plant::rhs at the initial state, each call
+// at a new time (1e-5 s apart, cycling through [0.5, 1.5] s, inside the
+// reference's first smooth piece), so that the reference is evaluated at
+// every call as in an integration; its counter ratio_to_fd is its time over
+// fd/<scene>'s, which runs first. rhs-exact-reference/<scene>: the same
+// with the inverse kinematics at every call (PlantConfig::tabulate_reference
+// off), as before the reference was tabulated.
+//
+//   bench_plant --benchmark_out=results/bench/plant.json --benchmark_out_format=json
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "models/plant/plant.hpp"
+#include "models/scene/scene.hpp"
+#include "pumasim_build_info.hpp"  // generated at build time
+
+namespace {
+
+const char* const kScenes[] = {"paper_slow_6dof_hybrid", "paper_slow"};
+
+std::string scene_file(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
+
+double fd_ns[2] = {0, 0};  // per scene, from the fd benchmark
+
+double per_call_ns(benchmark::State& state, std::chrono::steady_clock::duration d) {
+  return std::chrono::duration<double, std::nano>(d).count() / static_cast<double>(state.iterations());
+}
+
+void fd(benchmark::State& state, int k) {
+  const pumasim::Scene sc = pumasim::load_scene(scene_file(kScenes[k]));
+  pumasim::Plant plant(sc.plant);
+  std::vector<double> x(plant.size());
+  plant.initial_state(x.data());
+  const int n = plant.layout().n;
+  const pumasim::RobotModel model = pumasim::simulated_robot(sc.plant.robot, n, sc.plant.q_held);
+  auto backend = pumasim::find_backend(sc.plant.backend).make(model);
+  Eigen::VectorXd q(n), qd(n), tau = Eigen::VectorXd::Constant(n, 1.0), out(n);
+  for (int j = 0; j < n; ++j) q[j] = x[plant.layout().q + j], qd[j] = 0.1;
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    backend->forward_dynamics(q, qd, tau, out);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  fd_ns[k] = per_call_ns(state, std::chrono::steady_clock::now() - start);
+  state.counters["n"] = n;
+}
+
+void rhs(benchmark::State& state, int k, bool table) {
+  pumasim::Scene sc = pumasim::load_scene(scene_file(kScenes[k]));
+  sc.plant.tabulate_reference = table;
+  pumasim::Plant plant(sc.plant);
+  std::vector<double> x(plant.size()), f(plant.size());
+  plant.initial_state(x.data());
+  double t = 0.5;
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    t = t < 1.5 ? t + 1e-5 : 0.5;
+    plant.rhs(t, x.data(), f.data());
+    benchmark::DoNotOptimize(f.data());
+    benchmark::ClobberMemory();
+  }
+  const double ns = per_call_ns(state, std::chrono::steady_clock::now() - start);
+  state.counters["n"] = plant.layout().n;
+  if (fd_ns[k] > 0) state.counters["ratio_to_fd"] = ns / fd_ns[k];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (int k = 0; k < 2; ++k) {
+    benchmark::RegisterBenchmark((std::string("fd/") + kScenes[k]).c_str(), fd, k)->Unit(benchmark::kNanosecond);
+    benchmark::RegisterBenchmark((std::string("rhs/") + kScenes[k]).c_str(), rhs, k, true)
+        ->Unit(benchmark::kNanosecond);
+    benchmark::RegisterBenchmark((std::string("rhs-exact-reference/") + kScenes[k]).c_str(), rhs, k, false)
+        ->Unit(benchmark::kNanosecond);
+  }
+  benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);
+  benchmark::AddCustomContext("pumasim_flags", pumasim::build_info::kFlags);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,86 @@
+#include "models/reference/reference_table.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace pumasim {
+
+ReferenceTable::ReferenceTable(const Reference& ref) : ref_(ref) {
+  const std::vector<double>& bp = ref.breakpoints();
+  // Segment s is [bp[s-1], bp[s]] (bp[-1] = 0); the one after the last
+  // breakpoint (the hold at the end) is not tabulated.
+  for (std::size_t s = 0; s < bp.size(); ++s) {
+    first_.push_back(static_cast<int>(subs_.size()));
+    const double a = s == 0 ? 0.0 : bp[s - 1], b = bp[s];
+    const int k = std::max(1, static_cast<int>(std::ceil((b - a) / kSpan)));
+    for (int i = 0; i < k; ++i) {
+      Sub sub;
+      sub.a = a + (b - a) * i / k;
+      sub.b = i + 1 == k ? b : a + (b - a) * (i + 1) / k;
+      subs_.push_back(sub);
+    }
+  }
+  first_.push_back(static_cast<int>(subs_.size()));
+  coefs_.resize(subs_.size());
+}
+
+void ReferenceTable::pack(const ReferenceSample& s, double* c) {
+  for (int j = 0; j < 6; ++j) c[j] = s.q[j], c[6 + j] = s.qd[j], c[12 + j] = s.qdd[j];
+  for (int i = 0; i < 3; ++i) c[18 + i] = s.p[i], c[21 + i] = s.v[i];
+}
+
+// The values at the Chebyshev extreme points x_k = cos(pi k / N) and the
+// coefficients of the interpolant sum_j c_j T_j(x) (Trefethen 2013, ch. 3:
+// c_j = (2 / N) sum_k'' f_k cos(pi j k / N), the end terms halved, c_0 and
+// c_N halved too).
+void ReferenceTable::fill(int segment, int k) {
+  Sub& sub = subs_[static_cast<std::size_t>(k)];
+  constexpr int N = kDegree;
+  Eigen::Matrix<double, kComponents, N + 1> f;
+  ReferenceSample s;
+  const double mid = 0.5 * (sub.a + sub.b), half = 0.5 * (sub.b - sub.a);
+  for (int i = 0; i <= N; ++i) {
+    const double t = i == 0 ? sub.b : i == N ? sub.a : mid + half * std::cos(std::numbers::pi * i / N);
+    ref_.eval(t, s, segment, true);
+    pack(s, f.col(i).data());
+  }
+  Coefs& c = coefs_[static_cast<std::size_t>(k)];
+  for (int j = 0; j <= N; ++j) {
+    Eigen::Matrix<double, kComponents, 1> sum = 0.5 * (f.col(0) + (j % 2 ? -1.0 : 1.0) * f.col(N));
+    for (int i = 1; i < N; ++i) sum += std::cos(std::numbers::pi * ((j * i) % (2 * N)) / N) * f.col(i);
+    c.col(j) = (j == 0 || j == N ? 1.0 : 2.0) / N * sum;
+  }
+  const double tail = (c.col(N - 1).cwiseAbs() + c.col(N).cwiseAbs()).maxCoeff();
+  sub.state = tail <= kTailTol ? Sub::kTable : Sub::kExact;
+  ++filled_;
+  if (sub.state == Sub::kExact) ++fallbacks_;
+}
+
+void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool extend) {
+  const int m = static_cast<int>(first_.size()) - 1;  // tabulated segments
+  if (segment < 0 || segment >= m) return ref_.eval(t, out, segment, extend);
+  const int k0 = first_[static_cast<std::size_t>(segment)], k1 = first_[static_cast<std::size_t>(segment) + 1];
+  const double a = subs_[static_cast<std::size_t>(k0)].a, b = subs_[static_cast<std::size_t>(k1) - 1].b;
+  const double tol = 1e-12 * std::max(1.0, b);  // Reference's rounding of a segment's ends
+  if (!(t >= a - tol && t <= b + tol)) return ref_.eval(t, out, segment, extend);
+  const int k = std::clamp(k0 + static_cast<int>((t - a) / (b - a) * (k1 - k0)), k0, k1 - 1);
+  Sub& sub = subs_[static_cast<std::size_t>(k)];
+  if (sub.state == Sub::kEmpty) fill(segment, k);
+  if (sub.state == Sub::kExact) return ref_.eval(t, out, segment, extend);
+  // Clenshaw's recurrence for all components at once.
+  const Coefs& c = coefs_[static_cast<std::size_t>(k)];
+  const double x = (2 * t - sub.a - sub.b) / (sub.b - sub.a);
+  using Col = Eigen::Matrix<double, kComponents, 1>;
+  Col b1 = Col::Zero(), b2 = Col::Zero();
+  for (int j = kDegree; j >= 1; --j) {
+    const Col b0 = c.col(j) + 2 * x * b1 - b2;
+    b2 = b1;
+    b1 = b0;
+  }
+  const Col v = c.col(0) + x * b1 - b2;
+  for (int j = 0; j < 6; ++j) out.q[j] = v[j], out.qd[j] = v[6 + j], out.qdd[j] = v[12 + j];
+  for (int i = 0; i < 3; ++i) out.p[i] = v[18 + i], out.v[i] = v[21 + i];
+}
+
+}  // namespace pumasim

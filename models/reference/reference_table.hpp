@@ -1,0 +1,66 @@
+// The reference tabulated per smooth piece: within each segment between two
+// breakpoints (Reference::breakpoints), sub-intervals of at most kSpan
+// seconds, each with a Chebyshev interpolant of degree kDegree (values at the
+// Chebyshev extreme points, Trefethen, Approximation Theory and Approximation
+// Practice, 2013, ch. 2-3) of every component the plant reads: q, qd, qdd of
+// the simulated joints, p and v. Each component is interpolated from the
+// exact reference's own value (qd and qdd are not differences of q), so
+// their errors are of the same size. The nodes are evaluated on the
+// segment's own formula (Reference::eval with the segment and extend), so
+// the breakpoints stay exact: a sub-interval never straddles one.
+//
+// A sub-interval is filled the first time a time inside it is asked for
+// (the storage is allocated once, at construction: lookups never allocate).
+// Where the interpolant has not converged -- the magnitude of its last two
+// Chebyshev coefficients, which bounds the error of a smooth function's
+// interpolant to about that size (Trefethen 2013, ch. 8), above kTailTol
+// in any component -- the sub-interval is marked and the exact reference
+// is used there. Times outside the tabulated range (before 0, after the last
+// breakpoint, a piece continued past its ends) use the exact reference too.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "models/reference/trajectory.hpp"
+
+namespace pumasim {
+
+class ReferenceTable {
+ public:
+  static constexpr int kDegree = 32;         // Chebyshev degree per sub-interval
+  static constexpr double kSpan = 2.0;       // [s] longest sub-interval
+  static constexpr double kTailTol = 1e-12;  // convergence test on the last two coefficients
+  static constexpr int kComponents = 24;     // q, qd, qdd (6 each), p, v (3 each)
+
+  // The reference must outlive the table. Allocates all storage.
+  explicit ReferenceTable(const Reference& ref);
+
+  // As Reference::eval(t, out, segment, extend), from the interpolant where
+  // there is one. Allocation-free.
+  void eval(double t, ReferenceSample& out, int segment, bool extend);
+
+  // The exact reference at the node times of the sub-interval holding t in
+  // `segment`, and how many sub-intervals were filled / fell back to the
+  // exact reference (for tests).
+  int filled() const { return filled_; }
+  int exact_fallbacks() const { return fallbacks_; }
+
+ private:
+  using Coefs = Eigen::Matrix<double, kComponents, kDegree + 1>;
+  struct Sub {
+    double a = 0, b = 0;
+    enum State : char { kEmpty, kTable, kExact } state = kEmpty;
+  };
+  void fill(int segment, int k);
+  static void pack(const ReferenceSample& s, double* c);
+
+  const Reference& ref_;
+  std::vector<int> first_;   // per segment: index of its first sub-interval; one past the end at the back
+  std::vector<Sub> subs_;
+  std::vector<Coefs> coefs_;  // per sub-interval
+  int filled_ = 0, fallbacks_ = 0;
+};
+
+}  // namespace pumasim
