@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "models/dynamics/chain.hpp"
+#include "models/dynamics/tangent_backend.hpp"
 
 namespace pumasim {
 
@@ -102,6 +103,10 @@ Plant::Plant(PlantConfig config)
   for (auto& v : ft_) v.resize(layout_.size);
   jx_.resize(layout_.size);
   jf_.resize(layout_.size);
+  wt_ = std::make_unique<Workspace<Tangent>>(n);
+  wt_->backend = std::make_unique<TangentBackend<kJacobianTangents>>(model_, find_backend(cfg_.backend).make(model_));
+  tx_.resize(layout_.size);
+  tf_.resize(layout_.size);
 }
 
 Plant::~Plant() = default;
@@ -213,6 +218,20 @@ void Plant::linear_diagonal(double* lambda) const {
 }
 
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
+  const int m = layout_.size;
+  J.resize(m, m);
+  constexpr int N = kJacobianTangents;
+  for (int first = 0; first < m; first += N) {  // states first..first+N-1 in one pass
+    for (int i = 0; i < m; ++i) tx_[i] = Tangent(x[i], i - first);
+    eval(t, tx_.data(), tf_.data(), *wt_);
+    const int last = std::min(m, first + N);
+    for (int k = first; k < last; ++k) {
+      for (int r = 0; r < m; ++r) J(r, k) = tf_[r].deriv(k - first);
+    }
+  }
+}
+
+void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = layout_.size;
   J.resize(m, m);
   std::vector<Dual>&xx = jx_, &ff = jf_;

@@ -36,6 +36,7 @@
 #include <Eigen/Core>
 
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/dual_n.hpp"
 #include "models/plant/blocks/amplifier.hpp"
 #include "models/plant/blocks/energy_ledger.hpp"
 #include "models/plant/blocks/friction.hpp"
@@ -134,9 +135,17 @@ class Plant {
   // armature's -(R0 + R_j)/La_j on each current state, 0 elsewhere (and 0
   // everywhere without current states).
   void linear_diagonal(double* lambda) const;
-  // df/dx exactly (dual numbers through the same code); differences are
-  // OdeSystem::jacobian's (integrators/registry.cpp).
+  // df/dx exactly; differences are OdeSystem::jacobian's
+  // (integrators/registry.cpp). One pass of f per kJacobianTangents states on
+  // the multi-tangent dual number (DualN), the dynamics' tangents analytical
+  // (TangentBackend: the back-end's values in double, the RNEA's partials).
+  // Allocation-free after the first call.
+  static constexpr int kJacobianTangents = 24;
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
+  // The same, one single-tangent dual pass of f per state through the
+  // back-end's own algorithm on Dual: m passes, an independent computation
+  // (the tests compare the two).
+  void jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J);
   // df/dt at (t, x): f depends on t only through a continuously followed
   // reference, whose smooth piece since the last time event is continued for
   // the difference (so that it never straddles a breakpoint): a second-order
@@ -220,7 +229,10 @@ class Plant {
   PlantDiscreteState ds_;
   std::vector<double> ftmp_;        // f for roots, drive_signals and settle_modes
   std::vector<double> ft_[2];        // time_derivative scratch
-  std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
+  std::vector<Dual> jx_, jf_;        // jacobian_per_column's x and f
+  using Tangent = DualN<kJacobianTangents>;
+  std::unique_ptr<Workspace<Tangent>> wt_;
+  std::vector<Tangent> tx_, tf_;     // jacobian_exact's x and f
   bool friction_on_ = true;          // off only inside rhs_split
 };
 
