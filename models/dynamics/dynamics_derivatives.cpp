@@ -7,35 +7,43 @@ namespace pumasim {
 DynamicsDerivatives::DynamicsDerivatives(const RobotModel& model, std::unique_ptr<DynamicsBackend> values)
     : n_(model.dof()),
       values_(std::move(values)),
-      chain_(model),
-      rot_(n_),
-      rnea_(n_),
-      qs_(n_),
-      qds_(n_),
-      qdds_(n_),
-      taus_(n_),
       H_(n_, n_),
       h_(n_),
-      chol_(n_) {}
+      chol_(n_) {
+  if (2 * n_ <= 6) {
+    small_ = std::make_unique<Engine<6>>(model);
+  } else {
+    large_ = std::make_unique<Engine<kPartialTangents>>(model);
+  }
+}
 
 DynamicsDerivatives::~DynamicsDerivatives() = default;
 
 void DynamicsDerivatives::id_partials(const double* q, const double* qd, const double* qdd, bool gravity, MatRef dq,
                                       MatRef dqd) {
-  const int n = n_;
-  constexpr int K = kPartialTangents;
+  if (small_) {
+    small_->partials(q, qd, qdd, gravity, dq, dqd);
+  } else {
+    large_->partials(q, qd, qdd, gravity, dq, dqd);
+  }
+}
+
+template <int K>
+void DynamicsDerivatives::Engine<K>::partials(const double* q0, const double* qd0, const double* qdd0, bool gravity,
+                                              MatRef dq, MatRef dqd) {
+  const int n = chain.n;
   // Directions 0..n-1 are q's, n..2n-1 qd's; K of them per pass.
   for (int first = 0; first < 2 * n; first += K) {
     for (int j = 0; j < n; ++j) {
-      qs_[j] = Partial(q[j], j - first);
-      qds_[j] = Partial(qd[j], n + j - first);
-      qdds_[j] = Partial(qdd[j]);
+      q[j] = T(q0[j], j - first);
+      qd[j] = T(qd0[j], n + j - first);
+      qdd[j] = T(qdd0[j]);
     }
-    rot_.compute(chain_, qs_);
-    rnea_.run(chain_, rot_, qds_, qdds_, gravity, taus_);
+    rot.compute(chain, q);
+    rnea.run(chain, rot, qd, qdd, gravity, tau);
     const int last = std::min(2 * n, first + K);
     for (int k = first; k < last; ++k) {
-      for (int i = 0; i < n; ++i) (k < n ? dq(i, k) : dqd(i, k - n)) = taus_[i].deriv(k - first);
+      for (int i = 0; i < n; ++i) (k < n ? dq(i, k) : dqd(i, k - n)) = tau[i].deriv(k - first);
     }
   }
 }

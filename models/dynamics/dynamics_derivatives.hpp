@@ -4,8 +4,8 @@
 // defined by ID(q, qd, qdd) = tau, so at qdd = FD(q, qd, tau)
 //   dFD/dq = -H^-1 dID/dq,   dFD/dqd = -H^-1 dID/dqd,   dFD/dtau = H^-1.
 // The partials dID/dq and dID/dqd come from one RNEA (rnea.hpp) on a
-// multi-tangent dual number (DualN<kPartialTangents>) per kPartialTangents of
-// the 2n directions (one pass up to n = 6); the values (h, H, qdd) and the
+// multi-tangent dual number per kPartialTangents of the 2n directions (one
+// pass up to n = 6; DualN<6> for n <= 3, DualN<12> otherwise); the values (h, H, qdd) and the
 // Cholesky factor of H from the given back-end in double. Every back-end
 // computes the same ID up to rounding, so the partials serve every back-end
 // without instantiating it on a new scalar. No allocation after construction.
@@ -25,7 +25,6 @@ namespace pumasim {
 class DynamicsDerivatives {
  public:
   static constexpr int kPartialTangents = 12;
-  using Partial = DualN<kPartialTangents>;
 
   // The values come from `values`, a back-end made for `model`.
   DynamicsDerivatives(const RobotModel& model, std::unique_ptr<DynamicsBackend> values);
@@ -56,12 +55,23 @@ class DynamicsDerivatives {
                         MatRef dtau);
 
  private:
+  // One RNEA on DualN<K> and its inputs.
+  template <int K>
+  struct Engine {
+    using T = DualN<K>;
+    explicit Engine(const RobotModel& model)
+        : chain(model), rot(chain.n), rnea(chain.n), q(chain.n), qd(chain.n), qdd(chain.n), tau(chain.n) {}
+    void partials(const double* q0, const double* qd0, const double* qdd0, bool gravity, MatRef dq, MatRef dqd);
+    Chain<T, Eigen::Dynamic> chain;
+    JointTransforms<T, Eigen::Dynamic> rot;
+    RneaPass<T, Eigen::Dynamic> rnea;
+    Eigen::Matrix<T, Eigen::Dynamic, 1> q, qd, qdd, tau;
+  };
+
   int n_;
   std::unique_ptr<DynamicsBackend> values_;
-  Chain<Partial, Eigen::Dynamic> chain_;
-  JointTransforms<Partial, Eigen::Dynamic> rot_;
-  RneaPass<Partial, Eigen::Dynamic> rnea_;
-  Eigen::Matrix<Partial, Eigen::Dynamic, 1> qs_, qds_, qdds_, taus_;
+  std::unique_ptr<Engine<6>> small_;  // n <= 3
+  std::unique_ptr<Engine<kPartialTangents>> large_;
   Eigen::MatrixXd H_;
   Eigen::VectorXd h_;
   Cholesky<double, Eigen::Dynamic> chol_;

@@ -10,6 +10,7 @@
 // entry (constrained_forward_dynamics). No allocation after construction.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <type_traits>
 
@@ -37,7 +38,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
  public:
   TangentBackend(const RobotModel& model, std::unique_ptr<DynamicsBackend> values)
       : d_(model, std::move(values)), n_(model.dof()), q_(n_), qd_(n_), qdd_(n_), v_(n_), zero_(Eigen::VectorXd::Zero(n_)),
-        Pq_(n_, n_), Pqd_(n_, n_), T_(n_, N), X_(n_, N), Hc_(n_, n_), chol_(n_) {}
+        Pq_(n_, n_), Pqd_(n_, n_), T_(N, n_), X_(N, n_), Hc_(n_, n_), chol_(n_) {}
 
   const char* name() const override { return d_.values().name(); }
   int dof() const override { return n_; }
@@ -64,6 +65,13 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
     tangents(q, q, false);
     store(g);
   }
+  // h's value alone, its tangents zero: for a caller that uses no tangent of
+  // h (one RNEA pass on the multi-tangent scalar fewer).
+  void bias_value(TConstVecRef q, TConstVecRef qd, TVecRef h) {
+    load(q, qd);
+    d_.values().bias(q_, qd_, v_);
+    for (int j = 0; j < n_; ++j) h.data()[j] = S(v_[j]);
+  }
   // Column j of H is ID(q, 0, e_j) without gravity: its q-partials, one
   // RNEA pass each (this entry serves completeness, not a hot path).
   void mass_matrix(TConstVecRef q, TMatRef H) override {
@@ -76,7 +84,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
       tangents(q, q, false);
       for (int i = 0; i < n_; ++i) {
         H(i, j) = S(d_.mass_matrix()(i, j));
-        for (int k = 0; k < N; ++k) H(i, j).deriv(k) = T_(i, k);
+        for (int k = 0; k < N; ++k) H(i, j).deriv(k) = T_(k, i);
       }
     }
   }
@@ -106,20 +114,25 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
     chol_.factor(Hc_);
     chol_.solve_in_place(qdd_);
     chain(q, qd, qdd_.data(), true);  // T = dID/dq dq + dID/dqd dqd
+    const S* tp = tau.data();
     for (int j = 0; j < n_; ++j) {
-      for (int k = 0; k < N; ++k) X_(j, k) = stuck(j) ? 0.0 : tau[j].deriv(k) - T_(j, k);
+      double* x = X_.col(j).data();
+      const double *dt = tp[j].derivs(), *t = T_.col(j).data();
+      const bool held = stuck(j);
+      for (int k = 0; k < N; ++k) x[k] = held ? 0.0 : dt[k] - t[k];
     }
-    for (int k = 0; k < N; ++k) chol_.solve_in_place(X_.col(k));
+    for (int k = 0; k < N; ++k) chol_.solve_in_place(X_.row(k));
+    S* out = qdd.data();
     for (int j = 0; j < n_; ++j) {
-      qdd[j] = S(qdd_[j]);
-      for (int k = 0; k < N; ++k) qdd[j].deriv(k) = X_(j, k);
+      out[j] = S(qdd_[j]);
+      std::copy_n(X_.col(j).data(), N, out[j].derivs());
     }
     if (!id) return;
     v_.noalias() += H * qdd_;  // h + H qdd
     add_product(H, qdd);
     for (int j = 0; j < n_; ++j) {
       id[j] = S(v_[j]);
-      for (int k = 0; k < N; ++k) id[j].deriv(k) = T_(j, k);
+      std::copy_n(T_.col(j).data(), N, id[j].derivs());
     }
   }
 
@@ -132,34 +145,39 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
     d_.id_partials(q_.data(), qd_.data(), qdd, gravity, Pq_, Pqd_);
     tangents(q, qd, true);
   }
+  // Column i of T_ holds output i's N tangents (contiguous, as in DualN).
   void tangents(TConstVecRef q, TConstVecRef qd, bool with_qd) {
     T_.setZero();
-    for (int l = 0; l < n_; ++l) {
-      for (int i = 0; i < n_; ++i) {
-        const double a = Pq_(i, l), b = with_qd ? Pqd_(i, l) : 0.0;
-        for (int k = 0; k < N; ++k) T_(i, k) += a * q[l].deriv(k) + b * qd[l].deriv(k);
-      }
-    }
+    add_product(Pq_, q);
+    if (with_qd) add_product(Pqd_, qd);
   }
   // T_ += A x's tangents
   void add_product(const Eigen::MatrixXd& A, TConstVecRef x) {
+    const S* xp = x.data();
     for (int l = 0; l < n_; ++l) {
+      const double* dx = xp[l].derivs();
       for (int i = 0; i < n_; ++i) {
-        for (int k = 0; k < N; ++k) T_(i, k) += A(i, l) * x[l].deriv(k);
+        const double a = A(i, l);
+        if (a == 0.0) continue;
+        double* t = T_.col(i).data();
+        for (int k = 0; k < N; ++k) t[k] += a * dx[k];
       }
     }
   }
   void store(TVecRef out) {
+    S* o = out.data();
     for (int j = 0; j < n_; ++j) {
-      out[j] = S(v_[j]);
-      for (int k = 0; k < N; ++k) out[j].deriv(k) = T_(j, k);
+      o[j] = S(v_[j]);
+      std::copy_n(T_.col(j).data(), N, o[j].derivs());
     }
   }
 
   DynamicsDerivatives d_;
   int n_;
   Eigen::VectorXd q_, qd_, qdd_, v_, zero_;
-  Eigen::MatrixXd Pq_, Pqd_, T_, X_, Hc_;
+  Eigen::MatrixXd Pq_, Pqd_;
+  Eigen::Matrix<double, N, Eigen::Dynamic> T_, X_;  // column j: joint j's N tangents
+  Eigen::MatrixXd Hc_;
   Cholesky<double, Eigen::Dynamic> chol_;
 };
 

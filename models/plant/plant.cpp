@@ -105,6 +105,16 @@ Plant::Plant(PlantConfig config)
   jf_.resize(layout_.size);
   wt_ = std::make_unique<Workspace<Tangent>>(n);
   wt_->backend = std::make_unique<TangentBackend<kJacobianTangents>>(model_, find_backend(cfg_.backend).make(model_));
+  // h's tangents reach f only through the applied torque of a joint whose
+  // law reads it without stick/slip events (a law with events reads it only
+  // while the joint is stuck, where the constrained solve replaces it), or
+  // through the ledger's friction loss tf w_m (tf is the applied torque at a
+  // stuck joint).
+  bias_tangents_ = cfg_.energy_ledger;
+  for (int j = 0; j < n; ++j) {
+    bias_tangents_ = bias_tangents_ ||
+                     (needs_applied_torque(cfg_.friction[static_cast<std::size_t>(j)].model) && !friction_.has_events(j));
+  }
   tx_.resize(layout_.size);
   tf_.resize(layout_.size);
 }
@@ -163,7 +173,15 @@ void Plant::drive(const S* x, S* xdot, Workspace<S>& w) {
 template <class S>
 void Plant::friction_and_accelerations(Workspace<S>& w) {
   const bool need_bias = friction_on_ && friction_.needs_applied_torque();
-  if (need_bias) w.backend->bias(w.q, w.qd, w.h);
+  if constexpr (kIsDualN<S>) {  // the exact Jacobian's pass
+    if (need_bias && !bias_tangents_) {
+      static_cast<TangentBackend<S::kTangents>&>(*w.backend).bias_value(w.q, w.qd, w.h);
+    } else if (need_bias) {
+      w.backend->bias(w.q, w.qd, w.h);
+    }
+  } else if (need_bias) {
+    w.backend->bias(w.q, w.qd, w.h);
+  }
   for (int j = 0; j < layout_.n; ++j) {
     const double Z = body_.gear_ratio(j);
     const S wm = S(Z) * w.qd[j];

@@ -233,6 +233,7 @@ class Plant {
   using Tangent = DualN<kJacobianTangents>;
   std::unique_ptr<Workspace<Tangent>> wt_;
   std::vector<Tangent> tx_, tf_;     // jacobian_exact's x and f
+  bool bias_tangents_ = true;        // jacobian_exact needs h's tangents (see the constructor)
   bool friction_on_ = true;          // off only inside rhs_split
 };
 
