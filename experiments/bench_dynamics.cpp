@@ -7,6 +7,13 @@
 // of one call (Counted scalar) as user counters, and each forward-dynamics
 // benchmark those of H, c = C(q, qd) qd, g, the solve and inverse dynamics
 // (prefixes H_, c_, g_, solve_, id_), so that one JSON file holds all; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
+// `jacobian` rows: the forward dynamics' exact derivatives dqdd/d(q, qd, tau)
+// (DynamicsDerivatives: the back-end's h and H, the RNEA's partials on a
+// multi-tangent dual number), per back-end beside its `fd`. `plant_rhs` and
+// `plant_jacobian` rows: one right-hand side f(t, x) of a scene's plant and
+// its exact Jacobian df/dx (Plant::jacobian_exact), for the 6-joint hybrid
+// scene and the 3-joint paper scene, at the scene's initial state with the
+// joints moving.
 // The JSON's context names the build that ran (pumasim_flags: -march=native or
 // not, pumasim_build_type, pumasim_compiler, pumasim_git_revision), from the
 // build information fixed when the program was built (cmake/build_info.cmake).
@@ -18,6 +25,9 @@
 #include <vector>
 
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/dynamics_derivatives.hpp"
+#include "models/plant/plant.hpp"
+#include "models/scene/scene.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time
@@ -85,6 +95,49 @@ void run(benchmark::State& state, const pumasim::BackendInfo* info, const pumasi
   }
 }
 
+void run_jacobian(benchmark::State& state, const pumasim::BackendInfo* info, const pumasim::RobotModel* model) {
+  const int n = model->dof();
+  pumasim::DynamicsDerivatives d(*model, info->make(*model));
+  pumasim::Rng rng(42);  // the inputs of `fd` (run above)
+  const Eigen::VectorXd q = rng.uniform_vector(n, -1.5, 1.5);
+  const Eigen::VectorXd qd = rng.uniform_vector(n, -1.0, 1.0);
+  const Eigen::VectorXd tau = rng.uniform_vector(n, -10.0, 10.0);
+  Eigen::VectorXd qdd(n);
+  Eigen::MatrixXd Dq(n, n), Dqd(n, n), Dt(n, n);
+  for (auto _ : state) {
+    d.forward_dynamics(q, qd, tau, qdd, Dq, Dqd, Dt);
+    benchmark::DoNotOptimize(Dq.data());
+    benchmark::DoNotOptimize(Dqd.data());
+    benchmark::DoNotOptimize(Dt.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["n"] = n;
+}
+
+// One f(t, x) of the scene's plant, or its exact Jacobian.
+void run_plant(benchmark::State& state, const std::string& scene, bool jacobian) {
+  pumasim::Plant plant(pumasim::load_scene(std::string(PUMASIM_SCENES_DIR) + "/" + scene + ".toml").plant);
+  const int m = plant.size();
+  std::vector<double> x(m), f(m);
+  plant.initial_state(x.data());
+  const pumasim::StateLayout& L = plant.layout();
+  for (int j = 0; j < L.n; ++j) x[L.qd + j] = 0.1 * (j + 1);
+  plant.settle_modes(0.5, x.data());
+  Eigen::MatrixXd J(m, m);
+  for (auto _ : state) {
+    if (jacobian) {
+      plant.jacobian_exact(0.5, x.data(), J);
+    } else {
+      plant.rhs(0.5, x.data(), f.data());
+    }
+    benchmark::DoNotOptimize(J.data());
+    benchmark::DoNotOptimize(f.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["m"] = m;
+  state.counters["n"] = L.n;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -99,6 +152,14 @@ int main(int argc, char** argv) {
         benchmark::RegisterBenchmark(name.c_str(), run, &info, &r.model, what)
             ->Unit(benchmark::kNanosecond);
       }
+      const std::string name = "jacobian/" + r.label + "/" + info.name;
+      benchmark::RegisterBenchmark(name.c_str(), run_jacobian, &info, &r.model)->Unit(benchmark::kNanosecond);
+    }
+  }
+  for (const char* scene : {"paper_slow_6dof_hybrid", "paper_slow"}) {
+    for (const bool jac : {false, true}) {
+      const std::string name = std::string(jac ? "plant_jacobian/" : "plant_rhs/") + scene;
+      benchmark::RegisterBenchmark(name.c_str(), run_plant, std::string(scene), jac)->Unit(benchmark::kNanosecond);
     }
   }
   benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);

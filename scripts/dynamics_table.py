@@ -56,19 +56,26 @@ def load(path):
     with open(path) as f:
         doc = json.load(f)
     rows = defaultdict(dict)  # (quantity, robot) -> backend -> record
+    plant = defaultdict(dict)  # scene -> "plant_rhs" / "plant_jacobian" -> record
     for b in doc["benchmarks"]:
         if b.get("aggregate_name") != "median":
             continue
-        quantity, robot, backend = b["run_name"].split("/")
+        parts = b["run_name"].split("/")
         scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}[b["time_unit"]]
+        if len(parts) == 2:  # plant_rhs/<scene>, plant_jacobian/<scene>
+            plant[parts[1]][parts[0]] = {"ns": b["real_time"] * scale, "m": int(round(b["m"])),
+                                         "n": int(round(b["n"]))}
+            continue
+        quantity, robot, backend = parts
         rows[(quantity, robot)][backend] = {
             "ns": b["real_time"] * scale,
-            **{k: int(round(b[k])) for k in ("n", "mul", "add", "div", "sqrt", "trig")},
+            # operation counts: not on the `jacobian` rows
+            **{k: int(round(b.get(k, 0))) for k in ("n", "mul", "add", "div", "sqrt", "trig")},
             # forward dynamics only: the split (H_, c_, g_, solve_, id_ counters)
             **{k: int(round(v)) for k, v in b.items()
                if k.split("_")[0] in SPLIT and k.split("_")[-1] in OPS},
         }
-    return doc["context"], rows
+    return doc["context"], rows, plant
 
 
 def fmt_ns(x):
@@ -261,8 +268,57 @@ def cost_against_n(rows, robots, backends):
     return out
 
 
+def jacobian_section(rows, robots, backends):
+    """The forward dynamics' exact derivatives against the forward dynamics, per robot and back-end."""
+    out = []
+    w = out.append
+    if not any(q == "jacobian" for q, _ in rows):
+        return out
+    w("## Exact derivatives of the forward dynamics\n")
+    w("`jacobian` = dqdd/d(q, qd, tau) exactly (`DynamicsDerivatives`: the back-end's h and H in double, "
+      "the Cholesky factor of H, and dID/dq, dID/dqd from one RNEA on a 12-tangent dual number per 12 of "
+      "the 2n directions; Carpentier & Mansard 2018, RSS: dFD/dq = -H⁻¹ dID/dq, dFD/dqd = -H⁻¹ dID/dqd, "
+      "dFD/dtau = H⁻¹), beside the same back-end's `fd`, same state, same run. A forward difference "
+      "of the forward dynamics costs 3n + 1 `fd` calls.\n")
+    w("| robot | back-end | fd [ns] | jacobian [ns] | jacobian / fd | 3n + 1 |")
+    w("|---|---|---:|---:|---:|---:|")
+    for robot in robots:
+        fd, jac = rows.get(("fd", robot), {}), rows.get(("jacobian", robot), {})
+        for b in sorted(backends, key=lambda b: jac.get(b, {}).get("ns", float("inf"))):
+            if b not in fd or b not in jac:
+                continue
+            n = fd[b]["n"]
+            w(f"| {robot} | `{b}` | {fmt_ns(fd[b]['ns'])} | {fmt_ns(jac[b]['ns'])} | "
+              f"{jac[b]['ns'] / fd[b]['ns']:.2f} | {3 * n + 1} |")
+    w("")
+    return out
+
+
+def plant_section(plant):
+    """One right-hand side of a scene's plant against its exact Jacobian."""
+    out = []
+    w = out.append
+    if not plant:
+        return out
+    w("## The plant: one right-hand side and its exact Jacobian\n")
+    w("`plant_rhs` = one f(t, x) of the scene's plant (its back-end; the reference cached at t); "
+      "`plant_jacobian` = df/dx exactly (`Plant::jacobian_exact`: one pass of f on a 24-tangent dual "
+      "number per 24 states, the dynamics' tangents from `TangentBackend`). Forward differences, the "
+      "implicit methods' default, cost m + 1 right-hand sides (m states).\n")
+    w("| scene | joints | states m | rhs [ns] | jacobian [ns] | jacobian / rhs | m + 1 |")
+    w("|---|---:|---:|---:|---:|---:|---:|")
+    for scene, r in plant.items():
+        if "plant_rhs" not in r or "plant_jacobian" not in r:
+            continue
+        f, j = r["plant_rhs"], r["plant_jacobian"]
+        w(f"| `{scene}` | {f['n']} | {f['m']} | {fmt_ns(f['ns'])} | {fmt_ns(j['ns'])} | "
+          f"{j['ns'] / f['ns']:.2f} | {f['m'] + 1} |")
+    w("")
+    return out
+
+
 def main(src, dst):
-    ctx, rows = load(src)
+    ctx, rows, plant = load(src)
     backends = sorted({b for r in rows.values() for b in r})
     robots = []  # in the order of the JSON
     for (_, robot) in rows:
@@ -272,6 +328,8 @@ def main(src, dst):
     out += like_for_like(rows, robots)
     out += split_counts(rows, robots)
     out += reference_points()
+    out += jacobian_section(rows, robots, backends)
+    out += plant_section(plant)
     for robot in robots:
         out += robot_section(robot, rows, backends)
     # Cost against n on the random chains.

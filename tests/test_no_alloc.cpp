@@ -117,6 +117,24 @@ TEST(NoAllocation, PlantRightHandSide) {
   }
 }
 
+// The plant's exact Jacobian (multi-tangent pass, analytical dynamics
+// derivatives), which the implicit methods call per step with
+// --exact-jacobian, allocates nothing once J has its size.
+TEST(NoAllocation, PlantExactJacobian) {
+  for (const auto& entry : std::filesystem::directory_iterator(PUMASIM_SCENES_DIR)) {
+    if (entry.path().extension() != ".toml") continue;
+    const std::string name = entry.path().stem().string();
+    Plant plant(load_scene(entry.path().string()).plant);
+    std::vector<double> x(plant.size());
+    plant.initial_state(x.data());
+    Eigen::MatrixXd J;
+    plant.jacobian_exact(0.0, x.data(), J);
+    const long before = g_allocations.load();
+    for (int k = 1; k <= 3; ++k) plant.jacobian_exact(0.01 * k, x.data(), J);
+    EXPECT_EQ(g_allocations.load() - before, 0) << name;
+  }
+}
+
 // The numerical inverse kinematics (damped least squares in the reference,
 // evaluated inside f) allocates nothing either.
 TEST(NoAllocation, PlantRightHandSideWithNumericalInverseKinematics) {

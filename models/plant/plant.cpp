@@ -6,6 +6,7 @@
 
 #include "models/dynamics/chain.hpp"
 #include "models/plant/profile.hpp"
+#include "models/dynamics/tangent_backend.hpp"
 
 namespace pumasim {
 
@@ -116,6 +117,20 @@ Plant::Plant(PlantConfig config)
       cfg_.reference->interpolation() == Interpolation::kCartesian) {
     ref_table_ = std::make_unique<ReferenceTable>(*cfg_.reference);
   }
+  wt_ = std::make_unique<Workspace<Tangent>>(n);
+  wt_->backend = std::make_unique<TangentBackend<kJacobianTangents>>(model_, find_backend(cfg_.backend).make(model_));
+  // h's tangents reach f only through the applied torque of a joint whose
+  // law reads it without stick/slip events (a law with events reads it only
+  // while the joint is stuck, where the constrained solve replaces it), or
+  // through the ledger's friction loss tf w_m (tf is the applied torque at a
+  // stuck joint).
+  bias_tangents_ = cfg_.energy_ledger;
+  for (int j = 0; j < n; ++j) {
+    bias_tangents_ = bias_tangents_ ||
+                     (needs_applied_torque(cfg_.friction[static_cast<std::size_t>(j)].model) && !friction_.has_events(j));
+  }
+  tx_.resize(layout_.size);
+  tf_.resize(layout_.size);
 }
 
 Plant::~Plant() = default;
@@ -182,7 +197,15 @@ void Plant::friction_and_accelerations(Workspace<S>& w) {
   const bool need_bias = all && friction_.needs_applied_torque();
   if (need_bias) {
     PUMASIM_PROFILE_PART(kDynamics);
-    w.backend->bias(w.q, w.qd, w.h);
+    if constexpr (kIsDualN<S>) {  // the exact Jacobian's pass
+      if (!bias_tangents_) {
+        static_cast<TangentBackend<S::kTangents>&>(*w.backend).bias_value(w.q, w.qd, w.h);
+      } else {
+        w.backend->bias(w.q, w.qd, w.h);
+      }
+    } else {
+      w.backend->bias(w.q, w.qd, w.h);
+    }
   }
   PUMASIM_PROFILE_PART(kFriction);
   for (int j = 0; j < layout_.n; ++j) {
@@ -259,6 +282,20 @@ void Plant::linear_diagonal(double* lambda) const {
 
 void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
   PUMASIM_PROFILE_CONTEXT(kJacobian);
+  const int m = layout_.size;
+  J.resize(m, m);
+  constexpr int N = kJacobianTangents;
+  for (int first = 0; first < m; first += N) {  // states first..first+N-1 in one pass
+    for (int i = 0; i < m; ++i) tx_[i] = Tangent(x[i], i - first);
+    eval(t, tx_.data(), tf_.data(), *wt_);
+    const int last = std::min(m, first + N);
+    for (int k = first; k < last; ++k) {
+      for (int r = 0; r < m; ++r) J(r, k) = tf_[r].deriv(k - first);
+    }
+  }
+}
+
+void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = layout_.size;
   J.resize(m, m);
   std::vector<Dual>&xx = jx_, &ff = jf_;

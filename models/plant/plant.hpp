@@ -36,6 +36,7 @@
 #include <Eigen/Core>
 
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/dual_n.hpp"
 #include "models/plant/blocks/amplifier.hpp"
 #include "models/plant/blocks/energy_ledger.hpp"
 #include "models/plant/blocks/friction.hpp"
@@ -153,9 +154,17 @@ class Plant {
   // armature's -(R0 + R_j)/La_j on each current state, 0 elsewhere (and 0
   // everywhere without current states).
   void linear_diagonal(double* lambda) const;
-  // df/dx exactly (dual numbers through the same code); differences are
-  // OdeSystem::jacobian's (integrators/registry.cpp).
+  // df/dx exactly; differences are OdeSystem::jacobian's
+  // (integrators/registry.cpp). One pass of f per kJacobianTangents states on
+  // the multi-tangent dual number (DualN), the dynamics' tangents analytical
+  // (TangentBackend: the back-end's values in double, the RNEA's partials).
+  // Allocation-free after the first call.
+  static constexpr int kJacobianTangents = 24;
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
+  // The same, one single-tangent dual pass of f per state through the
+  // back-end's own algorithm on Dual: m passes, an independent computation
+  // (the tests compare the two).
+  void jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J);
   // df/dt at (t, x): f depends on t only through a continuously followed
   // reference, whose smooth piece since the last time event is continued for
   // the difference (so that it never straddles a breakpoint): a second-order
@@ -305,7 +314,7 @@ class Plant {
   bool last_valid_ = false;
   bool applied_current(double t, const double* x) const;
   std::vector<double> ft_[2];        // time_derivative scratch
-  std::vector<Dual> jx_, jf_;        // jacobian_exact's x and f
+  std::vector<Dual> jx_, jf_;        // jacobian_per_column's x and f
   std::vector<ModeChange> mode_log_;  // mode_changes()
   FrictionModes logged_;              // the modes the log last recorded
   std::vector<double> released_;     // per joint: the applied torque at its last release [N m]
@@ -320,6 +329,10 @@ class Plant {
   std::vector<double> cw_, cb_, cs_, ck_, cr_;  // its W (row-major), b, levels, r
   std::unique_ptr<bool[]> may_stick_;
   Eigen::VectorXd col_;              // a column of H^-1
+  using Tangent = DualN<kJacobianTangents>;
+  std::unique_ptr<Workspace<Tangent>> wt_;
+  std::vector<Tangent> tx_, tf_;     // jacobian_exact's x and f
+  bool bias_tangents_ = true;        // jacobian_exact needs h's tangents (see the constructor)
 };
 
 }  // namespace pumasim

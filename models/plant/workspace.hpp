@@ -25,12 +25,13 @@ struct PlantWorkspace {
   Vec tau;       // joint torque from the drive, friction subtracted [N m]
   Vec h;         // bias forces (Coriolis, centrifugal, gravity)
   Vec qdd;
+  Vec id;       // inverse dynamics at the constrained solution (the exact Jacobian's pass)
   Vec command_qdd, command_tau;  // a model-based controller's scratch
   Mat H, Hc;     // mass matrix; with stuck joints' rows and columns replaced by the identity
   Cholesky<S, Eigen::Dynamic> chol;
   S p_in, p_cu, p_f;  // energy ledger: power in, copper and friction losses [W]
   explicit PlantWorkspace(int n)
-      : q(n), qd(n), u(n), ea(n), tm(n), applied(n), tau(n), h(n), qdd(n), command_qdd(n), command_tau(n), H(n, n), Hc(n, n), chol(n) {}
+      : q(n), qd(n), u(n), ea(n), tm(n), applied(n), tau(n), h(n), qdd(n), id(n), command_qdd(n), command_tau(n), H(n, n), Hc(n, n), chol(n) {}
 };
 
 }  // namespace pumasim

@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "models/dynamics/tangent_backend.hpp"
 #include "models/plant/state_layout.hpp"
 #include "models/plant/workspace.hpp"
 
@@ -53,6 +54,14 @@ class RigidBodyBlock {
   template <class S, class Stuck>
   void constrained_accelerations(PlantWorkspace<S>& w, Stuck stuck) const {
     const int n = joints();
+    if constexpr (kIsDualN<S>) {  // the exact Jacobian's pass: values and tangents from the back-end's
+      auto& b = static_cast<TangentBackend<S::kTangents>&>(*w.backend);
+      b.constrained_forward_dynamics(w.q, w.qd, w.tau, stuck, w.qdd, w.id.data());
+      for (int j = 0; j < n; ++j) {
+        if (stuck(j)) w.applied[j] = w.tm[j] - w.id[j] / S(gear_ratio(j));
+      }
+      return;
+    }
     w.backend->mass_matrix(w.q, w.H);
     w.Hc = w.H;
     for (int j = 0; j < n; ++j) {
