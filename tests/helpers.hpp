@@ -62,6 +62,7 @@ void for_each_algorithm(const RobotModel& m, F&& f) {
   call.template operator()<RneaProbing>();
   call.template operator()<RneaProbingShared>();
   call.template operator()<Crba>();
+  call.template operator()<CrbaWorld>();
   call.template operator()<Aba>();
   call.template operator()<LagrangeEuler>();
   call.template operator()<LagrangeSymbolic>();

@@ -105,6 +105,17 @@ TEST(BackendAgreement, RandomChainsMixingPrismaticJoints) {
   }
 }
 
+// The large arms that crba-world is made for (issue 17: n = 24 and 48), and
+// the small ones it must also serve (n = 3 and 6 with the fixed-size code):
+// every back-end agrees with every other, revolute chains and chains with
+// prismatic joints, both conventions. (n = 1..12 are also in the tests above.)
+TEST(BackendAgreement, RandomChainsLargeAndSmall) {
+  for (int n : {3, 6, 24, 48}) {
+    expect_all_agree(random_chain(n, 900 + n), 29 * n, 2);
+    expect_all_agree(random_chain(n, 950 + n, DhConvention::kModified, "RRRP"), 31 * n, 2);
+  }
+}
+
 // A standard-DH chain rewritten in the modified convention (same joints, link
 // data moved from distal to proximal frames) has the same dynamics. The same
 // rewrite holds for a prismatic joint: its d_j = q_j + offset sits, like a

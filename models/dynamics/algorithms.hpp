@@ -8,6 +8,7 @@
 #include "models/dynamics/aba.hpp"
 #include "models/dynamics/chain.hpp"
 #include "models/dynamics/crba.hpp"
+#include "models/dynamics/crba_world.hpp"
 #include "models/dynamics/lagrange_euler.hpp"
 #include "models/dynamics/lagrange_symbolic.hpp"
 #include "models/dynamics/recursive_symbolic.hpp"

@@ -12,6 +12,7 @@ BackendInfo aba_entry();
 BackendInfo crba_entry();
 BackendInfo crba_symbolic_entry();
 BackendInfo crba_symbolic_puma560_entry();
+BackendInfo crba_world_entry();
 BackendInfo lagrange_euler_entry();
 BackendInfo lagrange_symbolic_entry();
 BackendInfo lagrange_symbolic_puma560_entry();
@@ -25,12 +26,13 @@ namespace {
 
 // Sorted by name (checked below). A new back-end is one file in
 // models/dynamics/backends/ and one line here.
-const std::array<BackendInfo, 11>& registry() {
-  static const std::array<BackendInfo, 11> table{{
+const std::array<BackendInfo, 12>& registry() {
+  static const std::array<BackendInfo, 12> table{{
       detail::aba_entry(),
       detail::crba_entry(),
       detail::crba_symbolic_entry(),
       detail::crba_symbolic_puma560_entry(),
+      detail::crba_world_entry(),
       detail::lagrange_euler_entry(),
       detail::lagrange_symbolic_entry(),
       detail::lagrange_symbolic_puma560_entry(),

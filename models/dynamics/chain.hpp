@@ -226,8 +226,15 @@ struct JointTransforms {
 
 // In-place Cholesky factorisation H = L L^T and solve, for small dense SPD
 // matrices; templated on the scalar so that its operations are counted too.
-// A matrix that is not positive definite yields NaN (sqrt of a negative
-// pivot), which the caller reports as a numerical failure; no branch, no throw.
+// Only H's lower triangle is read. A matrix that is not positive definite
+// yields NaN (sqrt of a negative pivot), which the caller reports as a
+// numerical failure; no branch, no throw.
+//
+// For a fixed size (n = 3, 6) the loops run row by row and unroll; for a
+// dynamic size (large chains) the same operations, in the same number, run
+// column by column (the gaxpy form of Golub & Van Loan, Matrix Computations,
+// sec. 4.2; section quoted from memory),
+// so that every inner loop reads contiguous memory and vectorises.
 template <class S, int N>
 class Cholesky {
  public:
@@ -235,6 +242,26 @@ class Cholesky {
 
   template <class M>
   void factor(const M& H) {
+    if constexpr (N == Eigen::Dynamic) {
+      factor_columns(H);
+    } else {
+      factor_rows(H);
+    }
+  }
+
+  // x <- H^{-1} x
+  template <class V>
+  void solve_in_place(V&& x) const {
+    if constexpr (N == Eigen::Dynamic) {
+      solve_columns(x);
+    } else {
+      solve_rows(x);
+    }
+  }
+
+ private:
+  template <class M>
+  void factor_rows(const M& H) {
     using std::sqrt;
     const int n = static_cast<int>(L_.rows());
     for (int j = 0; j < n; ++j) {
@@ -250,9 +277,8 @@ class Cholesky {
     }
   }
 
-  // x <- H^{-1} x
   template <class V>
-  void solve_in_place(V&& x) const {
+  void solve_rows(V& x) const {
     const int n = static_cast<int>(L_.rows());
     for (int i = 0; i < n; ++i) {
       S v = x[i];
@@ -262,6 +288,41 @@ class Cholesky {
     for (int i = n - 1; i >= 0; --i) {
       S v = x[i];
       for (int k = i + 1; k < n; ++k) v -= L_(k, i) * x[k];
+      x[i] = v * inv_diag_[i];
+    }
+  }
+
+  // Column j of L from column j of H less L(j:n, 0:j) L(j, 0:j)^T.
+  template <class M>
+  void factor_columns(const M& H) {
+    using std::sqrt;
+    const int n = static_cast<int>(L_.rows());
+    for (int j = 0; j < n; ++j) {
+      const int m = n - j;
+      auto col = L_.col(j).segment(j, m);
+      col = H.col(j).segment(j, m);
+      if (j > 0) col.noalias() -= L_.block(j, 0, m, j).lazyProduct(L_.row(j).head(j).transpose());
+      L_(j, j) = sqrt(L_(j, j));
+      inv_diag_[j] = S(1) / L_(j, j);
+      col.tail(m - 1) *= inv_diag_[j];
+    }
+  }
+
+  // L y = x by columns (each solved entry removed from the ones below), then
+  // L^T x = y by contiguous dot products.
+  template <class V>
+  void solve_columns(V& x) const {
+    const int n = static_cast<int>(L_.rows());
+    for (int i = 0; i < n; ++i) {
+      const S xi = x[i] * inv_diag_[i];
+      x[i] = xi;
+      const int m = n - i - 1;
+      if (m > 0) x.segment(i + 1, m) -= xi * L_.col(i).tail(m);
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      const int m = n - i - 1;
+      S v = x[i];
+      if (m > 0) v -= L_.col(i).tail(m).dot(x.segment(i + 1, m));
       x[i] = v * inv_diag_[i];
     }
   }
