@@ -63,7 +63,10 @@ from pumasim_io import ROOT, PUMASIM
 THEORY = {"euler": "1", "rk4": "4", "ab2": "2", "ab3": "3", "ab4": "4",
           "cvode-bdf": "1-5", "cvode-adams": "1-12", "arkode-erk": "4", "arkode-dirk": "4",
           "arkode-imex": "4", "odeint-dopri5": "5", "odeint-rodas4p": "4", "odeint-rosenbrock4": "4",
-          "etd-ab2": "2", "etd-ab3": "3", "etd-ab4": "4", "etd-rk4": "4"}
+          "etd-ab2": "2", "etd-ab3": "3", "etd-ab4": "4", "etd-rk4": "4",
+          # Moreau-Jean: linearly implicit theta-method, first order at theta = 1 and 3/4
+          # (error constant theta - 1/2; integrators/moreau_jean.cpp)
+          "moreau-jean": "1", "moreau-jean-075": "1"}
 REFERENCE = ("cvode-bdf", ["--rtol", "1e-12", "--atol", "1e-15"])
 CHECK = ("odeint-dopri5", ["--rtol", "1e-12", "--atol", "1e-15"])
 ASYMPTOTIC_FACTOR = 100  # a run's error must exceed this times reference vs check

@@ -13,7 +13,11 @@
 //                                   W_cd = scale_c Y[vel_c, d]
 //   p from the coupled stick/slip problem at velocity level (the system's
 //     solve_set_valued) with impulse levels h Fs, h Fk: each row's
-//     end-of-step speed v_c is 0 with |p_c| <= h Fs_c, or p_c = -sign(v_c) h Fk_c
+//     end-of-step speed v_c is 0 with |p_c| <= h Fs_c, or p_c = -sign(v_c) h Fk_c;
+//     the static level for a row at rest at the step's start (|v| <= kAtRest)
+//     only: a moving row sticks only where h Fk stops it (its speed reaches
+//     zero within the step), as in the exact model, where a slipping joint
+//     sticks at a speed reversal and not before
 //   x <- x + dx_free + Y p.
 // Without set-valued rows (the tanh, viscous or no friction) it is the
 // linearly implicit theta-method on the whole state. theta = 1 is the
@@ -33,6 +37,8 @@
 // methods. Dense output: linear between the step's ends (first order, as
 // the method). Costs per step: one f_smooth, one Jacobian (its differences'
 // right-hand sides counted too), one LU of A, 1 + k solves with it.
+#include <cmath>
+
 #include <Eigen/LU>
 
 #include "integrators/fixed_step.hpp"
@@ -40,6 +46,10 @@
 
 namespace pumasim::detail {
 namespace {
+
+// A row's speed at rest [the law's unit, rad/s on a motor shaft]: a stuck
+// row's speed after the impulse is 0 up to rounding (the update is linear).
+constexpr double kAtRest = 1e-9;
 
 class MoreauJean final : public FixedStep {
  public:
@@ -96,7 +106,12 @@ class MoreauJean final : public FixedStep {
       const SetValuedRow& rc = rows_[static_cast<std::size_t>(c)];
       b_[c] = rc.scale * (x_[static_cast<std::size_t>(rc.velocity)] + dx_[rc.velocity]);
       for (int d = 0; d < k_; ++d) W_[static_cast<std::size_t>(c * k_ + d)] = rc.scale * Y_(rc.velocity, d);
-      s_[c] = h * rc.static_level;
+      // The static level holds only a row at rest at the step's start; a
+      // moving row may stick only where Fk can stop it within the step (its
+      // speed would reach zero): with Fs there, a joint creeping under a
+      // torque between Fk and Fs would stick early, at any small speed.
+      const double v0 = rc.scale * x_[static_cast<std::size_t>(rc.velocity)];
+      s_[c] = h * (std::abs(v0) <= kAtRest ? rc.static_level : rc.kinetic_level);
       kin_[c] = h * rc.kinetic_level;
     }
     const SetValuedSolve r = sys_->solve_set_valued(k_, W_.data(), b_.data(), s_.data(), kin_.data(), p_.data());

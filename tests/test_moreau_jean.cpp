@@ -418,5 +418,58 @@ TEST(MoreauJean, FirstOrderOnASmoothScene) {
   }
 }
 
+
+// The impulse path at first order: planar2 falling with hybrid Coulomb
+// friction (Fs = 0.5, Fk = 0.3 N m motor side, B as the scene) that slips
+// from t = 0 and never reverses in 0.5 s, so the exact solution is smooth
+// (f with the constant -Fk sign(w) torques), and every moreau-jean step's
+// impulse is -h Fk sign(v). Reference: the hybrid model's event-driven run
+// at a tight tolerance, which must find no root (no reversal) for this to
+// hold. Order 1 is the theta = 1 method's (Euler on the velocities), at
+// either theta (3/4 too: its error constant theta - 1/2 is not 0).
+TEST(MoreauJean, FirstOrderThroughTheFrictionImpulses) {
+  PlantConfig pc = load_scene(test::scene_path("planar2_passive")).plant;
+  pc.energy_ledger = false;
+  for (FrictionParams& f : pc.friction) {
+    f.model = friction_model<HybridFriction>();
+    f.static_torque = 0.5, f.kinetic_torque = 0.3;
+  }
+  constexpr double kEnd = 0.5;
+  const auto final_state = [&](const char* method, IntegratorOptions o, RunResult* out = nullptr) {
+    Plant plant(pc);
+    auto integ = make_integrator(method, o);
+    std::vector<double> x;
+    const RunResult r = run_plant(plant, *integ, kEnd, kEnd, [&](double t, const double* xs) {
+      if (t == kEnd) x.assign(xs, xs + 2 * pc.n);
+    });
+    EXPECT_TRUE(r.ok) << r.failure;
+    if (out) *out = r;
+    EXPECT_EQ(integ->stats().friction_solves, std::string(method).starts_with("moreau") ? integ->stats().steps : 0);
+    return x;
+  };
+  IntegratorOptions tight;
+  tight.rtol = 1e-12, tight.atol = 1e-14;
+  RunResult ref_run;
+  const std::vector<double> ref = final_state("cvode-bdf", tight, &ref_run);
+  ASSERT_EQ(ref_run.root_events, 0) << "a joint reversed: the exact solution is not smooth";
+  ASSERT_EQ(ref.size(), 4u);
+  for (const char* method : {"moreau-jean", "moreau-jean-075"}) {
+    std::vector<double> errors;
+    for (double dt : {4e-3, 2e-3, 1e-3}) {
+      IntegratorOptions o;
+      o.dt = dt;
+      const std::vector<double> x = final_state(method, o);
+      double e = 0;
+      for (std::size_t i = 0; i < ref.size(); ++i) e = std::max(e, std::abs(x[i] - ref[i]));
+      errors.push_back(e);
+    }
+    for (int i = 0; i + 1 < 3; ++i) {
+      const double p = std::log2(errors[i] / errors[i + 1]);
+      EXPECT_GT(p, 0.9) << method << ": observed order " << p;
+      EXPECT_LT(p, 1.3) << method << ": observed order " << p;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pumasim

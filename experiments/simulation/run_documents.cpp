@@ -72,7 +72,8 @@ void statistics(Json& js, const SceneRun& run) {
   js["rejected_steps"] = st.rejected_steps;
   js["nonlinear_iterations"] = st.nonlinear_iterations;
   js["restarts"] = st.restarts;
-  // Time-stepping's set-valued friction solves (moreau-jean; 0 for the others).
+  // The coupled stick/slip solves: time-stepping's, one per step (moreau-jean),
+  // or the hybrid model's at its mode switches; 0 for the others.
   js["friction_solves"] = st.friction_solves;
   js["friction_iterations"] = st.friction_iterations;
   js["friction_unconverged"] = st.friction_unconverged;

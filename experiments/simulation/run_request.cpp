@@ -72,7 +72,8 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
       if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {
         throw std::invalid_argument(
             sc.integrator.name + ": the energy ledger does not count the friction impulses' loss (set-valued friction, "
-            "model " + std::string(to_string(f.model)) + "); expected energy_ledger = false, or a smooth law "
+            "model " + std::string(to_string(f.model)) +
+            "); expected scene.energy_ledger = false (--set scene.energy_ledger=false), or a smooth law "
             "(tanh, viscous, none)");
       }
     }

@@ -83,6 +83,13 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
     run.path_deviation = std::move(rows.path_deviation);
   }
   run.stats = integ->stats();
+  if (!time_stepping) {  // the hybrid model's mode solves (0 without events)
+    const Plant::StickStats& s = plant.stick_stats();
+    run.stats.friction_solves += s.solves;
+    run.stats.friction_iterations += s.iterations;
+    run.stats.friction_unconverged += s.unconverged;
+    run.stats.friction_worst_residual = std::max(run.stats.friction_worst_residual, s.worst_residual);
+  }
   run.state_names = plant.layout().names;
   for (int k = 0; k < plant.size(); ++k) run.tolerance_scales.push_back(plant.tolerance_scale(k));
   return run;

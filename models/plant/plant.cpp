@@ -483,6 +483,17 @@ void Plant::stick_operator(int k) {
 void Plant::solve_modes(double t, double* x, int breaking) {
   if (!friction_.has_events()) return;
   PUMASIM_PROFILE_CONTEXT(kEvents);
+  // A slipping joint whose speed is zero or past it (a fixed-step method
+  // stops at the first root of a step only: another joint's reversal in the
+  // same step is then already behind, and its root function would never
+  // cross zero again) is at a reversal too: stuck, then part of the solve.
+  for (int j = 0; j < layout_.n; ++j) {
+    const auto mode = ds_.modes[static_cast<std::size_t>(j)];
+    if (!friction_.has_events(j) || mode == SlipMode::kStuck) continue;
+    if (body_.gear_ratio(j) * x[layout_.qd + j] * static_cast<int>(mode) > 0) continue;
+    x[layout_.qd + j] = 0.0;
+    ds_.modes[static_cast<std::size_t>(j)] = SlipMode::kStuck;
+  }
   rhs(t, x, ftmp_.data());  // the held joints' applied torques, and H
   int k = 0;
   for (int j = 0; j < layout_.n; ++j) {
@@ -498,6 +509,10 @@ void Plant::solve_modes(double t, double* x, int breaking) {
   }
   const StickProblem p{k, cw_.data(), cb_.data(), cs_.data(), ck_.data(), may_stick_.get()};
   stick_result_ = stick_.solve(p, cr_.data(), cand_mode_.data());
+  ++stick_stats_.solves;
+  stick_stats_.iterations += stick_result_.iterations;
+  if (!(stick_result_.converged && stick_result_.consistent)) ++stick_stats_.unconverged;
+  stick_stats_.worst_residual = std::max(stick_stats_.worst_residual, stick_result_.residual);
   for (int a = 0; a < k; ++a) {
     const int m = cand_mode_[a];
     const auto j = static_cast<std::size_t>(cand_[a]);

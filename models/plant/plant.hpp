@@ -224,6 +224,15 @@ class Plant {
   bool has_mode_events() const { return friction_.has_events(); }
   // The last coupled stick solve's report (settle_modes, on_root).
   const StickResult& last_stick_solve() const { return stick_result_; }
+  // The hybrid model's coupled mode solves since the plant was made: how
+  // many, their PGS sweeps in all, how many missed PGS's stopping rule or
+  // its exact check (the enumeration then answered, when k <= 8), the worst
+  // relative residual.
+  struct StickStats {
+    long solves = 0, iterations = 0, unconverged = 0;
+    double worst_residual = 0.0;
+  };
+  const StickStats& stick_stats() const { return stick_stats_; }
 
   // Time-stepping with set-valued friction (moreau-jean, OdeSystem's
   // set-valued interface): f = f_smooth + sum_c B_c r_c over the joints whose
@@ -324,6 +333,7 @@ class Plant {
   // The coupled stick solve (hybrid model's modes; time-stepping through PlantSystem).
   StickSolver stick_;
   StickResult stick_result_;
+  StickStats stick_stats_;
   std::vector<int> sv_joint_;        // joints with set-valued friction
   std::vector<int> cand_, cand_mode_;  // the joints at rest in a mode solve, their modes
   std::vector<double> cw_, cb_, cs_, ck_, cr_;  // its W (row-major), b, levels, r
