@@ -34,6 +34,9 @@ import os
 MIN_DURATION = 1e-3   # [s], as kMinModeDuration in experiments/simulation/mode_log.hpp
 TORQUE_MARGIN = 0.01  # relative to Fs: a decision closer than this to the static level is marginal
 EVENTS = "events.csv"
+# The hybrid model's run classified by speed alone, as the laws without modes
+# and time-stepping are (experiments/simulation/scene_run.hpp): their yardstick.
+EVENTS_SPEED = "events_speed.csv"
 MODES = ("stick", "slip+", "slip-")
 
 
@@ -55,9 +58,10 @@ def parse_events(text, path=EVENTS):
     return out
 
 
-def read_events(run_dir):
-    """The run folder's events, or None when it has no events.csv (no joint with friction modes)."""
-    path = os.path.join(run_dir, EVENTS)
+def read_events(run_dir, name=EVENTS):
+    """The run folder's events (events.csv, or name), or None when it has no
+    such file (no joint with friction modes; events_speed.csv: not a hybrid-model run)."""
+    path = os.path.join(run_dir, name)
     if not os.path.exists(path):
         return None
     with open(path) as f:

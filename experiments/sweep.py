@@ -733,7 +733,12 @@ def _variant_rows(s, work, v, summaries, ref, c, a, modes):
         rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol]))
         if modes:
             events = mode_sequence.read_events(os.path.join(work, run[0])) if rows[-1]["ok"] else None
-            rows[-1].update(mode_sequence.columns(modes["events"], modes["marks"], events))
+            # The hybrid model's own events against the reference's own; a
+            # run classified by speed (the other laws, time-stepping) against
+            # the reference classified the same way.
+            own = summaries[run[0]].get("mode_log", "").startswith("hybrid")
+            key = "" if own or not modes["events_speed"] else "_speed"
+            rows[-1].update(mode_sequence.columns(modes["events" + key], modes["marks" + key], events))
     return rows
 
 
@@ -751,12 +756,20 @@ def _mode_reference(s, work):
         if ref is None:
             return None
         marks = mode_sequence.marginal(ref, mode_sequence.read_events(os.path.join(work, vdir, "check")) or [])
-        treatments = {v["label"]: mode_sequence.compare(
-            ref, mode_sequence.read_events(os.path.join(work, slug(v["label"]), "reference")) or [])
-            for v in s["variants"]}
+        speed = mode_sequence.read_events(os.path.join(work, vdir, "reference"), mode_sequence.EVENTS_SPEED)
+        marks_speed = mode_sequence.marginal(speed, mode_sequence.read_events(
+            os.path.join(work, vdir, "check"), mode_sequence.EVENTS_SPEED) or []) if speed else {}
+        treatments = {}
+        for v in s["variants"]:
+            vref = mode_sequence.read_events(os.path.join(work, slug(v["label"]), "reference")) or []
+            yardstick = ref if v["label"] == s["stuck_variant"] or not speed else speed
+            treatments[v["label"]] = mode_sequence.compare(yardstick, vref)
     except mode_sequence.EventsError as e:
         raise SweepError(f"merge: {e}")
     return {"variant": s["stuck_variant"], "events": ref, "marks": marks, "treatments": treatments,
+            "events_speed": speed, "marks_speed": marks_speed,
+            "marginal_speed": [{"joint": j, "t": t, "why": w} for (j, t), w in sorted(marks_speed.items())],
+            "reference_events_speed": len(speed or []),
             "min_duration_s": mode_sequence.MIN_DURATION, "torque_margin": mode_sequence.TORQUE_MARGIN,
             "marginal": [{"joint": j, "t": t, "why": w} for (j, t), w in sorted(marks.items())],
             "reference_events": len(ref)}
@@ -1000,7 +1013,7 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
     summary["skipped_variants"] = s.get("skipped_variants", [])
     if modes:
-        summary["modes"] = {k: v for k, v in modes.items() if k not in ("events", "marks")}
+        summary["modes"] = {k: v for k, v in modes.items() if k not in ("events", "marks", "events_speed", "marks_speed")}
         summary["modes"]["cheapest_match"] = mode_table.cheapest_matches(rows)
         md = mode_table.markdown(s, rows, summary["modes"])
         files[name + "_modes.md"] = lambda p: _write_csv(p, md)
@@ -1021,6 +1034,8 @@ def _mode_comments(s, modes):
     if not modes:
         return [f"variants left out: {', '.join(s['skipped_variants'])}"] if s.get("skipped_variants") else []
     lines = [f"mode columns: each run's friction modes (events.csv) against {modes['variant']}'s reference "
+             "(the hybrid model's runs against its own events; runs classified by speed -- the other laws, "
+             "time-stepping -- against the reference classified the same way, events_speed.csv) "
              f"({modes['reference_events']} events), modes held under {modes['min_duration_s']:g} s dropped "
              "(experiments/mode_sequence.py): sequence match, first divergence (time, joint; divergence_marginal: "
              "at a decision the reference's cross-check does not share or within "

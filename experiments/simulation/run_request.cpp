@@ -135,6 +135,7 @@ CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::option
                                                            {"meta.json", meta_json(started)},
                                                            {"scene.resolved.toml", resolved_toml(sc)}};
     if (!done.run.events_csv.empty()) files.emplace_back("events.csv", done.run.events_csv);
+    if (!done.run.events_speed_csv.empty()) files.emplace_back("events_speed.csv", done.run.events_speed_csv);
     write_run_folder(*out, files, force);
   }
   return done;

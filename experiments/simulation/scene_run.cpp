@@ -55,14 +55,18 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   run.modes_classified = modes && (!plant.has_mode_events() || time_stepping);
   run.speed_only = run.modes_classified && time_stepping;
   ModeClassifier classifier(plant, kStickSpeed, kMinModeDuration, time_stepping);
+  const bool speed_twin = modes && plant.has_mode_events() && !time_stepping;
+  ModeClassifier by_speed(plant, kStickSpeed, kMinModeDuration, true);  // costs no f
   const auto observe = [&](double t, const double* x) {
     if (t == 0.0 && run.modes_classified && classifier.changes().empty()) classifier.step(0.0, x);  // x(0)
+    if (t == 0.0 && speed_twin && by_speed.changes().empty()) by_speed.step(0.0, x);
     recorder.observe(t, x);
   };
   const Observer on_step = [&](double t, const double* x) {
     const auto start = std::chrono::steady_clock::now();
     classifier.count(t, x);
     if (run.modes_classified) classifier.step(t, x);
+    if (speed_twin) by_speed.step(t, x);
     run.mode_log_wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   run.result = run_plant(plant, *integ, sc.duration, sc.output_interval, observe, rc.max_steps, rc.stops,
@@ -70,6 +74,7 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   if (modes) {
     const auto& changes = run.modes_classified ? classifier.changes() : plant.mode_changes();
     run.events_csv = events_csv(plant, changes);
+    if (speed_twin) run.events_speed_csv = events_csv(plant, by_speed.changes());
     run.mode_changes = static_cast<long>(changes.size());
     run.speed_sign_changes = classifier.speed_sign_changes();
     run.shortest_step = classifier.shortest_step();

@@ -46,6 +46,11 @@ struct SceneRun {
   long mode_changes = 0;          // its rows
   bool modes_classified = false;  // from the accepted steps (else: the hybrid model's events)
   bool speed_only = false;        // classified by speed alone (time-stepping: moreau-jean)
+  // The hybrid model's run classified as the laws without modes and
+  // time-stepping are, by speed alone (|w_m| <= kStickSpeed, modes lasting
+  // kMinModeDuration): their like-for-like yardstick (events_speed.csv); ""
+  // for other runs.
+  std::string events_speed_csv;
   double mode_log_wall_time = 0;  // [s] spent classifying the steps (part of result.wall_time)
   long speed_sign_changes = 0;    // over the accepted steps, summed over the joints (with modes only)
   double shortest_step = 0;       // [s], the shortest accepted step (with modes only)
