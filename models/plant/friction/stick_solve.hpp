@@ -15,13 +15,18 @@
 // A joint with may_stick = false (one whose friction was just found at its
 // static level, a break-away) only slips.
 //
-// The solution is unique when s = k (then r minimises 1/2 r'Wr + b'r over the
-// box |r_j| <= k_j); with s > k a joint whose holding torque lies between
-// k_j and s_j may stick or slip. The choice here: stick whenever sticking is
-// consistent ("static friction holds while it can"), which is what the
-// projected Gauss-Seidel sweep below does joint by joint, and what the
-// enumeration's fallback takes (the consistent assignment with the most stuck
-// joints, the first in the enumeration's order among equals).
+// The solution is unique when s = k and W is symmetric positive definite
+// (then r minimises 1/2 r'Wr + b'r over the box |r_j| <= k_j; a time step's W
+// = Z S A^-1 B is only nearly symmetric); with s > k a joint whose holding
+// torque lies between k_j and s_j may stick or slip. The choice here is a
+// local one: the projected Gauss-Seidel sweep below sticks a joint whenever
+// sticking is consistent given the others' current r, joint by joint in index
+// order, so among several solutions its answer can depend on the joints'
+// order and need not have the most stuck joints (a referee's check of random
+// problems found a few such cases); the enumeration's fallback takes the
+// consistent assignment with the most stuck joints (the first in the
+// enumeration's order among equals). The tests check only that the answer is
+// one of the enumerated solutions.
 //
 // Method (solve): projected Gauss-Seidel. Per joint in turn, with the others'
 // r fixed: v'_j = b_j + sum_{i != j} W_ji r_i, the holding value
