@@ -60,8 +60,10 @@ std::vector<std::vector<int>> consistent_modes(const Problem& p) {
       rhs[a] = -(b[stuck[a]] + W.row(stuck[a]).dot(r));
       for (int c = 0; c < ns; ++c) Wss(a, c) = W(stuck[a], stuck[c]);
     }
-    const Eigen::VectorXd rs = Wss.fullPivLu().solve(rhs);
-    for (int a = 0; a < ns; ++a) r[stuck[a]] = rs[a];
+    if (ns > 0) {  // (Eigen asserts on the LU of an empty matrix)
+      const Eigen::VectorXd rs = Wss.fullPivLu().solve(rhs);
+      for (int a = 0; a < ns; ++a) r[stuck[a]] = rs[a];
+    }
     const Eigen::VectorXd v = b + W * r;
     bool ok = true;
     for (int j = 0; j < p.k; ++j) {
