@@ -8,8 +8,8 @@
 // benchmark those of H, c = C(q, qd) qd, g, the solve and inverse dynamics
 // (prefixes H_, c_, g_, solve_, id_), so that one JSON file holds all; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
 // `jacobian` rows: the forward dynamics' exact derivatives dqdd/d(q, qd, tau)
-// (DynamicsDerivatives: the back-end's h and H, the RNEA's partials on a
-// multi-tangent dual number), per back-end beside its `fd`. `plant_rhs` and
+// (DynamicsDerivatives: the back-end's h and H, the analytical partials of
+// inverse dynamics, rnea_derivatives.hpp), per back-end beside its `fd`. `plant_rhs` and
 // `plant_jacobian` rows: one right-hand side f(t, x) of a scene's plant and
 // its exact Jacobian df/dx (Plant::jacobian_exact), for the 6-joint hybrid
 // scene and the 3-joint paper scene, at the scene's initial state with the

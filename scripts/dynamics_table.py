@@ -302,8 +302,8 @@ def jacobian_section(rows, robots, backends):
         return out
     w("## Exact derivatives of the forward dynamics\n")
     w("`jacobian` = dqdd/d(q, qd, tau) exactly (`DynamicsDerivatives`: the back-end's h and H in double, "
-      "the Cholesky factor of H, and dID/dq, dID/dqd from one RNEA on a 12-tangent dual number per 12 of "
-      "the 2n directions; Carpentier & Mansard 2018, RSS: dFD/dq = -H⁻¹ dID/dq, dFD/dqd = -H⁻¹ dID/dqd, "
+      "the Cholesky factor of H, and dID/dq, dID/dqd from analytical world-frame recursions in double "
+      "(`models/dynamics/rnea_derivatives.hpp`, after Carpentier & Mansard 2018, RSS): dFD/dq = -H⁻¹ dID/dq, dFD/dqd = -H⁻¹ dID/dqd, "
       "dFD/dtau = H⁻¹), beside the same back-end's `fd`, same state, same run. A forward difference "
       "of the forward dynamics costs 3n + 1 `fd` calls.\n")
     w("| robot | back-end | fd [ns] | jacobian [ns] | jacobian / fd | 3n + 1 |")

@@ -259,6 +259,46 @@ class Cholesky {
     }
   }
 
+  // X <- H^{-1} X for a matrix X (each column a right-hand side), and
+  // X <- X H^{-1} (each row one), for the derivatives' many right-hand sides:
+  // the same substitutions as solve_in_place, a whole row (or column) of X at
+  // a time (on large matrices, Eigen's blocked triangular solves).
+  template <class M>
+  void solve_columns_in_place(M&& X) const {
+    const int n = static_cast<int>(L_.rows());
+    if constexpr (std::is_same_v<S, double>) {
+      // Eigen's blocked solves win on large matrices, lose on small ones
+      // (overhead); their work buffers are on the stack up to
+      // EIGEN_STACK_ALLOCATION_LIMIT (128 KB): no heap below about n = 128.
+      if (n > 12) {
+        const auto L = L_.template triangularView<Eigen::Lower>();
+        L.solveInPlace(X);
+        L.transpose().solveInPlace(X);
+        return;
+      }
+    }
+    for (int j = 0; j < n; ++j) {  // L Y = X
+      X.row(j) *= inv_diag_[j];
+      for (int i = j + 1; i < n; ++i) X.row(i) -= L_(i, j) * X.row(j);
+    }
+    for (int i = n - 1; i >= 0; --i) {  // L^T Z = Y
+      for (int k = i + 1; k < n; ++k) X.row(i) -= L_(k, i) * X.row(k);
+      X.row(i) *= inv_diag_[i];
+    }
+  }
+  template <class M>
+  void solve_rows_in_place(M&& X) const {
+    const int n = static_cast<int>(L_.rows());
+    for (int j = 0; j < n; ++j) {  // Z L^T = X
+      for (int k = 0; k < j; ++k) X.col(j) -= L_(j, k) * X.col(k);
+      X.col(j) *= inv_diag_[j];
+    }
+    for (int j = n - 1; j >= 0; --j) {  // Y L = Z
+      for (int k = j + 1; k < n; ++k) X.col(j) -= L_(k, j) * X.col(k);
+      X.col(j) *= inv_diag_[j];
+    }
+  }
+
  private:
   template <class M>
   void factor_rows(const M& H) {

@@ -21,6 +21,44 @@
 
 namespace pumasim {
 
+// Link j's inertia about the base origin in base axes (first moment h,
+// rotational inertia I; its mass is c.mass[j]), from its joint frame's
+// rotation Rw and origin o in the base. Body points r' = Rw r + o (the
+// parallel-axis move of crba.hpp's composites): I = Rw Io Rw^T - (k o^T + o k^T)
+// + 2 (o.k) 1 with k = Rw h_j + m o / 2; symmetric, so only its upper
+// triangle is formed.
+template <class S, int N>
+void world_inertia(const Chain<S, N>& c, int j, const Mat3<S>& Rw, const Vec3<S>& o, Vec3<S>& h, Mat3<S>& I) {
+  const Vec3<S> hr = Rw * c.h[j];
+  const Vec3<S> mo = c.mass[j] * o;
+  const Vec3<S> k = hr + S(0.5) * mo;
+  const Mat3<S> A = Rw * c.Io[j];
+  const S diag = S(2) * o.dot(k);
+  for (int b = 0; b < 3; ++b) {
+    for (int a = 0; a <= b; ++a) {
+      I(a, b) = A.row(a).dot(Rw.row(b)) - (k[a] * o[b] + o[a] * k[b]);
+      I(b, a) = I(a, b);
+    }
+  }
+  I(0, 0) += diag;
+  I(1, 1) += diag;
+  I(2, 2) += diag;
+  h = hr + mo;
+}
+
+// Frame j in the base (rotation Rw, origin o), from frame j-1's and the joint
+// transforms already computed from q (for j = 0, Rw and o are ignored).
+template <bool kMixed, class S, int N>
+void world_frame(const Chain<S, N>& c, const JointTransforms<S, N>& rot, int j, Mat3<S>& Rw, Vec3<S>& o) {
+  if (j == 0) {
+    Rw = rot.R[0];
+    o = rot.template origin<kMixed>(c, 0);
+    return;
+  }
+  o += Rw * rot.template origin<kMixed>(c, j);
+  Rw = (Rw * rot.R[j]).eval();
+}
+
 template <class S, int N>
 class WorldCompositeInertia {
   using Rows6 = Eigen::Matrix<S, N, 6>;  // one spatial vector [angular; linear] per row
@@ -67,13 +105,10 @@ class WorldCompositeInertia {
   // motion subspace, and its link's inertia about the base origin.
   template <bool kMixed>
   void bodies(const Chain<S, N>& c, const JointTransforms<S, N>& rot) {
-    Mat3<S> Rw = rot.R[0];
-    Vec3<S> o = rot.template origin<kMixed>(c, 0);
+    Mat3<S> Rw;
+    Vec3<S> o;
     for (int j = 0; j < c.n; ++j) {
-      if (j > 0) {
-        o += Rw * rot.template origin<kMixed>(c, j);
-        Rw = (Rw * rot.R[j]).eval();
-      }
+      world_frame<kMixed>(c, rot, j, Rw, o);
       const Vec3<S> z = Rw.col(2);
       if (slides<kMixed>(c, j)) {
         St_.row(j).template head<3>().setZero();
@@ -82,28 +117,8 @@ class WorldCompositeInertia {
         St_.row(j).template head<3>() = z.transpose();
         St_.row(j).template tail<3>() = o.cross(z).transpose();
       }
-      // Body points r' = Rw r + o (the parallel-axis move of crba.hpp's
-      // composites): I = Rw Io Rw^T - (k o^T + o k^T) + 2 (o.k) 1 with
-      // k = Rw h + m o / 2; symmetric, so only its upper triangle is formed.
-      const S mj = c.mass[j];
-      const Vec3<S> hr = Rw * c.h[j];
-      const Vec3<S> mo = mj * o;
-      const Vec3<S> k = hr + S(0.5) * mo;
-      const Mat3<S> A = Rw * c.Io[j];
-      const S diag = S(2) * o.dot(k);
-      Mat3<S> I;
-      for (int b = 0; b < 3; ++b) {
-        for (int a = 0; a <= b; ++a) {
-          I(a, b) = A.row(a).dot(Rw.row(b)) - (k[a] * o[b] + o[a] * k[b]);
-          I(b, a) = I(a, b);
-        }
-      }
-      I(0, 0) += diag;
-      I(1, 1) += diag;
-      I(2, 2) += diag;
-      m_[j] = mj;
-      h_[j] = hr + mo;
-      I_[j] = I;
+      m_[j] = c.mass[j];
+      world_inertia(c, j, Rw, o, h_[j], I_[j]);
     }
   }
 

@@ -48,7 +48,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
     for (int j = 0; j < n_; ++j) qdd_[j] = qdd[j].value();
     d_.values().inverse_dynamics(q_, qd_, qdd_, v_);
     chain(q, qd, qdd_.data(), true);
-    d_.factor_mass_matrix(q_);
+    d_.compute_mass_matrix(q_);
     add_product(d_.mass_matrix(), qdd);  // + H dqdd
     store(tau);
   }
@@ -76,7 +76,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
   // RNEA pass each (this entry serves completeness, not a hot path).
   void mass_matrix(TConstVecRef q, TMatRef H) override {
     load(q, q);
-    d_.factor_mass_matrix(q_);
+    d_.compute_mass_matrix(q_);
     for (int j = 0; j < n_; ++j) {
       v_ = zero_;
       v_[j] = 1.0;
@@ -102,7 +102,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
                                     S* id) {
     load(q, qd);
     d_.values().bias(q_, qd_, v_);
-    d_.factor_mass_matrix(q_);
+    d_.compute_mass_matrix(q_);
     const Eigen::MatrixXd& H = d_.mass_matrix();
     Hc_ = H;
     for (int j = 0; j < n_; ++j) {
@@ -121,7 +121,7 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
       const bool held = stuck(j);
       for (int k = 0; k < N; ++k) x[k] = held ? 0.0 : dt[k] - t[k];
     }
-    for (int k = 0; k < N; ++k) chol_.solve_in_place(X_.row(k));
+    chol_.solve_rows_in_place(X_);
     S* out = qdd.data();
     for (int j = 0; j < n_; ++j) {
       out[j] = S(qdd_[j]);

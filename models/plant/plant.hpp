@@ -157,7 +157,8 @@ class Plant {
   // df/dx exactly; differences are OdeSystem::jacobian's
   // (integrators/registry.cpp). One pass of f per kJacobianTangents states on
   // the multi-tangent dual number (DualN), the dynamics' tangents analytical
-  // (TangentBackend: the back-end's values in double, the RNEA's partials).
+  // (TangentBackend: the back-end's values in double, the analytical partials
+  // of inverse dynamics, rnea_derivatives.hpp).
   // Allocation-free after the first call.
   static constexpr int kJacobianTangents = 24;
   void jacobian_exact(double t, const double* x, Eigen::MatrixXd& J);
