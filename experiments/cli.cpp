@@ -287,9 +287,9 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
 
 struct RunArgs {
   SceneArgs scene;
-  std::optional<std::string> integrator, backend, out;
+  std::optional<std::string> integrator, backend, out, jacobian;
   std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
-  bool force = false, exact_jacobian = false, late_events = false, stop_at_outputs = false, quiet = false;
+  bool force = false, late_events = false, stop_at_outputs = false, quiet = false;
   bool keep_history = false;
   std::vector<std::string> argv;  // the program and its arguments, for meta.json
 };
@@ -306,7 +306,7 @@ RunControls run_controls(Scene& sc, const RunArgs& a) {
   r.t_end = a.t_end;
   r.max_steps = a.max_steps;
   r.max_wall = a.max_wall;
-  r.exact_jacobian = a.exact_jacobian;
+  r.jacobian = a.jacobian;
   r.late_events = a.late_events;
   r.keep_history = a.keep_history;
   r.stop_at_outputs = a.stop_at_outputs;
@@ -380,7 +380,14 @@ void add_run(CLI::App* app, RunArgs& a) {
   add_number(app, "--t-end", a.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
   add_text(app, "--out", a.out, "the run folder (default runs/<scene name>/)", "DIR");
   app->add_flag("--force", a.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");
-  app->add_flag("--exact-jacobian", a.exact_jacobian, "implicit methods: the plant's exact Jacobian");
+  app->add_option("--jacobian", a.jacobian,
+                  "cvode-*, arkode-dirk: the plant's exact Jacobian (default) or the integrator's difference "
+                  "quotients")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            return s == "exact" || s == "differences" ? "" : "expected exact or differences, got '" + s + "'";
+          },
+          "exact|differences", "jacobian"));
   add_number(app, "--max-steps", a.max_steps, kStepBudget, "steps in all before the run ends as a failure "
              "(default 10000000)", "N");
   add_number(app, "--max-wall", a.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "

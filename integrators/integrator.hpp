@@ -95,7 +95,11 @@ struct IntegratorOptions {
   double dt = 5e-4;             // fixed-step methods [s]
   double rtol = 1e-6;           // adaptive methods
   double atol = 1e-8;           // times the system's tolerance_scale(i) per component
-  bool exact_jacobian = false;  // implicit methods: the system's exact Jacobian, not differences
+  // Methods that take either Jacobian (capabilities().jacobian_choice: cvode-*,
+  // arkode-dirk): the system's exact one where it has one
+  // (OdeSystem::has_exact_jacobian), else the integrator's difference
+  // quotients; false: the difference quotients always.
+  bool exact_jacobian = true;
   long max_steps = 50'000'000;  // per advance_to; beyond it, a reported failure
   // Fixed-step methods: a reset at the time already reached (after an event)
   // keeps the multistep history instead of restarting it, as a simulation loop
@@ -131,11 +135,24 @@ struct IntegratorCapabilities {
   int order = 0;
   bool implicit = false;
   bool uses_jacobian = false;
+  // Uses the system's Jacobian (OdeSystem::jacobian: its exact one where it
+  // has one); else (arkode-imex, of its implicit part) its own differences.
+  bool exact_jacobian = false;
+  // And, with IntegratorOptions::exact_jacobian false, its own difference
+  // quotients instead (cvode-*, arkode-dirk).
+  bool jacobian_choice = false;
   bool finds_roots = false;  // locates roots; fixed-step methods check signs per step
   // Treats a system's set-valued friction itself (OdeSystem::set_valued_rows:
   // moreau-jean), not through the system's root functions and modes.
   bool set_valued_friction = false;
 };
+
+// Which Jacobian a method with these capabilities and options uses on a
+// system that has its exact one: "exact", "differences" or "none".
+inline const char* jacobian_used(const IntegratorCapabilities& c, const IntegratorOptions& o) {
+  if (!c.uses_jacobian) return "none";
+  return c.exact_jacobian && (o.exact_jacobian || !c.jacobian_choice) ? "exact" : "differences";
+}
 
 struct Outcome {
   enum Status { kReached, kRoot, kFailed } status = kReached;

@@ -60,6 +60,7 @@ class MoreauJean final : public FixedStep {
     IntegratorCapabilities c = FixedStep::capabilities();
     c.implicit = true;
     c.uses_jacobian = true;
+    c.exact_jacobian = true;
     c.set_valued_friction = true;
     return c;
   }

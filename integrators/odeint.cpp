@@ -316,6 +316,7 @@ class Rosenbrock4 final : public OdeintBase {
     c.order = 4;
     c.implicit = true;
     c.uses_jacobian = true;
+    c.exact_jacobian = true;
     return c;
   }
   const double* state() const override { return x_.data(); }

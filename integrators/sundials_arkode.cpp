@@ -59,12 +59,12 @@
 #include <arkode/arkode_arkstep.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/integrator.hpp"
 #include "integrators/registry_entries.hpp"
 #include "integrators/sundials_common.hpp"
+#include "integrators/sundials_dense_lu.hpp"
 
 #if SUNDIALS_VERSION_MAJOR != 6
 #error "pumasim's ARKODE adapter is written for the SUNDIALS 6.x API"
@@ -80,10 +80,6 @@ class Arkode final : public Integrator {
  public:
   Arkode(const IntegratorOptions& o, Kind kind) : Integrator(o.max_steps), opt_(o), kind_(kind) {
     if (!(o.rtol > 0) || !(o.atol > 0)) throw std::invalid_argument("arkode: expected rtol > 0 and atol > 0");
-    if (o.exact_jacobian && kind != Kind::kDirk) {
-      throw std::invalid_argument(std::string(name()) + ": the exact Jacobian (of the whole f) serves "
-                                  "arkode-dirk only");
-    }
     if (SUNContext_Create(nullptr, &ctx_) != 0) throw std::runtime_error("arkode: SUNContext_Create failed");
   }
   ~Arkode() override { release(); SUNContext_Free(&ctx_); }
@@ -97,6 +93,8 @@ class Arkode final : public Integrator {
     c.order = 4;
     c.implicit = kind_ != Kind::kErk;
     c.uses_jacobian = kind_ != Kind::kErk;
+    // The exact Jacobian is of the whole f: DIRK's; IMEX's implicit part has its differences.
+    c.exact_jacobian = c.jacobian_choice = kind_ == Kind::kDirk;
     c.finds_roots = true;
     return c;
   }
@@ -124,8 +122,8 @@ class Arkode final : public Integrator {
             "ARKStepSVtolerances");
       check(ARKStepSetMaxNumSteps(mem_, opt_.max_steps), "ARKStepSetMaxNumSteps");
       if (kind_ != Kind::kErk) {
-        A_ = SUNDenseMatrix(n, n, ctx_);
-        LS_ = SUNLinSol_Dense(y_, A_, ctx_);
+        A_ = detail::make_dense_matrix(ctx_, n);
+        LS_ = detail::make_dense_lu(ctx_, n);
         check(ARKStepSetLinearSolver(mem_, LS_, A_), "ARKStepSetLinearSolver");
         // See the note at the top: stage derivatives from the Newton solution
         // itself, not f_i at an inexact stage value (user guide, "Nonlinear
@@ -141,10 +139,7 @@ class Arkode final : public Integrator {
         if (kind_ == Kind::kDirk) {  // see the note at the top
           check(ARKStepSetTableNum(mem_, ARKODE_ARK436L2SA_DIRK_6_3_4, ARKODE_ERK_NONE), "ARKStepSetTableNum");
         }
-        if (opt_.exact_jacobian) {
-          if (!sys.has_exact_jacobian()) {
-            throw std::invalid_argument(std::string(name()) + ": exact Jacobian requested, but the system has none");
-          }
+        if (kind_ == Kind::kDirk && opt_.exact_jacobian && sys.has_exact_jacobian()) {
           check(ARKStepSetJacFn(mem_, &Arkode::jac), "ARKStepSetJacFn");
           J_.resize(n, n);
         }

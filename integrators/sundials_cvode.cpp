@@ -18,12 +18,12 @@
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/integrator.hpp"
 #include "integrators/registry_entries.hpp"
 #include "integrators/sundials_common.hpp"
+#include "integrators/sundials_dense_lu.hpp"
 
 #if SUNDIALS_VERSION_MAJOR != 6
 #error "pumasim's CVODE adapter is written for the SUNDIALS 6.x API"
@@ -47,6 +47,8 @@ class Cvode final : public Integrator {
     c.order = method_ == CV_BDF ? 5 : 12;
     c.implicit = true;
     c.uses_jacobian = true;
+    c.exact_jacobian = true;
+    c.jacobian_choice = true;
     c.finds_roots = true;
     return c;
   }
@@ -73,14 +75,10 @@ class Cvode final : public Integrator {
                                             [&](N_Vector a) { return CVodeSVtolerances(mem_, opt_.rtol, a); }),
             "CVodeSVtolerances");
       check(CVodeSetMaxNumSteps(mem_, opt_.max_steps), "CVodeSetMaxNumSteps");
-      A_ = SUNDenseMatrix(n, n, ctx_);
-      LS_ = SUNLinSol_Dense(y_, A_, ctx_);
+      A_ = detail::make_dense_matrix(ctx_, n);
+      LS_ = detail::make_dense_lu(ctx_, n);
       check(CVodeSetLinearSolver(mem_, LS_, A_), "CVodeSetLinearSolver");
-      if (opt_.exact_jacobian) {
-        if (!sys.has_exact_jacobian()) {
-          throw std::invalid_argument(std::string(name()) + ": exact Jacobian requested, but the "
-                                      "system has none");
-        }
+      if (opt_.exact_jacobian && sys.has_exact_jacobian()) {
         check(CVodeSetJacFn(mem_, &Cvode::jac), "CVodeSetJacFn");
         J_.resize(n, n);
       }

@@ -382,7 +382,8 @@ void bind_run(py::module_& m) {
       "run",
       [](const py::object& scene, const std::optional<std::string>& integrator, std::optional<double> rtol,
          std::optional<double> atol, std::optional<double> dt, std::optional<double> t_end, const py::object& out,
-         bool force, const std::optional<std::string>& backend, bool exact_jacobian, std::optional<double> max_steps,
+         bool force, const std::optional<std::string>& backend, const std::optional<std::string>& jacobian,
+         std::optional<double> max_steps,
          std::optional<double> max_wall, bool late_events, bool stop_at_outputs) {
         RunRequest r;
         r.integrator = integrator;
@@ -393,7 +394,7 @@ void bind_run(py::module_& m) {
         r.t_end = t_end;
         r.max_steps = max_steps;
         r.max_wall = max_wall;
-        r.exact_jacobian = exact_jacobian;
+        r.jacobian = jacobian;
         r.late_events = late_events;
         r.stop_at_outputs = stop_at_outputs;
         return run(scene, r, out, force);
@@ -401,7 +402,7 @@ void bind_run(py::module_& m) {
       py::arg("scene"), py::kw_only(), py::arg("integrator") = py::none(), py::arg("rtol") = py::none(),
       py::arg("atol") = py::none(), py::arg("dt") = py::none(), py::arg("t_end") = py::none(),
       py::arg("out") = py::none(), py::arg("force") = false, py::arg("backend") = py::none(),
-      py::arg("exact_jacobian") = false, py::arg("max_steps") = py::none(), py::arg("max_wall") = py::none(),
+      py::arg("jacobian") = py::none(), py::arg("max_steps") = py::none(), py::arg("max_wall") = py::none(),
       py::arg("late_events") = false, py::arg("stop_at_outputs") = false,
       "`pumasim run` on a Scene (or a scene file's path): the same options (None: the scene's value or\n"
       "the command line's default), the same checks and messages, the same stats. Writes the run folder\n"

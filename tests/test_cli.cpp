@@ -141,7 +141,7 @@ TEST(CliParsing, ACommandsHelpListsItsOptions) {
     const Result r = cli(args);
     EXPECT_EQ(r.status, kExitOk) << r.err;
     for (const char* o : {"--integrator", "--backend", "--rtol", "--atol", "--dt", "--t-end", "--out", "--force",
-                          "--exact-jacobian", "--max-steps", "--max-wall", "--late-events", "--stop-at-outputs",
+                          "--jacobian", "--max-steps", "--max-wall", "--late-events", "--stop-at-outputs",
                           "--set"}) {
       EXPECT_NE(r.out.find(o), std::string::npos) << o << " in:\n" << r.out;
     }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <limits>
 #include <string>
 
@@ -329,6 +330,56 @@ class TwoScales final : public OdeSystem {
   bool scaled_;
 };
 
+// Which Jacobian each method uses: the system's exact one by default for every
+// method that says it takes it (IntegratorCapabilities::exact_jacobian), its
+// own differences with IntegratorOptions::exact_jacobian false where it has the
+// choice, counted by calls to OdeSystem::jacobian on a linear system.
+std::vector<std::string> all_names();  // the registry's integrators (below)
+
+class CountingJacobians final : public OdeSystem {
+ public:
+  int size() const override { return 2; }
+  void rhs(double, const double* x, double* f) override { f[0] = -x[0] + x[1], f[1] = -1e3 * x[1]; }
+  void jacobian(double, const double*, Eigen::MatrixXd& J) override {
+    ++calls;
+    J.resize(2, 2), J << -1.0, 1.0, 0.0, -1e3;
+  }
+  bool has_exact_jacobian() const override { return true; }
+  int calls = 0;
+};
+
+TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
+  // What each method is documented to use (README, the integrator table), with
+  // exact_jacobian true and false: E exact (calls OdeSystem::jacobian), D its
+  // own difference quotients.
+  const std::map<std::string, std::string> documented = {
+      {"cvode-bdf", "ED"},     {"cvode-adams", "ED"},        {"arkode-dirk", "ED"},
+      {"arkode-imex", "DD"},   {"odeint-rosenbrock4", "EE"}, {"odeint-rodas4p", "EE"},
+      {"moreau-jean", "EE"},   {"moreau-jean-075", "EE"}};
+  int seen = 0;
+  for (const std::string& name : all_names()) {
+    IntegratorOptions o = fixed(1e-3);
+    o.rtol = 1e-6, o.atol = 1e-9;
+    const IntegratorCapabilities c = make_integrator(name, o)->capabilities();
+    if (!c.uses_jacobian) continue;
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(documented.count(name)) << "a method that uses a Jacobian, not in the table above";
+    ++seen;
+    for (bool exact : {true, false}) {
+      o.exact_jacobian = exact;
+      CountingJacobians sys;
+      auto integ = make_integrator(name, o);
+      const double x0[2] = {1.0, 1.0};
+      integ->reset(sys, 0.0, x0);
+      ASSERT_NE(integ->advance_to(0.05).status, Outcome::kFailed);
+      const bool expect_exact = documented.at(name)[exact ? 0 : 1] == 'E';
+      EXPECT_EQ(sys.calls > 0, expect_exact) << "exact_jacobian " << exact << ", calls " << sys.calls;
+      EXPECT_STREQ(jacobian_used(c, o), expect_exact ? "exact" : "differences");
+    }
+  }
+  EXPECT_EQ(seen, static_cast<int>(documented.size()));
+}
+
 // Per-component absolute tolerance (atol times the system's tolerance_scale):
 // with the scale, the 1e-9-sized component is as accurate, relatively, as the
 // rtol asks (within the factor 100 of ConvergesAtItsOrder); with scale 1 its
@@ -623,8 +674,12 @@ TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
       "--dt: cvode-bdf is adaptive; expected --rtol and --atol");
   bad({"run", scene, "--integrator", "ab2", "--rtol", "1e-6", "--out", dir.string()},
       "--rtol/--atol: ab2 has a fixed step; expected --dt");
-  bad({"run", scene, "--integrator", "rk4", "--exact-jacobian", "--out", dir.string()},
-      "--exact-jacobian: rk4 uses no Jacobian");
+  bad({"run", scene, "--integrator", "rk4", "--jacobian", "exact", "--out", dir.string()},
+      "--jacobian: rk4 uses no Jacobian");
+  bad({"run", scene, "--integrator", "arkode-imex", "--jacobian", "exact", "--out", dir.string()},
+      "--jacobian exact: arkode-imex forms its own difference quotients only");
+  bad({"run", scene, "--integrator", "odeint-rodas4p", "--jacobian", "differences", "--out", dir.string()},
+      "--jacobian differences: odeint-rodas4p takes the plant's exact Jacobian only");
   bad({"run", scene, "--integrator", "rk45", "--out", dir.string()},
       "unknown integrator 'rk45'; expected one of: ab2");
 }

@@ -118,8 +118,8 @@ TEST(NoAllocation, PlantRightHandSide) {
 }
 
 // The plant's exact Jacobian (multi-tangent pass, analytical dynamics
-// derivatives), which the implicit methods call per step with
-// --exact-jacobian, allocates nothing once J has its size.
+// derivatives), which the implicit methods call at every Jacobian update,
+// allocates nothing once J has its size.
 TEST(NoAllocation, PlantExactJacobian) {
   for (const auto& entry : std::filesystem::directory_iterator(PUMASIM_SCENES_DIR)) {
     if (entry.path().extension() != ".toml") continue;

@@ -26,6 +26,9 @@ void check_request(const RunRequest& r) {
   check_value("--rtol", r.rtol, "a number > 0", r.rtol > 0.0);
   check_value("--atol", r.atol, "a number > 0", r.atol > 0.0);
   check_value("--t-end", r.t_end, "a number > 0", r.t_end > 0.0);
+  if (r.jacobian && *r.jacobian != "exact" && *r.jacobian != "differences") {
+    throw std::invalid_argument("--jacobian: expected exact or differences, got '" + *r.jacobian + "'");
+  }
   check_value("--max-steps", r.max_steps, "a whole number >= 0 (0: no limit)",
               r.max_steps && *r.max_steps >= 0 && *r.max_steps <= 1e18 && *r.max_steps == std::floor(*r.max_steps));
   check_value("--max-wall", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
@@ -40,6 +43,20 @@ void override_backend(Scene& sc, const std::string& name) {
   sc.plant.backend = name;
 }
 
+// --jacobian exact|differences, checked against what the method can take.
+bool jacobian_choice(const std::string& method, const IntegratorInfo& info, const std::string& choice) {
+  const IntegratorCapabilities c = info.make(IntegratorOptions{})->capabilities();
+  const bool exact = choice == "exact";
+  if (!c.uses_jacobian) throw std::invalid_argument("--jacobian: " + method + " uses no Jacobian");
+  if (exact && !c.exact_jacobian) {
+    throw std::invalid_argument("--jacobian exact: " + method + " forms its own difference quotients only");
+  }
+  if (!exact && !c.jacobian_choice) {
+    throw std::invalid_argument("--jacobian differences: " + method + " takes the plant's exact Jacobian only");
+  }
+  return exact;
+}
+
 // The integrator's settings: the scene's, overridden by --dt (fixed-step
 // methods) or --rtol and --atol (adaptive ones); an option the method cannot
 // honour is refused. The scene records what was used.
@@ -49,7 +66,6 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
   io.dt = sc.integrator.dt;
   io.rtol = sc.integrator.rtol;
   io.atol = sc.integrator.atol;
-  io.exact_jacobian = a.exact_jacobian;
   io.keep_history = a.keep_history;
   adaptive = info.make(io)->capabilities().adaptive;
   if (io.keep_history && adaptive) {
@@ -64,9 +80,7 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
     if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
     if (a.atol) io.atol = sc.integrator.atol = *a.atol;
   }
-  if (io.exact_jacobian && !info.make(IntegratorOptions{})->capabilities().uses_jacobian) {
-    throw std::invalid_argument("--exact-jacobian: " + sc.integrator.name + " uses no Jacobian");
-  }
+  if (a.jacobian) io.exact_jacobian = jacobian_choice(sc.integrator.name, info, *a.jacobian);
   if (sc.integrator.name.starts_with("moreau-jean") && sc.plant.energy_ledger) {
     for (const FrictionParams& f : sc.plant.friction) {
       if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {

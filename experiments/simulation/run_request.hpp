@@ -27,7 +27,7 @@ struct RunRequest {
   std::optional<double> t_end;            // --t-end [s] (default: the scene's duration)
   std::optional<double> max_steps;        // --max-steps, a whole number >= 0 (0: no limit)
   std::optional<double> max_wall;         // --max-wall [s] >= 0 (0: no limit)
-  bool exact_jacobian = false;            // --exact-jacobian
+  std::optional<std::string> jacobian;    // --jacobian exact|differences (default: exact where taken)
   bool late_events = false;               // --late-events
   bool stop_at_outputs = false;           // --stop-at-outputs
   bool keep_history = false;              // --keep-history

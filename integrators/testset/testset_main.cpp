@@ -143,22 +143,13 @@ Row run(Problem& p, const pumasim::IntegratorInfo& info, bool adaptive, double s
     o.dt = setting;
   }
   std::unique_ptr<Integrator> integ;
-  const bool uses_jac = info.make(IntegratorOptions{})->capabilities().uses_jacobian;
-  r.jacobian = "none";
-  if (uses_jac) {
-    o.exact_jacobian = true;  // every problem has its exact Jacobian
-    try {
-      integ = info.make(o);
-      r.jacobian = "exact";
-    } catch (const std::invalid_argument&) {  // a method that cannot take it (arkode-imex)
-      o.exact_jacobian = false;
-      r.jacobian = "differences";
-    }
-  }
   Guarded sys(p, max_seconds);
   const auto start = Clock::now();
   try {
-    if (!integ) integ = info.make(o);
+    integ = info.make(o);
+    // Every problem has its exact Jacobian; the methods that can take it do
+    // (IntegratorOptions' default), arkode-imex forms its own differences.
+    r.jacobian = jacobian_used(integ->capabilities(), o);
     integ->reset(sys, p.t0(), p.initial_value().data());
     const Outcome out = integ->advance_to(p.t_end());
     if (out.status == Outcome::kFailed) {

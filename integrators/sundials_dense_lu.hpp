@@ -1,0 +1,31 @@
+// The Newton systems of CVODE and ARKODE (SUNDIALS 6.x) on a SUNDenseMatrix,
+// with the project's vector instructions: a direct linear solver by Eigen's LU
+// with partial pivoting, the same factorisation as SUNDIALS' own dense solver
+// (SUNLinSol_Dense: Gaussian elimination with partial pivoting, LAPACK's
+// GETRF/GETRS in C), and a dense matrix whose copy and scale-add operations
+// (the Newton matrix I - gamma J from the saved Jacobian at every set-up) run
+// as Eigen expressions (copy, zero and c A + I with the same arithmetic
+// element by element; c A + B, used with a mass matrix only, may be fused). On the
+// 24-state plant the LU and its solves were about 40 % of CVODE's own work and
+// the copies and scale-adds about 15 % (results/cost_breakdown.md, perf).
+// Private to the SUNDIALS adapters.
+#pragma once
+
+#include <sundials/sundials_context.h>
+#include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_matrix.h>
+
+namespace pumasim::detail {
+
+// For an n x n SUNDenseMatrix; freed with SUNLinSolFree. A matrix with a zero
+// pivot fails the set-up with SUNLS_LUFACT_FAIL (recoverable, as
+// SUNLinSol_Dense reports it).
+SUNLinearSolver make_dense_lu(SUNContext ctx, int n);
+
+// An n x n SUNDenseMatrix (SUNMATRIX_DENSE: SUNDIALS' difference-quotient
+// Jacobian and every dense accessor still apply) whose zero, copy, scale-add
+// and clone operations are replaced by Eigen ones; its clones too. Freed with
+// SUNMatDestroy.
+SUNMatrix make_dense_matrix(SUNContext ctx, int n);
+
+}  // namespace pumasim::detail
