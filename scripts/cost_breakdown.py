@@ -17,8 +17,10 @@ For each, three measurements:
      Jacobian, the root functions, the discrete events, the output) and part
      (reference, controller, drive, friction, dynamics, the rest);
   3. with perf (if installed and allowed), the normal build sampled over the
-     --repeats runs: the integrator's own work inside SUNDIALS split by symbol
-     (dense LU and solve, matrix copies, vector operations and norms, the rest).
+     --repeats runs: the integrator's own work (SUNDIALS, and the Newton
+     systems' LU and matrix operations in integrators/sundials_dense_lu.cpp)
+     split by symbol (dense LU and solve, matrix copies, vector operations and
+     norms, the rest).
 Besides: the 6-joint scene on other back-ends (rounding-level changes of f:
 how far its step count and path error move with no change of the model),
 and bench_plant's rows (one f beside the forward dynamics) when built.
@@ -56,12 +58,18 @@ CONTEXTS = ["loop", "rhs", "jacobian", "roots", "events", "output"]
 CONTEXT_NAMES = {"loop": "integrator's own work", "rhs": "f (right-hand side)", "jacobian": "exact Jacobian",
                  "roots": "root functions", "events": "events and restarts", "output": "output (dense output, rows)"}
 PARTS = ["own", "reference", "controller", "drive", "friction", "dynamics"]
-# perf symbol classes inside SUNDIALS (the integrator's own work).
+# perf symbol classes of the integrator's own work: SUNDIALS' (libsundials_*,
+# each symbol's own samples) and, in pumasim's binary, the Newton systems'
+# dense LU and matrix operations (integrators/sundials_dense_lu.cpp: the
+# newton_* functions with everything they call, Eigen's kernels included,
+# from the call graph).
 SUNDIALS_CLASSES = [
-    ("dense LU factor and solve", re.compile(r"denseGETR|SUNLinSol|GETRF|GETRS")),
-    ("Newton matrix I - gamma J (copy, scale-add)", re.compile(r"SUNMat")),
+    ("dense LU factor and solve", re.compile(r"denseGETR|SUNLinSol|GETRF|GETRS|newton_lu_")),
+    ("Newton matrix I - gamma J (copy, scale-add)", re.compile(r"SUNMat|newton_matrix_")),
     ("vector operations, error norms", re.compile(r"^N_V")),
 ]
+PUMASIM_NEWTON = re.compile(r"pumasim::detail::\(anonymous namespace\)::newton_\w+")
+OTHER_SUNDIALS = "other SUNDIALS (CVODE's step, error test, root finding)"
 
 
 def run(binary, args, out, env=None):
@@ -112,27 +120,38 @@ def perf_split(binary, args, repeats, tmp):
         return None
     data = os.path.join(tmp, "perf.data")
     loop = "; ".join(f"{binary} run {' '.join(args)} --out {tmp}/perf --force -q >/dev/null" for _ in range(repeats))
-    rec = subprocess.run(["perf", "record", "-e", "cpu-clock", "-F", "20000", "-o", data, "--", "sh", "-c", loop],
+    # DWARF call graphs: the release build keeps no frame pointers.
+    rec = subprocess.run(["perf", "record", "-e", "cpu-clock", "-F", "5000", "--call-graph", "dwarf,16384",
+                          "-o", data, "--", "sh", "-c", loop],
                          cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     if rec.returncode != 0:
         return None
-    rep = subprocess.run(["perf", "report", "-i", data, "--no-children", "--sort", "dso,sym", "--stdio"],
-                         capture_output=True, text=True)
+    line_rx = re.compile(r"\s*([\d.]+)%\s+(?:([\d.]+)%\s+)?(\S+)\s+\[.\]\s+(.+?)\s*$")
     shares = {name: 0.0 for name, _ in SUNDIALS_CLASSES}
-    shares["other SUNDIALS (CVODE's step, error test, root finding)"] = 0.0
+    shares[OTHER_SUNDIALS] = 0.0
     sundials = 0.0
+    # SUNDIALS' own samples, symbol by symbol.
+    rep = subprocess.run(["perf", "report", "-i", data, "--no-children", "--sort", "dso,sym", "--stdio", "-g", "none"],
+                         capture_output=True, text=True)
     for line in rep.stdout.splitlines():
-        m = re.match(r"\s*([\d.]+)%\s+(\S+)\s+\[.\]\s+(\S+)", line)
-        if not m or "sundials" not in m.group(2):
+        m = line_rx.match(line)
+        if not m or "sundials" not in m.group(3):
             continue
-        pct, sym = float(m.group(1)), m.group(3)
+        pct, sym = float(m.group(1)), m.group(4)
+        cls = next((name for name, rx in SUNDIALS_CLASSES if rx.search(sym)), OTHER_SUNDIALS)
         sundials += pct
-        for name, rx in SUNDIALS_CLASSES:
-            if rx.search(sym):
-                shares[name] += pct
-                break
-        else:
-            shares["other SUNDIALS (CVODE's step, error test, root finding)"] += pct
+        shares[cls] += pct
+    # pumasim's Newton functions with their callees (the children column).
+    rep = subprocess.run(["perf", "report", "-i", data, "--children", "--sort", "dso,sym", "--stdio", "-g", "none"],
+                         capture_output=True, text=True)
+    for line in rep.stdout.splitlines():
+        m = line_rx.match(line)
+        if not m or not m.group(2) or not PUMASIM_NEWTON.search(m.group(4)):
+            continue
+        pct, sym = float(m.group(1)), m.group(4)
+        cls = next(name for name, rx in SUNDIALS_CLASSES if rx.search(sym))
+        sundials += pct
+        shares[cls] += pct
     if sundials == 0:
         return None
     return {k: v / sundials for k, v in shares.items()}
@@ -218,7 +237,8 @@ def scene_section(title, m):
         lines.append("The Jacobians are CVODE's difference quotients: each is one f per state column inside the "
                      "f row (counted among the f), plus the Newton matrix's LU in the integrator's own work.")
     if m.get("perf"):
-        lines += ["", "Integrator's own work inside SUNDIALS, shares of its perf samples (normal build): " +
+        lines += ["", "Integrator's own work (SUNDIALS, and the Newton systems' dense LU and matrix operations "
+                  "where pumasim supplies them), shares of its perf samples (normal build): " +
                   ", ".join(f"{k} {100 * v:.0f} %" for k, v in m["perf"].items()) + "."]
     return lines + [""]
 
