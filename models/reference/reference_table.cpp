@@ -54,7 +54,18 @@ void ReferenceTable::fill(int segment, int k) {
   const double tail = (c.col(N - 1).cwiseAbs() + c.col(N).cwiseAbs()).maxCoeff();
   sub.state = tail <= kTailTol ? Sub::kTable : Sub::kExact;
   ++filled_;
-  if (sub.state == Sub::kExact) ++fallbacks_;
+  if (sub.state == Sub::kExact) {
+    ++fallbacks_;
+    return;
+  }
+  double dropped = 0;  // sum of the dropped degrees' largest |c_j|
+  int d = N;
+  for (; d > 0; --d) {
+    dropped += c.col(d).cwiseAbs().maxCoeff();
+    if (dropped > kChopTol) break;
+  }
+  sub.degree = d;
+  max_degree_kept_ = std::max(max_degree_kept_, d);
 }
 
 void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool extend) {
@@ -73,7 +84,7 @@ void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool exte
   const double x = (2 * t - sub.a - sub.b) / (sub.b - sub.a);
   using Col = Eigen::Matrix<double, kComponents, 1>;
   Col b1 = Col::Zero(), b2 = Col::Zero();
-  for (int j = kDegree; j >= 1; --j) {
+  for (int j = sub.degree; j >= 1; --j) {
     const Col b0 = c.col(j) + 2 * x * b1 - b2;
     b2 = b1;
     b1 = b0;

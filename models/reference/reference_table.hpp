@@ -32,6 +32,13 @@ class ReferenceTable {
   static constexpr int kDegree = 32;         // Chebyshev degree per sub-interval
   static constexpr double kSpan = 2.0;       // [s] longest sub-interval
   static constexpr double kTailTol = 1e-12;  // convergence test on the last two coefficients
+  // Truncation: each sub-interval's series is cut after the last degree d
+  // with sum_{j > d} max_i |c_ij| > kChopTol. As |T_j(x)| <= 1 on the
+  // interval, the cut changes no component by more than kChopTol, far below
+  // the interpolant's own error bound (kTailTol); a smooth piece's series
+  // decays well before kDegree, and Clenshaw's recurrence, a dependency chain
+  // as long as the degree, is the table's whole cost per lookup.
+  static constexpr double kChopTol = 1e-14;
   static constexpr int kComponents = 24;     // q, qd, qdd (6 each), p, v (3 each)
 
   // The reference must outlive the table. Allocates all storage.
@@ -41,16 +48,17 @@ class ReferenceTable {
   // there is one. Allocation-free.
   void eval(double t, ReferenceSample& out, int segment, bool extend);
 
-  // The exact reference at the node times of the sub-interval holding t in
-  // `segment`, and how many sub-intervals were filled / fell back to the
-  // exact reference (for tests).
+  // How many sub-intervals were filled / fell back to the exact reference,
+  // and the largest degree kept after truncation (for tests).
   int filled() const { return filled_; }
   int exact_fallbacks() const { return fallbacks_; }
+  int max_degree_kept() const { return max_degree_kept_; }
 
  private:
   using Coefs = Eigen::Matrix<double, kComponents, kDegree + 1>;
   struct Sub {
     double a = 0, b = 0;
+    int degree = kDegree;  // kept after truncation
     enum State : char { kEmpty, kTable, kExact } state = kEmpty;
   };
   void fill(int segment, int k);
@@ -60,7 +68,7 @@ class ReferenceTable {
   std::vector<int> first_;   // per segment: index of its first sub-interval; one past the end at the back
   std::vector<Sub> subs_;
   std::vector<Coefs> coefs_;  // per sub-interval
-  int filled_ = 0, fallbacks_ = 0;
+  int filled_ = 0, fallbacks_ = 0, max_degree_kept_ = 0;
 };
 
 }  // namespace pumasim
