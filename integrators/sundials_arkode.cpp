@@ -110,7 +110,7 @@ class Arkode final : public Integrator {
       release();
       sys_ = &sys;
       n_ = n;
-      y_ = N_VNew_Serial(n, ctx_);
+      y_ = detail::make_state_vector(ctx_, n);
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       fe_buf_.resize(n), fi_buf_.resize(n);
       mem_ = ARKStepCreate(fe(), fi(), t0, y_, ctx_);

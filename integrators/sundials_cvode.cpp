@@ -64,7 +64,7 @@ class Cvode final : public Integrator {
       release();
       sys_ = &sys;
       n_ = n;
-      y_ = N_VNew_Serial(n, ctx_);
+      y_ = detail::make_state_vector(ctx_, n);
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       mem_ = CVodeCreate(method_, ctx_);
       if (!mem_) throw std::runtime_error("cvode: CVodeCreate failed");

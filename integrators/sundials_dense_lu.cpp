@@ -1,6 +1,8 @@
 #include "integrators/sundials_dense_lu.hpp"
 
+#include <cmath>
 #include <memory>
+#include <stdexcept>
 #include <new>
 #include <type_traits>
 
@@ -112,7 +114,42 @@ void install_matrix_ops(SUNMatrix A) {
   A->ops->clone = newton_matrix_clone;
 }
 
+// sum_i (x_i w_i)^2 in four partial sums (see the header).
+realtype weighted_square_sum(N_Vector x, N_Vector w) {
+  const sunindextype n = NV_LENGTH_S(x);
+  const realtype* a = NV_DATA_S(x);
+  const realtype* b = NV_DATA_S(w);
+  realtype s[4] = {0, 0, 0, 0};
+  sunindextype i = 0;
+  for (; i + 4 <= n; i += 4) {
+    for (int k = 0; k < 4; ++k) {
+      const realtype p = a[i + k] * b[i + k];
+      s[k] += p * p;
+    }
+  }
+  for (; i < n; ++i) {
+    const realtype p = a[i] * b[i];
+    s[0] += p * p;
+  }
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+realtype weighted_rms_norm(N_Vector x, N_Vector w) {
+  return std::sqrt(weighted_square_sum(x, w) / static_cast<realtype>(NV_LENGTH_S(x)));
+}
+
 }  // namespace
+
+N_Vector make_state_vector(SUNContext ctx, int n) {
+  N_Vector v = N_VNew_Serial(n, ctx);
+  if (!v) throw std::bad_alloc();
+  if (N_VEnableFusedOps_Serial(v, SUNTRUE) != 0) {
+    N_VDestroy(v);
+    throw std::runtime_error("N_VEnableFusedOps_Serial failed");
+  }
+  v->ops->nvwsqrsumlocal = weighted_square_sum;
+  v->ops->nvwrmsnorm = weighted_rms_norm;
+  return v;
+}
 
 SUNMatrix make_dense_matrix(SUNContext ctx, int n) {
   SUNMatrix A = SUNDenseMatrix(n, n, ctx);

@@ -11,6 +11,7 @@
 // Private to the SUNDIALS adapters.
 #pragma once
 
+#include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sundials/sundials_linearsolver.h>
 #include <sundials/sundials_matrix.h>
@@ -27,5 +28,17 @@ SUNLinearSolver make_dense_lu(SUNContext ctx, int n);
 // and clone operations are replaced by Eigen ones; its clones too. Freed with
 // SUNMatDestroy.
 SUNMatrix make_dense_matrix(SUNContext ctx, int n);
+
+// A serial N_Vector of length n (NVECTOR_SERIAL: N_VGetArrayPointer and every
+// serial operation apply) with SUNDIALS' fused operations enabled (a linear
+// combination of the Nordsieck history in one loop instead of one
+// N_VScale/N_VLinearSum pass per vector) and its weighted norms replaced:
+// N_VWSqrSumLocal and N_VWrmsNorm (every error test and Newton convergence
+// test) sum in four independent partial sums, which the compiler vectorises,
+// where the library's single running sum is a chain of dependent additions
+// (a reassociation it may not make itself). The same sum up to rounding.
+// Its clones (CVODE's and ARKODE's work vectors) inherit the operations.
+// Freed with N_VDestroy.
+N_Vector make_state_vector(SUNContext ctx, int n);
 
 }  // namespace pumasim::detail
