@@ -45,6 +45,14 @@ void expect_all_agree(const RobotModel& model, std::uint64_t seed, int states) {
       EXPECT_LT(rel_err(ref.tau, r.tau), kAgree) << who << " tau";
       EXPECT_LT(rel_err(ref.qdd, r.qdd), kAgree) << who << " qdd";
     }
+    // Forward dynamics given this back-end's own h is forward dynamics.
+    for (const auto& b : all) {
+      Eigen::VectorXd h(n), qdd(n), qdd_h(n);
+      b->bias(q, qd, h);
+      b->forward_dynamics(q, qd, tau, qdd);
+      b->forward_dynamics_with_bias(q, qd, h, tau, qdd_h);
+      EXPECT_LT(rel_err(qdd, qdd_h), kAgree) << model.name << ": " << b->name() << " with its bias, state " << s;
+    }
     // Forward dynamics inverts inverse dynamics: ID(q, qd, FD(q, qd, tau)) = tau.
     Eigen::VectorXd tau_back(n);
     all[0]->inverse_dynamics(q, qd, ref.qdd, tau_back);
@@ -113,6 +121,26 @@ TEST(BackendAgreement, RandomChainsLargeAndSmall) {
   for (int n : {3, 6, 24, 48}) {
     expect_all_agree(random_chain(n, 900 + n), 29 * n, 2);
     expect_all_agree(random_chain(n, 950 + n, DhConvention::kModified, "RRRP"), 31 * n, 2);
+  }
+}
+
+// The CRBA back-ends read the h they are given (their forward dynamics skips
+// its own RNEA pass): with h + d in place of h the result is the forward
+// dynamics of tau - d, qdd = H^-1 (tau - (h + d)).
+TEST(BackendAgreement, CrbaForwardDynamicsUsesTheGivenBias) {
+  for (int n : {3, 6, 24}) {
+    const RobotModel model = random_chain(n, 700 + n, DhConvention::kStandard, "RRRP");
+    Rng rng(41 * n);
+    const Eigen::VectorXd q = rng.uniform_vector(n, -M_PI, M_PI), qd = rng.uniform_vector(n, -2, 2);
+    const Eigen::VectorXd tau = rng.uniform_vector(n, -20, 20), d = rng.uniform_vector(n, -5, 5);
+    for (const char* name : {"crba", "crba-world"}) {
+      const std::unique_ptr<DynamicsBackend> b = make_backend(name, model);
+      Eigen::VectorXd h(n), given(n), direct(n);
+      b->bias(q, qd, h);
+      b->forward_dynamics_with_bias(q, qd, h + d, tau, given);
+      b->forward_dynamics(q, qd, tau - d, direct);
+      EXPECT_LT(rel_err(direct, given), kAgree) << name << ", n = " << n;
+    }
   }
 }
 

@@ -6,7 +6,7 @@
 //   mass matrix       H(q)           (with Z^2 Im on the diagonal)
 //   bias              h(q, qd) = C(q, qd) qd + g(q)
 //   gravity           g(q)
-//   forward dynamics  qdd = H(q)^{-1} (tau - h(q, qd))
+//   forward dynamics  qdd = H(q)^{-1} (tau - h(q, qd))  (also given h)
 // One virtual call per quantity; inside, the algorithm runs on fixed-size
 // types for n = 3 and n = 6 and never allocates. A back-end object owns its
 // workspace: use one object per thread.
@@ -44,6 +44,15 @@ class BasicDynamicsBackend {
   virtual void bias(ConstVecRef q, ConstVecRef qd, VecRef h) = 0;
   virtual void gravity(ConstVecRef q, VecRef g) = 0;
   virtual void forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef tau, VecRef qdd) = 0;
+  // Forward dynamics where the caller has h = bias(q, qd) from this back-end
+  // already (the plant's friction laws that read the applied torque need it
+  // first): the same qdd; a back-end whose forward dynamics forms h on its
+  // own (the CRBA ones) skips that pass, the others ignore h.
+  virtual void forward_dynamics_with_bias(ConstVecRef q, ConstVecRef qd, ConstVecRef h, ConstVecRef tau,
+                                          VecRef qdd) {
+    static_cast<void>(h);
+    forward_dynamics(q, qd, tau, qdd);
+  }
 };
 
 using DynamicsBackend = BasicDynamicsBackend<double>;

@@ -83,6 +83,16 @@ class Adapter final : public BasicDynamicsBackend<S> {
     check(q, "q"), check(qd, "qd"), check(tau, "tau"), check(qdd, "qdd");
     algo_.forward_dynamics(vec_in<N>(q), vec_in<N>(qd), vec_in<N>(tau), vec_out<N>(qdd));
   }
+  void forward_dynamics_with_bias(ConstVecRef q, ConstVecRef qd, ConstVecRef h, ConstVecRef tau,
+                                  VecRef qdd) override {
+    check(q, "q"), check(qd, "qd"), check(h, "h"), check(tau, "tau"), check(qdd, "qdd");
+    if constexpr (requires { algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau),
+                                                               vec_out<N>(qdd)); }) {
+      algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau), vec_out<N>(qdd));
+    } else {
+      algo_.forward_dynamics(vec_in<N>(q), vec_in<N>(qd), vec_in<N>(tau), vec_out<N>(qdd));
+    }
+  }
 
  private:
   template <class V>

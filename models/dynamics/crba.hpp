@@ -31,6 +31,15 @@ class CompositeInertia {
       run_kinds<false>(c, rot, H);
     }
   }
+  // CrbaShell's kernel interface: the body-frame recursion fills both triangles.
+  template <class M>
+  void full(const Chain<S, N>& c, const JointTransforms<S, N>& rot, M&& H) {
+    run(c, rot, H);
+  }
+  template <class M>
+  void lower(const Chain<S, N>& c, const JointTransforms<S, N>& rot, M&& H) {
+    run(c, rot, H);
+  }
 
  private:
   template <bool kMixed, class M>
@@ -89,8 +98,14 @@ class CompositeInertia {
   PerJoint<Mat3<S>, N> Ic_;
 };
 
-template <class S, int N>
-class Crba : public RneaBased<S, N> {
+// The shell of the CRBA back-ends: H from a composite-inertia kernel (`full`:
+// every entry; `lower`: at least the lower triangle, all the Cholesky
+// factorisation reads), h from one RNEA pass on the same joint transforms,
+// qdd by Cholesky. `forward_dynamics_from_bias` takes h already computed by
+// bias(q, qd) (the plant's friction laws need it first) and skips the RNEA
+// pass, with the same arithmetic as forward_dynamics.
+template <class S, int N, class Kernel>
+class CrbaShell : public RneaBased<S, N> {
   using Base = RneaBased<S, N>;
   using Base::c_;
   using Base::rnea_;
@@ -98,15 +113,13 @@ class Crba : public RneaBased<S, N> {
   using Base::zero_;
 
  public:
-  static constexpr const char* kName = "crba";
-
-  explicit Crba(const Chain<S, N>& chain)
-      : Base(chain), crba_(chain.n), H_(make_mat<S, N>(chain.n)), chol_(chain.n) {}
+  explicit CrbaShell(const Chain<S, N>& chain)
+      : Base(chain), kernel_(chain.n), H_(make_mat<S, N>(chain.n)), chol_(chain.n) {}
 
   template <class Q, class M>
   void mass_matrix(const Q& q, M&& H) {
     rot_.compute(c_, q);
-    crba_.run(c_, rot_, H);
+    kernel_.full(c_, rot_, H);
   }
 
   template <class Q, class Qd, class Tau, class Qdd>
@@ -114,15 +127,34 @@ class Crba : public RneaBased<S, N> {
     rot_.compute(c_, q);
     rnea_.run(c_, rot_, qd, zero_, true, qdd);  // qdd <- h
     for (int j = 0; j < c_.n; ++j) qdd[j] = S(tau[j]) - qdd[j];
-    crba_.run(c_, rot_, H_);
-    chol_.factor(H_);
-    chol_.solve_in_place(qdd);
+    solve(qdd);
+  }
+
+  template <class Q, class Hb, class Tau, class Qdd>
+  void forward_dynamics_from_bias(const Q& q, const Hb& h, const Tau& tau, Qdd&& qdd) {
+    rot_.compute(c_, q);
+    for (int j = 0; j < c_.n; ++j) qdd[j] = S(tau[j]) - S(h[j]);
+    solve(qdd);
   }
 
  private:
-  CompositeInertia<S, N> crba_;
+  template <class V>
+  void solve(V& rhs) {  // rhs <- H^-1 rhs, H from the joint transforms computed
+    kernel_.lower(c_, rot_, H_);
+    chol_.factor(H_);
+    chol_.solve_in_place(rhs);
+  }
+
+  Kernel kernel_;
   MatN<S, N> H_;
   Cholesky<S, N> chol_;
+};
+
+template <class S, int N>
+class Crba : public CrbaShell<S, N, CompositeInertia<S, N>> {
+ public:
+  static constexpr const char* kName = "crba";
+  using CrbaShell<S, N, CompositeInertia<S, N>>::CrbaShell;
 };
 
 }  // namespace pumasim

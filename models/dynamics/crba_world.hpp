@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "models/dynamics/chain.hpp"
+#include "models/dynamics/crba.hpp"
 #include "models/dynamics/rnea_based.hpp"
 
 namespace pumasim {
@@ -152,39 +153,10 @@ class WorldCompositeInertia {
 };
 
 template <class S, int N>
-class CrbaWorld : public RneaBased<S, N> {
-  using Base = RneaBased<S, N>;
-  using Base::c_;
-  using Base::rnea_;
-  using Base::rot_;
-  using Base::zero_;
-
+class CrbaWorld : public CrbaShell<S, N, WorldCompositeInertia<S, N>> {
  public:
   static constexpr const char* kName = "crba-world";
-
-  explicit CrbaWorld(const Chain<S, N>& chain)
-      : Base(chain), crba_(chain.n), H_(make_mat<S, N>(chain.n)), chol_(chain.n) {}
-
-  template <class Q, class M>
-  void mass_matrix(const Q& q, M&& H) {
-    rot_.compute(c_, q);
-    crba_.full(c_, rot_, H);
-  }
-
-  template <class Q, class Qd, class Tau, class Qdd>
-  void forward_dynamics(const Q& q, const Qd& qd, const Tau& tau, Qdd&& qdd) {
-    rot_.compute(c_, q);
-    rnea_.run(c_, rot_, qd, zero_, true, qdd);  // qdd <- h
-    for (int j = 0; j < c_.n; ++j) qdd[j] = S(tau[j]) - qdd[j];
-    crba_.lower(c_, rot_, H_);  // the Cholesky factorisation reads the lower triangle only
-    chol_.factor(H_);
-    chol_.solve_in_place(qdd);
-  }
-
- private:
-  WorldCompositeInertia<S, N> crba_;
-  MatN<S, N> H_;
-  Cholesky<S, N> chol_;
+  using CrbaShell<S, N, WorldCompositeInertia<S, N>>::CrbaShell;
 };
 
 }  // namespace pumasim

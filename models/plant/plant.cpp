@@ -222,7 +222,7 @@ void Plant::friction_and_accelerations(Workspace<S>& w) {
   if (all && friction_.has_events()) {
     body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, ds_.modes); });
   } else {
-    body_.accelerations(w);
+    body_.accelerations(w, need_bias);
   }
 }
 

@@ -40,9 +40,15 @@ class RigidBodyBlock {
     }
   }
 
+  // bias_known: w.h holds bias(q, qd) from this back-end (on the exact
+  // Jacobian's scalar perhaps its values only: TangentBackend does not read it).
   template <class S>
-  void accelerations(PlantWorkspace<S>& w) const {
-    w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
+  void accelerations(PlantWorkspace<S>& w, bool bias_known) const {
+    if (bias_known) {
+      w.backend->forward_dynamics_with_bias(w.q, w.qd, w.h, w.tau, w.qdd);
+    } else {
+      w.backend->forward_dynamics(w.q, w.qd, w.tau, w.qdd);
+    }
   }
 
   // Joints held by their friction (stuck(j)) have qdd_j = 0 and a friction
