@@ -355,8 +355,8 @@ def plant_section(plant):
     w("## The plant: one right-hand side and its exact Jacobian\n")
     w("`plant_rhs` = one f(t, x) of the scene's plant (its back-end; the reference cached at t); "
       "`plant_jacobian` = df/dx exactly (`Plant::jacobian_exact`: one pass of f on a 24-tangent dual "
-      "number per 24 states, the dynamics' tangents from `TangentBackend`). Forward differences, the "
-      "implicit methods' default, cost m + 1 right-hand sides (m states).\n")
+      "number per 24 states, the dynamics' tangents from `TangentBackend`), the implicit methods' "
+      "default; forward differences (`--jacobian differences`) cost m + 1 right-hand sides (m states).\n")
     w("| scene | joints | states m | rhs [ns] | jacobian [ns] | jacobian / rhs | m + 1 |")
     w("|---|---:|---:|---:|---:|---:|---:|")
     for scene, r in plant.items():
