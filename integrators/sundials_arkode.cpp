@@ -111,6 +111,7 @@ class Arkode final : public Integrator {
       sys_ = &sys;
       n_ = n;
       y_ = detail::make_state_vector(ctx_, n);
+      dky_ = detail::make_view_vector(ctx_, n);
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       fe_buf_.resize(n), fi_buf_.resize(n);
       mem_ = ARKStepCreate(fe(), fi(), t0, y_, ctx_);
@@ -159,7 +160,7 @@ class Arkode final : public Integrator {
     return detail::last_step_start(mem_, t_, ARKStepGetCurrentTime, ARKStepGetLastStep);
   }
   void dense_state(double t, double* x) override {
-    detail::interpolated_state(mem_, ARKStepGetDky, t, t_, y_, ctx_, x, "arkode", "ARKStepGetDky");
+    detail::interpolated_state(mem_, ARKStepGetDky, t, t_, y_, dky_, x, "arkode", "ARKStepGetDky");
   }
 
  protected:
@@ -282,6 +283,7 @@ class Arkode final : public Integrator {
     if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;
     if (A_) SUNMatDestroy(A_), A_ = nullptr;
     if (y_) N_VDestroy(y_), y_ = nullptr;
+    if (dky_) N_VDestroy(dky_), dky_ = nullptr;
   }
 
   IntegratorOptions opt_;
@@ -289,6 +291,7 @@ class Arkode final : public Integrator {
   SUNContext ctx_ = nullptr;
   void* mem_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector dky_ = nullptr;  // the dense output's target (make_view_vector)
   SUNMatrix A_ = nullptr;
   SUNLinearSolver LS_ = nullptr;
   OdeSystem* sys_ = nullptr;

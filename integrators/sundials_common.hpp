@@ -94,18 +94,20 @@ inline double last_step_start(void* mem, double t_reached, GetReal current_time,
 }
 
 // The state at t into x: the current state at or past the time reached,
-// else SUNDIALS' interpolant (CVodeGetDky / ARKStepGetDky, derivative 0).
+// else SUNDIALS' interpolant (CVodeGetDky / ARKStepGetDky, derivative 0)
+// written through `view`, a vector without data of y's length
+// (make_view_vector), pointed at x for the call.
 using GetDky = int (*)(void*, sunrealtype, int, N_Vector);
-inline void interpolated_state(void* mem, GetDky get_dky, double t, double t_reached, N_Vector y, SUNContext ctx,
+inline void interpolated_state(void* mem, GetDky get_dky, double t, double t_reached, N_Vector y, N_Vector view,
                                double* x, const char* module, const char* what) {
   const sunindextype n = N_VGetLength_Serial(y);
   if (t >= t_reached) {
     std::copy(N_VGetArrayPointer(y), N_VGetArrayPointer(y) + n, x);
     return;
   }
-  N_Vector v = N_VMake_Serial(n, x, ctx);
-  const int flag = get_dky(mem, t, 0, v);
-  N_VDestroy(v);
+  N_VSetArrayPointer(x, view);
+  const int flag = get_dky(mem, t, 0, view);
+  N_VSetArrayPointer(nullptr, view);
   check_flag(flag, module, what);
 }
 

@@ -65,6 +65,7 @@ class Cvode final : public Integrator {
       sys_ = &sys;
       n_ = n;
       y_ = detail::make_state_vector(ctx_, n);
+      dky_ = detail::make_view_vector(ctx_, n);
       std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
       mem_ = CVodeCreate(method_, ctx_);
       if (!mem_) throw std::runtime_error("cvode: CVodeCreate failed");
@@ -115,7 +116,7 @@ class Cvode final : public Integrator {
   }
   double step_start() const override { return detail::last_step_start(mem_, t_, CVodeGetCurrentTime, CVodeGetLastStep); }
   void dense_state(double t, double* x) override {
-    detail::interpolated_state(mem_, CVodeGetDky, t, t_, y_, ctx_, x, "cvode", "CVodeGetDky");
+    detail::interpolated_state(mem_, CVodeGetDky, t, t_, y_, dky_, x, "cvode", "CVodeGetDky");
   }
 
   double time() const override { return t_; }
@@ -197,6 +198,7 @@ class Cvode final : public Integrator {
     if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;
     if (A_) SUNMatDestroy(A_), A_ = nullptr;
     if (y_) N_VDestroy(y_), y_ = nullptr;
+    if (dky_) N_VDestroy(dky_), dky_ = nullptr;
   }
 
   IntegratorOptions opt_;
@@ -204,6 +206,7 @@ class Cvode final : public Integrator {
   SUNContext ctx_ = nullptr;
   void* mem_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector dky_ = nullptr;  // the dense output's target (make_view_vector)
   SUNMatrix A_ = nullptr;
   SUNLinearSolver LS_ = nullptr;
   OdeSystem* sys_ = nullptr;

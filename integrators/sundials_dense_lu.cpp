@@ -139,8 +139,8 @@ realtype weighted_rms_norm(N_Vector x, N_Vector w) {
 
 }  // namespace
 
-N_Vector make_state_vector(SUNContext ctx, int n) {
-  N_Vector v = N_VNew_Serial(n, ctx);
+namespace {
+N_Vector with_state_ops(N_Vector v) {
   if (!v) throw std::bad_alloc();
   if (N_VEnableFusedOps_Serial(v, SUNTRUE) != 0) {
     N_VDestroy(v);
@@ -150,6 +150,11 @@ N_Vector make_state_vector(SUNContext ctx, int n) {
   v->ops->nvwrmsnorm = weighted_rms_norm;
   return v;
 }
+}  // namespace
+
+N_Vector make_state_vector(SUNContext ctx, int n) { return with_state_ops(N_VNew_Serial(n, ctx)); }
+
+N_Vector make_view_vector(SUNContext ctx, int n) { return with_state_ops(N_VMake_Serial(n, nullptr, ctx)); }
 
 SUNMatrix make_dense_matrix(SUNContext ctx, int n) {
   SUNMatrix A = SUNDenseMatrix(n, n, ctx);

@@ -41,4 +41,9 @@ SUNMatrix make_dense_matrix(SUNContext ctx, int n);
 // Freed with N_VDestroy.
 N_Vector make_state_vector(SUNContext ctx, int n);
 
+// The same operations on a vector that owns no data: point it at an array
+// with N_VSetArrayPointer before each use (the dense output's target), so
+// that no vector is allocated per output. Freed with N_VDestroy.
+N_Vector make_view_vector(SUNContext ctx, int n);
+
 }  // namespace pumasim::detail
