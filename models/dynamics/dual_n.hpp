@@ -35,6 +35,13 @@ class DualN {
   DualN(double v, int k) : DualN(v) {
     if (k >= 0 && k < N) d_[static_cast<std::size_t>(k)] = 1.0;
   }
+  // In place: value v, tangent 1 in direction k (none if k is outside
+  // [0, N)), the others 0 (a seed without a temporary).
+  PUMASIM_DUALN_INLINE void seed(double v, int k) {
+    v_ = v;
+    d_.fill(0.0);
+    if (k >= 0 && k < N) d_[static_cast<std::size_t>(k)] = 1.0;
+  }
   double value() const { return v_; }
   double deriv(int k) const { return d_[static_cast<std::size_t>(k)]; }
   double& deriv(int k) { return d_[static_cast<std::size_t>(k)]; }

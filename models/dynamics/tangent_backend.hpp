@@ -96,12 +96,18 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
   // (qdd_j = 0): the free joints F solve H_FF qdd_F = tau_F - h_F, whose
   // derivative is H_FF dqdd_F = (dtau - dID/dq dq - dID/dqd dqd)_F at the
   // solution; id (if given) receives ID(q, qd, qdd), the torque each stuck
-  // joint's constraint supplies in its row (value and tangents).
+  // joint's constraint supplies in its row (value and tangents). h (if
+  // given) holds h(q, qd) from this back-end (bias_value's, or bias's
+  // values): its RNEA pass is not run again.
   template <class Stuck>
   void constrained_forward_dynamics(TConstVecRef q, TConstVecRef qd, TConstVecRef tau, Stuck stuck, TVecRef qdd,
-                                    S* id) {
+                                    S* id, const S* h = nullptr) {
     load(q, qd);
-    d_.values().bias(q_, qd_, v_);
+    if (h) {
+      for (int j = 0; j < n_; ++j) v_[j] = h[j].value();
+    } else {
+      d_.values().bias(q_, qd_, v_);
+    }
     d_.compute_mass_matrix(q_);
     const Eigen::MatrixXd& H = d_.mass_matrix();
     Hc_ = H;

@@ -286,7 +286,7 @@ void Plant::jacobian_exact(double t, const double* x, Eigen::MatrixXd& J) {
   J.resize(m, m);
   constexpr int N = kJacobianTangents;
   for (int first = 0; first < m; first += N) {  // states first..first+N-1 in one pass
-    for (int i = 0; i < m; ++i) tx_[i] = Tangent(x[i], i - first);
+    for (int i = 0; i < m; ++i) tx_[i].seed(x[i], i - first);
     eval(t, tx_.data(), tf_.data(), *wt_);
     const int last = std::min(m, first + N);
     for (int k = first; k < last; ++k) {

@@ -62,7 +62,7 @@ class RigidBodyBlock {
     const int n = joints();
     if constexpr (kIsDualN<S>) {  // the exact Jacobian's pass: values and tangents from the back-end's
       auto& b = static_cast<TangentBackend<S::kTangents>&>(*w.backend);
-      b.constrained_forward_dynamics(w.q, w.qd, w.tau, stuck, w.qdd, w.id.data());
+      b.constrained_forward_dynamics(w.q, w.qd, w.tau, stuck, w.qdd, w.id.data(), w.h.data());
       for (int j = 0; j < n; ++j) {
         if (stuck(j)) w.applied[j] = w.tm[j] - w.id[j] / S(gear_ratio(j));
       }
