@@ -62,7 +62,7 @@ install(TARGETS ${_pumasim_targets} EXPORT pumasim-targets
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 
 # Headers, in the repository's layout under include/pumasim. Left out: the
-# two files that include SUNDIALS and Boost's uBLAS (implementation details of
+# files that include SUNDIALS and Boost's uBLAS (implementation details of
 # the integrators' .cpp files; DESIGN.md keeps SUNDIALS behind one wall) and
 # the test set, which is not part of the package.
 foreach(_dir models/dynamics models/robot models/reference models/plant models/scene integrators
@@ -71,6 +71,7 @@ foreach(_dir models/dynamics models/robot models/reference models/plant models/s
     FILES_MATCHING PATTERN "*.hpp"
     PATTERN "testset" EXCLUDE
     PATTERN "sundials_common.hpp" EXCLUDE
+    PATTERN "sundials_dense_lu.hpp" EXCLUDE
     PATTERN "rosenbrock_coefficients.hpp" EXCLUDE)
 endforeach()
 

@@ -32,18 +32,23 @@ SUNMatrix make_dense_matrix(SUNContext ctx, int n);
 // A serial N_Vector of length n (NVECTOR_SERIAL: N_VGetArrayPointer and every
 // serial operation apply) with SUNDIALS' fused operations enabled (a linear
 // combination of the Nordsieck history in one loop instead of one
-// N_VScale/N_VLinearSum pass per vector) and its weighted norms replaced:
-// N_VWSqrSumLocal and N_VWrmsNorm (every error test and Newton convergence
-// test) sum in four independent partial sums, which the compiler vectorises,
-// where the library's single running sum is a chain of dependent additions
-// (a reassociation it may not make itself). The same sum up to rounding.
-// Its clones (CVODE's and ARKODE's work vectors) inherit the operations.
-// Freed with N_VDestroy.
+// N_VScale/N_VLinearSum pass per vector) and two weighted norms replaced:
+// nvwsqrsumlocal and nvwrmsnorm (N_VWrmsNorm: every error test and Newton
+// convergence test of CVODE and ARKODE) sum in four independent partial
+// sums, which the compiler vectorises, where the library's single running
+// sum is a chain of dependent additions (a reassociation it may not make
+// itself): the same sum up to rounding. The masked and vector-array norms
+// (nvwrmsnormmask, nvwsqrsummasklocal, nvwrmsnormvectorarray), which CVODE
+// and ARKODE call only for features pumasim does not use (constraints,
+// sensitivities), stay the library's. Its clones (CVODE's and ARKODE's work
+// vectors) inherit the operations. Freed with N_VDestroy.
 N_Vector make_state_vector(SUNContext ctx, int n);
 
 // The same operations on a vector that owns no data: point it at an array
 // with N_VSetArrayPointer before each use (the dense output's target), so
-// that no vector is allocated per output. Freed with N_VDestroy.
+// that no vector is allocated per output. Being reused, it makes its
+// integrator's dense output one call at a time (one integrator per thread,
+// as everywhere). Freed with N_VDestroy; the array is never freed by it.
 N_Vector make_view_vector(SUNContext ctx, int n);
 
 }  // namespace pumasim::detail

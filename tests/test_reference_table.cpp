@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "models/reference/reference_table.hpp"
 #include "models/scene/scene.hpp"
@@ -64,6 +65,41 @@ TEST_P(ReferenceTableScenes, WithinOneTenthOfANanoradianOfTheExactReference) {
   std::snprintf(buf, sizeof buf, "q %.3g qd %.3g qdd %.3g p %.3g v %.3g; degree kept <= %d", e.q, e.qd, e.qdd, e.p,
                 e.v, table.max_degree_kept());
   RecordProperty("max_errors", buf);
+}
+
+// The truncation (ReferenceTable::kChopTol) against the same table with every
+// series at full degree: no component moves by more than the bound, |T_j| <= 1
+// times the dropped coefficients, plus Clenshaw's rounding (a few ulps of the
+// largest value); and the series do decay before the full degree, so the
+// truncation is in effect.
+TEST_P(ReferenceTableScenes, TruncationMovesNoComponentByMoreThanItsBound) {
+  const Scene sc = load_scene(test::scene_path(GetParam()));
+  const Reference& ref = *sc.plant.reference;
+  ReferenceTable cut(ref), full(ref, false);
+  const std::vector<double>& bp = ref.breakpoints();
+  ReferenceSample a, b;
+  double diff = 0, scale = 1;
+  for (std::size_t s = 0; s < bp.size(); ++s) {
+    const double t0 = s == 0 ? 0.0 : bp[s - 1], t1 = bp[s];
+    const int pts = std::max(2, static_cast<int>(std::ceil((t1 - t0) / ReferenceTable::kSpan)) * 400);
+    for (int i = 0; i <= pts; ++i) {
+      const double t = t0 + (t1 - t0) * i / pts;
+      cut.eval(t, a, static_cast<int>(s), false);
+      full.eval(t, b, static_cast<int>(s), false);
+      for (const auto& [x, y] : {std::pair{a.q, b.q}, {a.qd, b.qd}, {a.qdd, b.qdd}}) {
+        diff = std::max(diff, (x - y).cwiseAbs().maxCoeff());
+        scale = std::max(scale, y.cwiseAbs().maxCoeff());
+      }
+      for (const auto& [x, y] : {std::pair{a.p, b.p}, {a.v, b.v}}) {
+        diff = std::max(diff, (x - y).cwiseAbs().maxCoeff());
+        scale = std::max(scale, y.cwiseAbs().maxCoeff());
+      }
+    }
+  }
+  const double eps = std::numeric_limits<double>::epsilon();
+  EXPECT_LE(diff, ReferenceTable::kChopTol + 64 * eps * scale);
+  EXPECT_EQ(full.max_degree_kept(), ReferenceTable::kDegree);
+  EXPECT_LT(cut.max_degree_kept(), ReferenceTable::kDegree);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ReferenceTableScenes,

@@ -46,8 +46,12 @@ class BasicDynamicsBackend {
   virtual void forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef tau, VecRef qdd) = 0;
   // Forward dynamics where the caller has h = bias(q, qd) from this back-end
   // already (the plant's friction laws that read the applied torque need it
-  // first): the same qdd; a back-end whose forward dynamics forms h on its
-  // own (the CRBA ones) skips that pass, the others ignore h.
+  // first). A back-end that factors H returns H^-1 (tau - h) for the h
+  // given, without forming h again: the CRBA shells (crba, crba-world) with
+  // their own H pass, the others from their mass_matrix and a Cholesky solve
+  // (backend_impl.hpp). One that forms no H (aba) ignores h and runs its own
+  // forward dynamics, so h must be this back-end's bias(q, qd): then every
+  // back-end returns its forward dynamics, up to rounding.
   virtual void forward_dynamics_with_bias(ConstVecRef q, ConstVecRef qd, ConstVecRef h, ConstVecRef tau,
                                           VecRef qdd) {
     static_cast<void>(h);

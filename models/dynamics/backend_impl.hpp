@@ -55,7 +55,8 @@ class Adapter final : public BasicDynamicsBackend<S> {
   using MatRef = typename Base::MatRef;
 
  public:
-  explicit Adapter(const RobotModel& model) : chain_(model), algo_(chain_) {}
+  explicit Adapter(const RobotModel& model)
+      : chain_(model), algo_(chain_), H_(make_mat<S, N>(chain_.n)), chol_(chain_.n) {}
   Adapter(const Adapter&) = delete;
   Adapter& operator=(const Adapter&) = delete;
 
@@ -89,7 +90,13 @@ class Adapter final : public BasicDynamicsBackend<S> {
     if constexpr (requires { algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau),
                                                                vec_out<N>(qdd)); }) {
       algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau), vec_out<N>(qdd));
-    } else {
+    } else if constexpr (factors_mass_matrix<Algo>()) {  // its H, then the Cholesky solve of its forward dynamics
+      algo_.mass_matrix(vec_in<N>(q), H_);
+      chol_.factor(H_);
+      auto out = vec_out<N>(qdd);
+      for (int j = 0; j < chain_.n; ++j) out[j] = S(tau[j]) - S(h[j]);
+      chol_.solve_in_place(out);
+    } else {  // no H: its own forward dynamics (h given is its own bias)
       algo_.forward_dynamics(vec_in<N>(q), vec_in<N>(qd), vec_in<N>(tau), vec_out<N>(qdd));
     }
   }
@@ -107,6 +114,8 @@ class Adapter final : public BasicDynamicsBackend<S> {
 
   const Chain<S, N> chain_;
   Algo<S, N> algo_;
+  MatN<S, N> H_;         // forward_dynamics_with_bias's H, for the back-ends without their own
+  Cholesky<S, N> chol_;
 };
 
 template <template <class, int> class Algo, class S = double>

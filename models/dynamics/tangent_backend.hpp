@@ -91,6 +91,12 @@ class TangentBackend final : public BasicDynamicsBackend<DualN<N>> {
   void forward_dynamics(TConstVecRef q, TConstVecRef qd, TConstVecRef tau, TVecRef qdd) override {
     constrained_forward_dynamics(q, qd, tau, [](int) { return false; }, qdd, nullptr);
   }
+  // Only h's values are read (the plant's pass may hold values alone,
+  // bias_value's): its tangents come from the derivative recursions.
+  void forward_dynamics_with_bias(TConstVecRef q, TConstVecRef qd, TConstVecRef h, TConstVecRef tau,
+                                  TVecRef qdd) override {
+    constrained_forward_dynamics(q, qd, tau, [](int) { return false; }, qdd, nullptr, h.data());
+  }
 
   // Forward dynamics with the joints for which stuck(j) holds fixed
   // (qdd_j = 0): the free joints F solve H_FF qdd_F = tau_F - h_F, whose

@@ -6,7 +6,7 @@
 
 namespace pumasim {
 
-ReferenceTable::ReferenceTable(const Reference& ref) : ref_(ref) {
+ReferenceTable::ReferenceTable(const Reference& ref, bool truncate) : ref_(ref), truncate_(truncate) {
   const std::vector<double>& bp = ref.breakpoints();
   // Segment s is [bp[s-1], bp[s]] (bp[-1] = 0); the one after the last
   // breakpoint (the hold at the end) is not tabulated.
@@ -58,9 +58,9 @@ void ReferenceTable::fill(int segment, int k) {
     ++fallbacks_;
     return;
   }
-  double dropped = 0;  // sum of the dropped degrees' largest |c_j|
+  double dropped = 0;  // sum over j >= d of the largest |c_j|: degree d is kept once it passes kChopTol
   int d = N;
-  for (; d > 0; --d) {
+  for (; d > 0 && truncate_; --d) {
     dropped += c.col(d).cwiseAbs().maxCoeff();
     if (dropped > kChopTol) break;
   }

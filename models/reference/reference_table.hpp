@@ -32,17 +32,20 @@ class ReferenceTable {
   static constexpr int kDegree = 32;         // Chebyshev degree per sub-interval
   static constexpr double kSpan = 2.0;       // [s] longest sub-interval
   static constexpr double kTailTol = 1e-12;  // convergence test on the last two coefficients
-  // Truncation: each sub-interval's series is cut after the last degree d
-  // with sum_{j > d} max_i |c_ij| > kChopTol. As |T_j(x)| <= 1 on the
-  // interval, the cut changes no component by more than kChopTol, far below
-  // the interpolant's own error bound (kTailTol); a smooth piece's series
-  // decays well before kDegree, and Clenshaw's recurrence, a dependency chain
-  // as long as the degree, is the table's whole cost per lookup.
+  // Truncation: each sub-interval's series keeps degrees 0..d, d the
+  // smallest with sum_{j > d} max_i |c_ij| <= kChopTol (the tail dropped).
+  // As |T_j(x)| <= 1 on the interval, the cut changes no component by more
+  // than kChopTol: an absolute bound in each component's own unit (rad,
+  // rad/s, rad/s^2, m, m/s), far below the interpolant's error bound
+  // (kTailTol). A smooth piece's series decays well before kDegree, and
+  // Clenshaw's recurrence, a dependency chain as long as the degree, is the
+  // table's whole cost per lookup.
   static constexpr double kChopTol = 1e-14;
   static constexpr int kComponents = 24;     // q, qd, qdd (6 each), p, v (3 each)
 
-  // The reference must outlive the table. Allocates all storage.
-  explicit ReferenceTable(const Reference& ref);
+  // The reference must outlive the table. Allocates all storage. truncate:
+  // cut each series as above (false: every series keeps kDegree; for tests).
+  explicit ReferenceTable(const Reference& ref, bool truncate = true);
 
   // As Reference::eval(t, out, segment, extend), from the interpolant where
   // there is one. Allocation-free.
@@ -65,6 +68,7 @@ class ReferenceTable {
   static void pack(const ReferenceSample& s, double* c);
 
   const Reference& ref_;
+  bool truncate_;
   std::vector<int> first_;   // per segment: index of its first sub-interval; one past the end at the back
   std::vector<Sub> subs_;
   std::vector<Coefs> coefs_;  // per sub-interval

@@ -41,7 +41,7 @@ class RigidBodyBlock {
   }
 
   // bias_known: w.h holds bias(q, qd) from this back-end (on the exact
-  // Jacobian's scalar perhaps its values only: TangentBackend does not read it).
+  // Jacobian's scalar perhaps its values only, all TangentBackend reads).
   template <class S>
   void accelerations(PlantWorkspace<S>& w, bool bias_known) const {
     if (bias_known) {

@@ -64,6 +64,14 @@ constexpr FrictionModel friction_model() {
   return m;
 }
 static_assert(friction_model<NoFriction>().none(), "the first law, the default, is none");
+// The plant's constrained accelerations (a stuck joint) read h, which it
+// computes only for a law that reads the applied torque.
+template <class... Laws>
+constexpr bool events_read_applied_torque(FrictionLawList<Laws...>*) {
+  return ((!Laws::kStickSlipEvents || Laws::kNeedsAppliedTorque) && ...);
+}
+static_assert(events_read_applied_torque(static_cast<FrictionLaws*>(nullptr)),
+              "a law with stick/slip events must read the applied torque (Plant::friction_and_accelerations)");
 
 // Friction torque on the motor shaft, opposing motion [N m, motor side].
 // w: shaft speed; tau_applied: the torque the friction must resist when the
