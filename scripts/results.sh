@@ -3,7 +3,8 @@
 # experiments/sweeps/ (work-precision on the paper's scenes and on the Stanford
 # arm's tracking scene, the dynamics back-ends inside the ODE, the stiff
 # scenes), the stiffness tables, the
-# planning methods (experiments/planning.py), the observed orders, the test set,
+# planning methods (experiments/planning.py), the observed orders and their
+# rounding spread (experiments/rounding_spread.py), the test set,
 # the output-grid table (experiments/output_grid.py), the extreme runs
 # (tests/check_extreme_runs.py, results/reliability/), and the report. A fresh run
 # takes about 20 minutes on 2 cores (the report's header states how long its
@@ -31,6 +32,7 @@ done
 /usr/bin/python3 experiments/stiffness_table.py
 /usr/bin/python3 experiments/planning.py
 /usr/bin/python3 experiments/observed_order.py
+/usr/bin/python3 experiments/rounding_spread.py   # steps of the same run over the back-ends (rounding-level changes of f)
 /usr/bin/python3 experiments/testset.py
 /usr/bin/python3 experiments/output_grid.py
 # extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
