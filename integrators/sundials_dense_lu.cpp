@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <memory>
-#include <stdexcept>
 #include <new>
+#include <stdexcept>
 #include <type_traits>
 
 #include <Eigen/Dense>
@@ -137,9 +137,6 @@ realtype weighted_rms_norm(N_Vector x, N_Vector w) {
   return std::sqrt(weighted_square_sum(x, w) / static_cast<realtype>(NV_LENGTH_S(x)));
 }
 
-}  // namespace
-
-namespace {
 N_Vector with_state_ops(N_Vector v) {
   if (!v) throw std::bad_alloc();
   if (N_VEnableFusedOps_Serial(v, SUNTRUE) != 0) {

@@ -47,9 +47,9 @@ class BasicDynamicsBackend {
   // Forward dynamics where the caller has h = bias(q, qd) from this back-end
   // already (the plant's friction laws that read the applied torque need it
   // first). A back-end that factors H returns H^-1 (tau - h) for the h
-  // given, without forming h again: the CRBA shells (crba, crba-world) with
-  // their own H pass, the others from their mass_matrix and a Cholesky solve
-  // (backend_impl.hpp). One that forms no H (aba) ignores h and runs its own
+  // given, without forming h again: its mass_matrix and a Cholesky solve
+  // (backend_impl.hpp; for the CRBA ones the operations of their forward
+  // dynamics without its RNEA pass). One that forms no H (aba) ignores h and runs its own
   // forward dynamics, so h must be this back-end's bias(q, qd): then every
   // back-end returns its forward dynamics, up to rounding.
   virtual void forward_dynamics_with_bias(ConstVecRef q, ConstVecRef qd, ConstVecRef h, ConstVecRef tau,

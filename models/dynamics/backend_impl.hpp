@@ -87,10 +87,7 @@ class Adapter final : public BasicDynamicsBackend<S> {
   void forward_dynamics_with_bias(ConstVecRef q, ConstVecRef qd, ConstVecRef h, ConstVecRef tau,
                                   VecRef qdd) override {
     check(q, "q"), check(qd, "qd"), check(h, "h"), check(tau, "tau"), check(qdd, "qdd");
-    if constexpr (requires { algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau),
-                                                               vec_out<N>(qdd)); }) {
-      algo_.forward_dynamics_from_bias(vec_in<N>(q), vec_in<N>(h), vec_in<N>(tau), vec_out<N>(qdd));
-    } else if constexpr (factors_mass_matrix<Algo>()) {  // its H, then the Cholesky solve of its forward dynamics
+    if constexpr (factors_mass_matrix<Algo>()) {  // its H, then the Cholesky solve of its forward dynamics
       algo_.mass_matrix(vec_in<N>(q), H_);
       chol_.factor(H_);
       auto out = vec_out<N>(qdd);
@@ -114,7 +111,7 @@ class Adapter final : public BasicDynamicsBackend<S> {
 
   const Chain<S, N> chain_;
   Algo<S, N> algo_;
-  MatN<S, N> H_;         // forward_dynamics_with_bias's H, for the back-ends without their own
+  MatN<S, N> H_;         // forward_dynamics_with_bias's H and its factor
   Cholesky<S, N> chol_;
 };
 

@@ -101,9 +101,7 @@ class CompositeInertia {
 // The shell of the CRBA back-ends: H from a composite-inertia kernel (`full`:
 // every entry; `lower`: at least the lower triangle, all the Cholesky
 // factorisation reads), h from one RNEA pass on the same joint transforms,
-// qdd by Cholesky. `forward_dynamics_from_bias` takes h already computed by
-// bias(q, qd) (the plant's friction laws need it first) and skips the RNEA
-// pass, with the same arithmetic as forward_dynamics.
+// qdd by Cholesky.
 template <class S, int N, class Kernel>
 class CrbaShell : public RneaBased<S, N> {
   using Base = RneaBased<S, N>;
@@ -127,24 +125,12 @@ class CrbaShell : public RneaBased<S, N> {
     rot_.compute(c_, q);
     rnea_.run(c_, rot_, qd, zero_, true, qdd);  // qdd <- h
     for (int j = 0; j < c_.n; ++j) qdd[j] = S(tau[j]) - qdd[j];
-    solve(qdd);
-  }
-
-  template <class Q, class Hb, class Tau, class Qdd>
-  void forward_dynamics_from_bias(const Q& q, const Hb& h, const Tau& tau, Qdd&& qdd) {
-    rot_.compute(c_, q);
-    for (int j = 0; j < c_.n; ++j) qdd[j] = S(tau[j]) - S(h[j]);
-    solve(qdd);
+    kernel_.lower(c_, rot_, H_);
+    chol_.factor(H_);
+    chol_.solve_in_place(qdd);
   }
 
  private:
-  template <class V>
-  void solve(V& rhs) {  // rhs <- H^-1 rhs, H from the joint transforms computed
-    kernel_.lower(c_, rot_, H_);
-    chol_.factor(H_);
-    chol_.solve_in_place(rhs);
-  }
-
   Kernel kernel_;
   MatN<S, N> H_;
   Cholesky<S, N> chol_;

@@ -32,9 +32,7 @@ class DualN {
   DualN() { d_.fill(0.0); }
   DualN(double v) : v_(v) { d_.fill(0.0); }  // NOLINT: implicit, as for a built-in scalar
   // v with tangent 1 in direction k (none if k is outside [0, N)).
-  DualN(double v, int k) : DualN(v) {
-    if (k >= 0 && k < N) d_[static_cast<std::size_t>(k)] = 1.0;
-  }
+  DualN(double v, int k) { seed(v, k); }
   // In place: value v, tangent 1 in direction k (none if k is outside
   // [0, N)), the others 0 (a seed without a temporary).
   PUMASIM_DUALN_INLINE void seed(double v, int k) {
