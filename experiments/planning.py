@@ -25,14 +25,17 @@ import math
 import os
 import subprocess
 import sys
+import tomllib
 
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
 SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
 PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
 VIA = 16
-# Written after reading results/planning/planning.csv (regenerated with the rest).
-FINDINGS = """At the paper's T = 24 s every Cartesian law tracks the path to about half a millimetre with the drives far from their limits: the planning method hardly matters when the arm is slow. The joint-space splines through 16 via-points are the exception, and their error does not shrink with T: between via-points the flange leaves the path by millimetres with cubic pieces and by about a millimetre with quintic ones (which also match the path's rates at the via-points), whatever the tracking. As T falls the errors grow slowly until a drive saturates; the law with the highest peak speed for a given T saturates first (the quintic, at 3 s), the others follow near the time-optimal T. The time-optimal timing traverses the path in T_opt with the voltages within the 80 % planned plus what feedback adds, no saturation, and an error near a millimetre; every other law run in the same time saturates for about half the outputs and leaves the path by centimetres. Planned with the whole voltage range it is faster still, but then saturates almost throughout and loses the path: the margin for feedback is part of the plan."""
+# Written after reading results/planning/planning.csv (regenerated with the rest), each sentence with the
+# assertions report.py checks against the table (experiments/planning_findings.toml).
+with open(os.path.join(ROOT, "experiments", "planning_findings.toml"), "rb") as _f:
+    FINDINGS = " ".join(f["text"] for f in tomllib.load(_f)["findings"])
 
 
 # The methods run at every traversal time: their --set values.

@@ -5,18 +5,77 @@
 
 Reads every <sweep>_summary.json and <sweep>.csv under DIR (default results/)
 and results/stiffness/*.csv; every number in the report is read from those
-files (the sweeps' qualitative findings come from the sweep files, where they
-were written after reading the tables). --minutes: how long the whole
-regeneration took, for the header (scripts/results.sh passes it).
+files. The sweeps' findings (the prose under each table) come from the sweep
+files ([[sweep.findings]]) and the planning comparison's from
+experiments/planning_findings.toml, where they were written after reading the
+tables, each sentence with assertions that say what in the table makes it true
+(experiments/findings.py). Every assertion is checked against the table before
+anything is written: if a table contradicts a sentence the report exits with
+status 1, naming the sentence, the assertion and the rows, and writes nothing.
+Runs no simulation. --minutes: how long the whole regeneration took, for the
+header (scripts/results.sh passes it). --omit-findings: leave the findings out
+unchecked (tables they were not written about: the reduced sweeps of
+scripts/check_sweep_pipeline.sh).
 """
 import argparse
 import glob
 import math
 import os
+import tomllib
 
+import findings
 import mode_table
 import pumasim_io
 from pumasim_io import ROOT
+
+PLANNING_FINDINGS = os.path.join(ROOT, "experiments", "planning_findings.toml")
+STANDARD_TABLES = ("runs", "references", "creep", "limit")
+
+
+class Checks:
+    """The run's findings settings and the contradictions found so far."""
+
+    def __init__(self, results, omit):
+        self.results, self.omit, self.problems = results, omit, []
+
+    def lines(self, found, tables, where):
+        """The findings' paragraph (lines) after checking them against tables
+        (their problems kept for the end); nothing if omitted or none."""
+        if self.omit or not found:
+            return []
+        try:
+            for name in {a.get("table", "runs") for f in findings.validated(found, where)
+                         for a in f.get("assert", [])} - set(tables):
+                path = os.path.join(self.results, name)
+                if not os.path.exists(path):
+                    raise findings.FindingsError(f"{where}: table {name}: no {path}")
+                tables[name] = findings.plain_rows(read_csv(path))
+            self.problems += findings.check(found, tables, where)
+        except findings.FindingsError as e:
+            raise SystemExit(f"report: {e}")
+        return [findings.text(found), ""]
+
+
+def sweep_tables(summary, rows):
+    """The tables a sweep's findings can name: its runs (with the derived
+    names), its references, creep and distance to the limit variant."""
+    rank = summary["rank_by"]
+    values = {v["label"]: v["value"] for v in summary["variants"]}
+
+    def labelled(per_variant):
+        return [findings.Row({"variant": lab, "value": values.get(lab), "target": rank["target"], **x})
+                for lab, x in (per_variant or {}).items()]
+    return {"runs": [findings.run_row(r, rank["column"], rank["target"]) for r in rows],
+            "references": labelled(summary["agreement"]), "creep": labelled(summary.get("creep")),
+            "limit": labelled(summary.get("distance_to_limit"))}
+
+
+def sweep_findings(summary, rows, checks):
+    """Lines: the sweep's checked findings, from its sweep file."""
+    path = os.path.join(ROOT, summary["file"])
+    if checks.omit or not os.path.exists(path):
+        return []
+    return checks.lines(findings.sweep_findings(path), sweep_tables(summary, rows), summary["file"])
 
 
 def read_csv(path):
@@ -71,7 +130,7 @@ def references_table(summary):
     return out
 
 
-def limit_and_creep(summary):
+def limit_and_creep(summary, checks):
     """Lines: each variant's reference against the limit variant's, and the
     creep table (sweeps without a limit or a stuck variant: nothing)."""
     out = []
@@ -83,6 +142,9 @@ def limit_and_creep(summary):
                 f"distance): {cells}.", ""]
     if summary.get("creep"):
         st = summary["stuck_variant"]
+        if summary["creep"][st]["rad"] != 0.0:  # what the sentence below says of it
+            checks.problems.append(f"{summary['file']}: the creep table's `{st}` moves "
+                                   f"{summary['creep'][st]['rad']:.3g} rad while stuck; the report says zero")
         out += [f"Creep while stuck: over the intervals in which the `{st}` model holds a joint at exactly zero "
                 f"speed (the outputs 2 samples in from each end; {summary['creep'][st]['stuck_time_s']:.3g} s of "
                 "joint-time in all), the largest motion of that joint in each other variant's reference solution "
@@ -195,9 +257,9 @@ def modes_section(summary, folder, rel):
     return out
 
 
-def sweep_section(summary, folder, rel):
+def sweep_section(summary, folder, rel, checks):
     """The report's section on one sweep (its summary, its CSV in folder; rel:
-    folder relative to the report, for links)."""
+    folder relative to the report, for links; checks: its findings')."""
     name = summary["name"]
     if "rank_by" not in summary:
         raise SystemExit(f"report: {folder}/{name}_summary.json predates the error measures (no rank_by): "
@@ -215,10 +277,9 @@ def sweep_section(summary, folder, rel):
            f"table `{rel}/{name}.csv` ({summary['runs']} runs, {summary['failed']} failed, each with its reason). "
            f"Runs are ranked by the {rlabel} [{runit}] against the variant's reference, target {target:g} {runit}.",
            ""]
-    if summary.get("findings"):
-        out += [summary["findings"], ""]
+    out += sweep_findings(summary, rows, checks)
     out += references_table(summary)
-    out += limit_and_creep(summary)
+    out += limit_and_creep(summary, checks)
     cheapest, chosen = cheapest_runs(summary, rows)
     out += cheapest
     out += chosen_runs_table(summary, chosen)
@@ -234,7 +295,20 @@ def sweep_section(summary, folder, rel):
     return out
 
 
-def stiffness_section(folder, rel):
+def scenes_stiff_problems(rows):
+    """What contradicts the scenes table's sentences: stiff when the median
+    ratio is at least 100; named stiff_* only when stiff."""
+    bad = []
+    for r in rows:
+        stiff = r["stiff"] == "yes"
+        if stiff != (float(r["median_stiffness_ratio"]) >= 100):
+            bad.append(f"{r['scene']}: stiff = {r['stiff']} with median stiffness ratio {r['median_stiffness_ratio']}")
+        if r["scene"].startswith("stiff_") and not stiff:
+            bad.append(f"{r['scene']}: named stiff_* but not stiff")
+    return [f"stiffness/scenes.csv: {b}" for b in bad]
+
+
+def stiffness_section(folder, rel, checks):
     files = sorted(f for f in glob.glob(os.path.join(folder, "*.csv"))
                    if os.path.basename(f) not in ("conditioning.csv", "scenes.csv"))
     if not files:
@@ -252,6 +326,7 @@ def stiffness_section(folder, rel):
                 "by this measure.", "",
                 "| scene | duration [s] | max spectral radius [1/s] | fastest state | stiffness ratio: median "
                 "(min … max) | stiff |", "|---|---:|---:|---|---|---|"]
+        checks.problems += scenes_stiff_problems(read_csv(scenes))
         for r in read_csv(scenes):
             out.append(f"| {r['scene']} | {float(r['t_end_s']):.3g} | {float(r['max_spectral_radius_per_s']):.4g} | "
                        f"{r['fastest_state']} | {float(r['median_stiffness_ratio']):.3g} "
@@ -317,7 +392,7 @@ def conditioning_section(folder, rel):
     return out + [""]
 
 
-def planning_section(folder, rel):
+def planning_section(folder, rel, checks):
     path = os.path.join(folder, "planning.csv")
     if not os.path.exists(path):
         return []
@@ -332,7 +407,7 @@ def planning_section(folder, rel):
            "trapezoid. Tracking error: distance to where the reference is at that instant; path error: distance to "
            "the geometric path. Peak amplifier voltage and motor current per joint (limit 40 V); saturated: the "
            "largest share of outputs at which a joint's controller or amplifier is at its limit.", "",
-           summary["findings"], "",
+           *planning_findings(rows, checks),
            "| method | T [s] | max tracking [mm] | max path [mm] | RMS path [mm] | peak e_a [V] | peak i [A] | "
            "saturated |", "|---|---:|---:|---:|---:|---|---|---:|"]
     for r in rows:
@@ -349,25 +424,53 @@ def planning_section(folder, rel):
     return out
 
 
+def planning_findings(rows, checks):
+    """Lines: the planning comparison's checked findings."""
+    with open(PLANNING_FINDINGS, "rb") as f:
+        found = tomllib.load(f)["findings"]
+    return checks.lines(found, {"runs": findings.plain_rows(rows)}, os.path.relpath(PLANNING_FINDINGS, ROOT))
+
+
+def minutes_of_last_run(res, minutes):
+    """The minutes the header quotes: those given (--minutes), else the last
+    full run's, kept in res/report_run.json (None if neither)."""
+    path = os.path.join(res, "report_run.json")
+    if minutes is None and os.path.exists(path):
+        minutes = pumasim_io.read_json(path).get("minutes_of_last_full_run")
+    return minutes
+
+
+def header(minutes, omit_findings):
+    """The report's first lines."""
+    return ["# pumasim results", "",
+            "Generated by `scripts/results.sh` (sweeps, stiffness tables, then `experiments/report.py`); "
+            "do not edit by hand."
+            + (f" Its last run took {minutes:.0f} min on this machine (2 cores; runs already complete "
+               "under build/sweeps/ are skipped)." if minutes else ""),
+            "Wall times are medians of repeated runs, with their range, on a shared machine (each run pinned to "
+            "one CPU where the platform allows): compare them within one table; right-hand-side evaluations do "
+            "not depend on the machine."
+            + ("" if omit_findings else " The findings under each table are written by hand, each sentence with "
+               "assertions beside it (in its sweep file; the planning comparison's in "
+               "`experiments/planning_findings.toml`) that this report checks against the table's rows when it is "
+               "written: a table that contradicts one fails the report."), "",
+            "Other results: `paper/README.md` (the paper's experiment), `dynamics_backends.md` (the dynamics "
+            "back-ends' cost).", ""]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--results", default=os.path.join(ROOT, "results"))
     ap.add_argument("--out", default=None)
     ap.add_argument("--minutes", type=float, default=None)
+    ap.add_argument("--omit-findings", action="store_true",
+                    help="leave the hand-written findings out, unchecked (tables they were not written about)")
     args = ap.parse_args()
     res = args.results
+    checks = Checks(res, args.omit_findings)
     out_path = args.out or os.path.join(res, "README.md")
     out_dir = os.path.dirname(os.path.abspath(out_path))
-    lines = ["# pumasim results", "",
-             "Generated by `scripts/results.sh` (sweeps, stiffness tables, then `experiments/report.py`); "
-             "do not edit by hand."
-             + (f" Its last run took {args.minutes:.0f} min on this machine (2 cores; runs already complete "
-                "under build/sweeps/ are skipped)." if args.minutes else ""),
-             "Wall times are medians of repeated runs, with their range, on a shared machine (each run pinned to "
-             "one CPU where the platform allows): compare them within one table; right-hand-side evaluations do "
-             "not depend on the machine.", "",
-             "Other results: `paper/README.md` (the paper's experiment), `dynamics_backends.md` (the dynamics "
-             "back-ends' cost).", ""]
+    lines = header(minutes_of_last_run(res, args.minutes), args.omit_findings)
     summaries = []
     for path in sorted(glob.glob(os.path.join(res, "*", "*_summary.json"))):
         summaries.append((pumasim_io.read_json(path), os.path.dirname(path)))
@@ -379,12 +482,15 @@ def main():
             continue
         lines += [f"## {title}", ""]
         for s, d in chosen:
-            lines += sweep_section(s, d, os.path.relpath(d, out_dir))
+            lines += sweep_section(s, d, os.path.relpath(d, out_dir), checks)
     plan_dir = os.path.join(res, "planning")
-    lines += planning_section(plan_dir, os.path.relpath(plan_dir, out_dir))
+    lines += planning_section(plan_dir, os.path.relpath(plan_dir, out_dir), checks)
     stiff_dir = os.path.join(res, "stiffness")
-    lines += stiffness_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
+    lines += stiffness_section(stiff_dir, os.path.relpath(stiff_dir, out_dir), checks)
     lines += conditioning_section(stiff_dir, os.path.relpath(stiff_dir, out_dir))
+    if checks.problems:
+        raise SystemExit(f"report: {len(checks.problems)} finding(s) contradicted by their tables; nothing written "
+                         "(correct the sentence and its assertion, or the table):\n" + "\n".join(checks.problems))
     pumasim_io.write_text_atomic(out_path, "\n".join(lines) + "\n")
     if args.minutes:  # the figure the header quotes, kept beside the tables it describes
         pumasim_io.write_json_atomic(os.path.join(res, "report_run.json"),
