@@ -4,10 +4,13 @@ killed at random instants and between its renames, a read-only or full
 output location. A tiny reduced sweep (passive_arm, 20 ms, six runs) in a
 temporary folder stands in for a real one; a wrapper script stands in for
 pumasim where a crash, a slow run or a log of the runs started is needed.
+Nothing here needs the checkout to be readable by another user: the suite
+passes from a clone in a private (0700) folder, as root too (issue 31).
 
     PUMASIM=build/release/bin/pumasim /usr/bin/python3 -m pytest -q tests/test_sweep_faults.py
 """
 import os
+import ctypes
 import random
 import resource
 import shutil
@@ -76,14 +79,13 @@ sys.exit(rc)
 
 
 class Sweep:
-    """A tiny sweep of its own in a fresh folder `base` (readable by every
-    user): the sweep file, the wrapper and its log; the runs in `work`, the
-    merge output in `out` (with a file the program did not write)."""
+    """A tiny sweep of its own in a fresh folder `base`: the sweep file, the
+    wrapper and its log; the runs in `work`, the merge output in `out` (with a
+    file the program did not write)."""
 
     def __init__(self):
         self.name = "faults"
         self.base = tempfile.mkdtemp(prefix="pumasim_faults_")
-        os.chmod(self.base, 0o755)
         self.work = os.path.join(self.base, "work")
         self.out = os.path.join(self.base, "results", "folder")
         self.file = os.path.join(self.base, self.name + ".toml")
@@ -312,12 +314,35 @@ def test_a_merge_killed_between_its_renames_leaves_no_undetected_mismatch(sw):
     finish_merge(sw)
 
 
-def unprivileged():
-    """For a child process run by root: run it as nobody, for whom the
-    folders root made are read-only (root may write anywhere)."""
+CAP_DAC_OVERRIDE = 1  # linux/capability.h
+CAP_SETPCAP = 8
+PR_CAPBSET_DROP = 24  # linux/prctl.h
+
+
+def can_drop_dac_override():
+    """True unless this process is root without CAP_SETPCAP (which dropping a
+    capability from the bounding set needs)."""
+    if os.geteuid() != 0:
+        return True
+    with open("/proc/self/status") as f:
+        eff = next(int(line.split()[1], 16) for line in f if line.startswith("CapEff:"))
+    return bool(eff >> CAP_SETPCAP & 1)
+
+
+def read_only_for_root():
+    """In a child of root, before it execs: drops CAP_DAC_OVERRIDE from its
+    capability bounding set, so that neither the program it runs nor that
+    program's children (sweep.py's pumasim) have it. Root then obeys a folder's
+    mode 0555 like any owner: writing into it fails with EACCES, as for a user
+    in a read-only location. Root keeps its identity and CAP_DAC_READ_SEARCH,
+    so it still reads the checkout wherever it lies: a checkout in a private
+    (0700) folder is not readable by another user, which running the child as
+    nobody needed (issue 31). A no-op for other users (the folders' modes
+    already bind them)."""
     if os.geteuid() == 0:
-        os.setgid(65534)
-        os.setuid(65534)
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(PR_CAPBSET_DROP, CAP_DAC_OVERRIDE, 0, 0, 0) != 0:
+            raise OSError(ctypes.get_errno(), "prctl(PR_CAPBSET_DROP, CAP_DAC_OVERRIDE)")
 
 
 def file_size_limit():
@@ -331,7 +356,6 @@ def file_size_limit():
 
 def run_limited(sw, preexec, *extra):
     mpl = tempfile.mkdtemp(prefix="pumasim_faults_mpl_")  # matplotlib's cache, writable by the child
-    os.chmod(mpl, 0o777)
     env = {**sw.env(fake=False), "MPLCONFIGDIR": mpl}
     try:
         return subprocess.run(sw.args(*extra), capture_output=True, text=True, env=env, preexec_fn=preexec)
@@ -341,9 +365,13 @@ def run_limited(sw, preexec, *extra):
 
 @pytest.mark.parametrize("fault", ["read-only", "full"])
 def test_a_read_only_or_full_output_location_is_a_clear_error(sw, fault):
-    preexec = unprivileged if fault == "read-only" else file_size_limit
+    """read-only: the folder's mode 0555 (root's child without
+    CAP_DAC_OVERRIDE, read_only_for_root); full: a file size limit."""
+    if fault == "read-only" and not can_drop_dac_override():
+        pytest.skip("root without CAP_SETPCAP: cannot make a folder read-only to its child")
+    preexec = read_only_for_root if fault == "read-only" else file_size_limit
     os.makedirs(sw.work)
-    if fault == "read-only" and os.geteuid() != 0:
+    if fault == "read-only":
         os.chmod(sw.work, 0o555)
     # The run folders' location.
     p = run_limited(sw, preexec)
@@ -356,7 +384,7 @@ def test_a_read_only_or_full_output_location_is_a_clear_error(sw, fault):
     assert sw.run(fake=False).returncode == 0
     before = {f: open(os.path.join(sw.out, f), "rb").read() for f in os.listdir(sw.out)}
     sw.write(target=2.0)
-    if fault == "read-only" and os.geteuid() != 0:
+    if fault == "read-only":
         os.chmod(sw.out, 0o555)
     p = run_limited(sw, preexec, "--merge")
     os.chmod(sw.out, 0o755)
@@ -365,3 +393,27 @@ def test_a_read_only_or_full_output_location_is_a_clear_error(sw, fault):
     assert sw.out in p.stderr, p.stderr
     assert {f: open(os.path.join(sw.out, f), "rb").read() for f in os.listdir(sw.out)} == before, \
         "a failed merge changed or left files"
+
+
+def test_the_read_only_case_passes_from_a_checkout_in_a_private_folder():
+    """Issue 31: the repository cloned into a fresh `mktemp -d` folder (0700,
+    here as whoever runs the suite, root in CI) with its build inside. A copy
+    of experiments/, of this file and of the binary in such a folder runs the
+    read-only case there."""
+    if not can_drop_dac_override():
+        pytest.skip("root without CAP_SETPCAP: cannot make a folder read-only to its child")
+    private = tempfile.mkdtemp(prefix="pumasim_private_checkout_")  # mode 0700, like mktemp -d
+    try:
+        shutil.copytree(os.path.join(ROOT, "experiments"), os.path.join(private, "experiments"),
+                        ignore=shutil.ignore_patterns("__pycache__", "*.cpp", "*.hpp"))
+        os.makedirs(os.path.join(private, "tests"))
+        test_copy = shutil.copy(os.path.abspath(__file__), os.path.join(private, "tests"))
+        binary = os.path.join(private, "build", "release", "bin", "pumasim")
+        os.makedirs(os.path.dirname(binary))
+        shutil.copy2(REAL, binary)
+        node = test_copy + "::test_a_read_only_or_full_output_location_is_a_clear_error[read-only]"
+        p = subprocess.run([PY, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rs", node], capture_output=True,
+                           text=True, cwd=private, env={**os.environ, "PUMASIM": binary})
+        assert p.returncode == 0 and "1 passed" in p.stdout, p.stdout + p.stderr
+    finally:
+        shutil.rmtree(private, ignore_errors=True)
