@@ -13,9 +13,13 @@ published reference value. Writes, into --out:
 
   testset.csv           the binary's output, as it printed it
   problems.csv          the problems (size, span, tolerance scale, dt ladder, reference source)
-  observed_slopes.csv   per problem x integrator: the least-squares slope of
-                        log10(error) against log10(RHS evaluations) over the runs that succeeded
-                        (reached the end point with a mixed error below 1)
+  observed_slopes.csv   per problem x integrator: the observed order fitted over the
+                        ladder's asymptotic range (experiments/order_fit.py: above the
+                        rounding floor, at steps where the method is stable), or why there is
+                        none (order_mark), the runs in that range and each other run's mark;
+                        and, for the record, the least-squares slope of log10(error) against
+                        log10(RHS evaluations) over every run that succeeded (reached the end
+                        point with a mixed error below 1), which is not an order
   <problem>.png         work-precision: error against RHS evaluations, one line per
                         integrator, the failed runs named in the title
   README.md             tables per problem and the methods whose error does not fall
@@ -33,6 +37,7 @@ import sys
 import time
 from collections import OrderedDict, defaultdict
 
+import order_fit
 import pumasim_io
 from pumasim_io import ROOT
 
@@ -70,6 +75,11 @@ def fnum(x):
 def fmt(x, digits=3):
     v = fnum(x)
     return "–" if math.isnan(v) else f"{v:.{digits}g}"
+
+
+def fixed4(x):
+    """A float with 4 decimals, '' for nan."""
+    return f"{x:.4f}" if math.isfinite(x) else ""
 
 
 def fmt_int(x):
@@ -112,8 +122,24 @@ def loose_to_tight(runs):
     return sorted(runs, key=lambda r: -fnum(r["setting"]))
 
 
+def ladder_fit(runs):
+    """order_fit.asymptotic_fit over one method's ladder (runs: loose to
+    tight): the error is the mixed error, n is 1/dt for a fixed step and the
+    RHS evaluations for an adaptive method, the floor is the rounding one
+    unit of roundoff per step accumulates to, EPS x steps (closed-form and
+    published references are taken as exact); a run with a mixed error of
+    MAX_ERROR or more is unstable."""
+    name, fixed = runs[0]["integrator"], runs[0]["kind"] == "fixed"
+    if name not in order_fit.THEORY:
+        raise SystemExit(f"testset.py: {name}: no theoretical order in order_fit.THEORY (experiments/order_fit.py)")
+    pts = [{"ok": r["ok"] == "1", "e": fnum(r["mixed_error"]), "floor": EPS * max(fnum(r["steps"]), 1.0),
+            "n": 1.0 / fnum(r["setting"]) if fixed else fnum(r["rhs_evaluations"])} for r in runs]
+    return order_fit.asymptotic_fit(pts, order_fit.THEORY[name], fixed, unstable=MAX_ERROR)
+
+
 def analyse(groups):
-    """Per (problem, integrator): slope, and the findings on error against tolerance."""
+    """Per (problem, integrator): the raw slope, the observed order over the
+    asymptotic range (ladder_fit), and the findings on error against tolerance."""
     out = OrderedDict()
     for key, runs in groups.items():
         runs = loose_to_tight(runs)
@@ -126,7 +152,7 @@ def analyse(groups):
         falls = None
         if len(ok) >= 2:
             falls = fnum(ok[-1]["mixed_error"]) < fnum(ok[0]["mixed_error"])
-        out[key] = {"runs": runs, "ok": ok, "slope": s, "rises": rises, "falls": falls,
+        out[key] = {"runs": runs, "ok": ok, "slope": s, "fit": ladder_fit(runs), "rises": rises, "falls": falls,
                     "floor": bool(ok) and fnum(ok[-1]["mixed_error"]) <= rounding_level(ok[-1])}
     return out
 
@@ -197,9 +223,14 @@ def header(rows, problems, cmd, elapsed, reduced):
          "Error: the test set's mixed error at the end point, max over components of |y − y_ref| / "
          "(|y_ref| + atol/rtol) with atol/rtol the problem's scale below; scd = −log10(mixed error) is "
          "the number of correct significant digits. Adaptive methods run with rtol = setting and atol = "
-         "rtol × scale; fixed-step methods with dt = setting. Slope: least squares of log10(error) against "
-         f"log10(RHS evaluations) over the runs that succeeded, i.e. reached the end point with a mixed error "
-         f"below {MAX_ERROR:g} (−slope is the observed order per RHS evaluation for a fixed-step method).", "",
+         "rtol × scale; fixed-step methods with dt = setting. Observed order: least squares of −log(error) "
+         "against log(1/dt) (fixed step) or log(RHS evaluations) (adaptive: a cost exponent, which the "
+         "step-size controller shapes; for the variable-order CVODE methods no order) over the ladder's "
+         "asymptotic range only (`experiments/order_fit.py`); a run's floor is ε × its steps, the rounding "
+         "one unit of roundoff per step adds up to (the references are closed forms or the published "
+         f"values, taken as exact), and a run with a mixed error of {MAX_ERROR:g} or more is unstable. "
+         + order_fit.RULE_TEXT + " `observed_slopes.csv` has each fit, its runs, its reason and the raw "
+         "slope of log10(error) against log10(RHS evaluations) over every run that succeeded.", "",
          "## Problems", "",
          "| problem | equations | stiff | t_end | atol/rtol | fixed steps | reference |",
          "|---|---:|---|---:|---:|---|---|"]
@@ -283,7 +314,9 @@ def method_row(name, a):
     why = f"{fmt(bad[0]['setting'])}: {short(bad[0]['message'], 90)}" if bad else ""
     if not why and len(ok) < len(runs):
         why = "error ≥ 1 at " + ", ".join(fmt(r["setting"]) for r in runs if not succeeded(r))
-    s = "–" if a["slope"] is None else f"{a['slope']:.2f}"
+    s = order_fit.slope_cell(a["fit"]).replace("|", "/")
+    if math.isfinite(a["fit"]["slope"]):
+        s += f" ({len(a['fit']['used'])})"
     return (f"| `{name}` | {kind} | {len(ok)} / {len(runs)} | {ladder} | {span('setting', fmt)} | "
             f"{span('scd', fmt)} | {span('rhs_evaluations', fmt_int)} | {best_s} | {s} | {wall:.3g} "
             f"| {why.replace('|', '/')} |")
@@ -300,7 +333,8 @@ def problem_sections(problems, analysis):
         L += [f"## `{prob}`", "", f"{p['description']}. Reference: {p['reference_source']}. "
               f"Plot: `{prob}.png`.", "",
               "| integrator | kind | runs ok | ladder | loosest → tightest setting that succeeded | scd there "
-              "| RHS evaluations there | best scd (RHS) | slope | wall time, s (all runs) | first failure |",
+              "| RHS evaluations there | best scd (RHS) | observed order (runs in range) | wall time, s (all runs) "
+              "| first failure |",
               "|---|---|---:|---|---|---|---|---|---:|---:|---|"]
         for name, a in by_problem.get(prob, []):
             L.append(method_row(name, a))
@@ -319,13 +353,19 @@ def readme(rows, problems, analysis, args, cmd, elapsed, reduced):
 
 def write_slopes(path, analysis):
     """observed_slopes.csv: per problem x integrator its runs, those that
-    succeeded, and the slope."""
+    succeeded, the raw slope, and the observed order over the asymptotic
+    range (or why there is none) with each other run's mark."""
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
-    w.writerow(["problem", "integrator", "kind", "runs", "runs_ok", "slope_log_error_per_log_rhs"])
+    w.writerow(["problem", "integrator", "kind", "theoretical_order", "runs", "runs_ok",
+                "slope_log_error_per_log_rhs", "observed_order", "runs_in_range", "order_mark",
+                "finest_pair", "finest_pair_mark", "run_marks"])
     for (prob, name), a in analysis.items():
-        w.writerow([prob, name, a["runs"][0]["kind"], len(a["runs"]), len(a["ok"]),
-                    "" if a["slope"] is None else f"{a['slope']:.4f}"])
+        f = a["fit"]
+        marks = "; ".join(f"{fmt(r['setting'])} {m}" for r, m in zip(a["runs"], f["marks"]) if m)
+        w.writerow([prob, name, a["runs"][0]["kind"], order_fit.THEORY[name], len(a["runs"]), len(a["ok"]),
+                    "" if a["slope"] is None else f"{a['slope']:.4f}", fixed4(f["slope"]), len(f["used"]),
+                    f["reason"], fixed4(f["finest_pair"]), f["finest_pair_mark"] or "", marks])
     write_atomic(path, out.getvalue())
 
 
