@@ -98,6 +98,9 @@ struct NumberRule {
   bool (*ok)(double);
 };
 constexpr NumberRule kPositive{"a number > 0", [](double x) { return x > 0; }};
+constexpr NumberRule kRtol{"a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no "
+                           "digit controlled)",
+                           [](double x) { return x >= kRtolMin && x <= kRtolMax; }};
 constexpr NumberRule kSecondsBudget{"seconds >= 0 (0: no limit)", [](double x) { return x >= 0; }};
 constexpr NumberRule kStepBudget{"a whole number >= 0 (0: no limit)",
                                  [](double x) { return x >= 0 && x <= 1e18 && x == std::floor(x); }};
@@ -279,6 +282,8 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   for (double v : x) std::snprintf(buf, sizeof buf, " %.10g", v), o << buf;
   const RunContext robot = run_context({}, sc);  // what meta.json records of the robot file
   o << "\n# robot file: " << robot.robot_file << " (fnv1a64 " << robot.robot_fnv1a64 << ")\n";
+  // (every input file with its hash is in the resolved scene's footer above)
+  if (const std::string note = discontinuity_note(sc); !note.empty()) o << "# note: " << note << "\n";
   out << o.str();
   return kExitOk;
 }
@@ -345,6 +350,17 @@ int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   Scene sc = load_checked_scene(a.scene);
   const RunContext context = run_context(a.argv, sc);  // the start time, the robot file's hash as loaded
   const RunControls rc = run_controls(sc, a);
+  if (const std::string w = stability_warning(sc, rc); !w.empty()) err << "pumasim run: " << w << "\n";
+  if (const std::string note = discontinuity_note(sc); rc.adaptive && !note.empty()) {
+    err << "pumasim run: warning: " << sc.integrator.name << " is adaptive and " << note << "\n";
+  }
+  if (rc.adaptive && !a.quiet) {
+    char tol[160];
+    std::snprintf(tol, sizeof tol, "pumasim run: %s at rtol %.3g, atol %.3g (times each state's scale%s)\n",
+                  sc.integrator.name.c_str(), rc.options.rtol, rc.options.atol,
+                  a.rtol && !a.atol ? "; 1e-3 x --rtol, as --atol was not given" : "");
+    err << tol;
+  }
   // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
   const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
   std::size_t progress_width = 0;
@@ -373,10 +389,13 @@ void add_run(CLI::App* app, RunArgs& a) {
       ->check(registry_name([](const std::string& s) { find_integrator(s); }));
   add_text(app, "--backend", a.backend, "the dynamics back-end (pumasim backends; default: the scene's)", "NAME")
       ->check(registry_name([](const std::string& s) { find_backend(s); }));
-  add_number(app, "--dt", a.dt, kPositive, "fixed-step methods: the step [s]", "SECONDS");
-  add_number(app, "--rtol", a.rtol, kPositive, "adaptive methods: the relative tolerance");
+  add_number(app, "--dt", a.dt, kPositive, "fixed-step methods: the step [s] (default: the scene's integrator.dt, "
+             "else 5e-4)", "SECONDS");
+  add_number(app, "--rtol", a.rtol, kRtol, "adaptive methods: the relative tolerance (default: the scene's "
+             "integrator.rtol, else 1e-6)");
   add_number(app, "--atol", a.atol, kPositive,
-             "adaptive methods: the absolute tolerance per unit of each state's typical magnitude");
+             "adaptive methods: the absolute tolerance per unit of each state's typical magnitude (default: "
+             "1e-3 x --rtol when --rtol is given, else the scene's integrator.atol, else 1e-8)");
   add_number(app, "--t-end", a.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
   add_text(app, "--out", a.out, "the run folder (default runs/<scene name>/)", "DIR");
   app->add_flag("--force", a.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");

@@ -362,9 +362,11 @@ def program_identity(pumasim):
 @functools.lru_cache(maxsize=None)
 def resolved_scene(pumasim, scene, sets):
     """The scene as pumasim resolves it with the --set values `sets` (a
-    tuple): `pumasim check`'s text (every default, the state layout, the
-    robot file's hash) without the lines that name where files lie (the scene
-    file's path; the robot file's path, its hash kept)."""
+    tuple): `pumasim check`'s text (every default, the state layout, and the
+    hash of every file the scene read: the footer's `# input file:` lines)
+    without the paths, so that the key says what a run computes, not where
+    its files lie (the scene file's path; each input file's path, its hash
+    kept)."""
     cmd = [pumasim, "check", scene]
     for o in sets:
         cmd += ["--set", o]
@@ -375,8 +377,9 @@ def resolved_scene(pumasim, scene, sets):
     for line in p.stdout.splitlines():
         if line.startswith("# Resolved scene"):
             continue
-        if line.startswith("# robot file: "):
-            line = "# robot file" + line[line.rfind(" ("):]
+        for head in ("# robot file: ", "# input file: "):
+            if line.startswith(head):
+                line = head + line[line.rfind(" ("):]
         lines.append(line)
     return "\n".join(lines) + "\n"
 

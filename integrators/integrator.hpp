@@ -7,6 +7,7 @@
 // for every method. Options a method cannot honour are errors, not no-ops.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,10 @@ struct SetValuedRow {
   double scale = 1.0;          // the law's speed is scale * x[velocity] (a gear ratio: motor speed)
   double static_level = 0.0;   // s >= kinetic_level (a torque or force)
   double kinetic_level = 0.0;
+  // The law's "zero speed" band (its speed within +-band counts as rest: the
+  // paper's rule, Karnopp's); 0 for an exact law. Its edges are the switching
+  // surfaces a driver watches for chattering.
+  double band = 0.0;
 };
 
 // How one coupled set-valued solve went (OdeSystem::solve_set_valued).
@@ -65,6 +70,11 @@ class OdeSystem {
   // states of different units and sizes (an angle, a current, an integral).
   // A component's scale is a typical magnitude of it; the default is 1.
   virtual double tolerance_scale(int /*i*/) const { return 1.0; }
+  // The physically possible range of component i, |x_i| <= bound (+inf: none
+  // known), and the formula it came from; a driver ends a run that leaves it
+  // by a wide margin as unstable (a diverged method, not a result).
+  virtual double physical_bound(int /*i*/) const { return std::numeric_limits<double>::infinity(); }
+  virtual std::string physical_bound_why(int /*i*/) const { return {}; }
   // Root functions g(t, x): the integrators that find roots stop where one changes sign.
   virtual int num_roots() const { return 0; }
   virtual void roots(double /*t*/, const double* /*x*/, double* /*g*/) {}

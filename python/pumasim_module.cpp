@@ -185,6 +185,7 @@ class PyScene {
 
   Eigen::VectorXd rhs(double t, const py::handle& x_in) {
     const Eigen::VectorXd x = state_arg(x_in);
+    warn_discontinuous();
     Eigen::VectorXd f(x.size());
     plant_->rhs(t, x.data(), f.data());
     return f;
@@ -192,6 +193,7 @@ class PyScene {
 
   Eigen::MatrixXd jacobian(double t, const py::handle& x_in, bool exact) {
     const Eigen::VectorXd x = state_arg(x_in);
+    warn_discontinuous();
     Eigen::MatrixXd J;
     if (exact) {
       plant_->jacobian_exact(t, x.data(), J);
@@ -210,6 +212,19 @@ class PyScene {
   }
 
  private:
+  // An ODE solver given rhs meets the friction's jump without a word
+  // (scipy's BDF then fails obscurely): a RuntimeWarning, once per scene.
+  void warn_discontinuous() {
+    if (warned_) return;
+    warned_ = true;
+    if (const std::string note = discontinuity_note(scene_); !note.empty()) {
+      const std::string msg = scene_.file + ": rhs(t, x) is not smooth: " + note +
+                              "; a solver of your own meets the same (pumasim.run(scene, integrator=\"ab2\", "
+                              "dt=5e-4) integrates it as the paper did)";
+      if (PyErr_WarnEx(PyExc_RuntimeWarning, msg.c_str(), 1) != 0) throw py::error_already_set();
+    }
+  }
+
   Eigen::VectorXd state_arg(const py::handle& x_in) const {
     if (!discrete_.empty()) {
       throw std::invalid_argument(scene_.file + ": rhs(t, x) and jacobian(t, x) are the continuous right-hand side "
@@ -228,6 +243,7 @@ class PyScene {
   std::string discrete_;
   std::unique_ptr<Plant> plant_;
   std::unique_ptr<PlantSystem> system_;
+  bool warned_ = false;
 };
 
 // ---------------------------------------------------------------- runs
@@ -242,6 +258,15 @@ PyRun run(const py::object& scene_in, const RunRequest& request, const py::objec
   Scene sc = py::isinstance<PyScene>(scene_in) ? scene_in.cast<const PyScene&>().scene()
                                                : load_checked_scene(path_arg(scene_in), {});
   const RunControls rc = run_controls(sc, request);
+  // What `pumasim run` says on stderr before it starts, as Python warnings.
+  std::vector<std::string> warnings;
+  if (const std::string note = discontinuity_note(sc); rc.adaptive && !note.empty()) {
+    warnings.push_back(sc.integrator.name + " is adaptive and " + note);
+  }
+  if (std::string w = stability_warning(sc, rc); !w.empty()) warnings.push_back(std::move(w));
+  for (const std::string& w : warnings) {
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+  }
   std::optional<std::filesystem::path> dir;
   if (!out.is_none()) dir = path_arg(out);
   CompletedRun done;

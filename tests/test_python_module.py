@@ -214,6 +214,22 @@ def test_a_scene_with_discrete_state_refuses_rhs():
     assert pumasim.run(sampled, integrator="cvode-bdf", t_end=0.05).ok  # run() takes it, with its events
 
 
+def test_the_papers_rule_warns_an_ode_solver_and_an_adaptive_run():
+    """paper_slow's friction rule is discontinuous in the state: rhs warns
+    (scipy's BDF failed obscurely on it, issue 31), as does pumasim.run with
+    an adaptive method; a smooth scene gives no warning."""
+    s = pumasim.Scene.load(os.path.join(SCENES, "paper_slow.toml"))
+    x = s.initial_state()
+    with pytest.warns(RuntimeWarning, match="discontinuous in the state"):
+        s.rhs(0.0, x)
+    with pytest.warns(RuntimeWarning, match="cvode-bdf is adaptive and friction.model"):
+        pumasim.run(s, integrator="cvode-bdf", rtol=1e-6, t_end=0.01)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pumasim.Scene.load(PASSIVE).rhs(0.0, pumasim.Scene.load(PASSIVE).initial_state())
+
+
 # ---------------------------------------------------------------- bad input
 
 def test_an_unknown_key_names_file_and_key(tmp_path):

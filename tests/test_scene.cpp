@@ -33,7 +33,12 @@ std::vector<std::string> shipped_scenes() {
 }
 
 // The text after the header line (which names the source file).
-std::string body(const std::string& resolved) { return resolved.substr(resolved.find('\n')); }
+// The scene itself: without the header line naming the source and the footer
+// naming the files read (the copy reads itself, not the original).
+std::string body(const std::string& resolved) {
+  const std::size_t from = resolved.find('\n'), to = resolved.find("\n# input file: ");
+  return resolved.substr(from, to == std::string::npos ? std::string::npos : to - from);
+}
 
 void expect_same_drive(const PlantConfig& a, const PlantConfig& b, const std::string& what) {
   ASSERT_EQ(a.amplifier.size(), b.amplifier.size()) << what;

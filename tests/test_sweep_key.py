@@ -3,10 +3,14 @@ determines it is unchanged: a tiny sweep (passive_arm, 20 ms, three runs) is
 run, re-run (nothing runs), then re-run after each change -- t_end, the scene
 file, a variant's --set, a method's setting, the program -- and each change
 runs again exactly the runs it concerns; --merge refuses a stale summary.
+Every other file a scene reads is in the key by its content too: a URDF
+robot's side file and the URDF itself, a joint-space reference CSV and an
+open-loop input CSV (the footer of `pumasim check`: issue 31's stale sweep).
 
     PUMASIM=build/release/bin/pumasim /usr/bin/python3 -m pytest -q tests/test_sweep_key.py
 """
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -43,13 +47,13 @@ dt = [{dt}]
 """
 
 
-@pytest.fixture
-def setup(tmp_path, monkeypatch):
-    """A copy of passive_arm.toml the test may edit, a counter of `pumasim run`
-    processes, and a function that loads the tiny sweep and runs what is not
-    complete, returning the ids of the runs it ran."""
-    scene = tmp_path / "passive_arm.toml"
-    shutil.copy(os.path.join(pumasim_io.ROOT, "experiments", "scenes", "passive_arm.toml"), scene)
+SCENES = os.path.join(pumasim_io.ROOT, "experiments", "scenes")
+
+
+def _tiny_sweep(tmp_path, monkeypatch, scene):
+    """A counter of `pumasim run` processes, and a function that loads the
+    tiny sweep over `scene` and runs what is not complete, returning the ids
+    of the runs it ran."""
     monkeypatch.setattr(sweep, "scene_file", lambda s: str(scene))
     ran = []
     real_run = subprocess.run
@@ -72,7 +76,15 @@ def setup(tmp_path, monkeypatch):
         assert all(sm["stats"]["ok"] for sm in summaries), [sm["stats"]["failure"] for sm in summaries]
         return s, sorted(os.path.relpath(d, work) for d in ran)
 
-    return scene, work, run_sweep
+    return work, run_sweep
+
+
+@pytest.fixture
+def setup(tmp_path, monkeypatch):
+    """A copy of passive_arm.toml the test may edit, and the tiny sweep over it."""
+    scene = tmp_path / "passive_arm.toml"
+    shutil.copy(os.path.join(SCENES, "passive_arm.toml"), scene)
+    return (scene,) + _tiny_sweep(tmp_path, monkeypatch, scene)
 
 
 ALL = ["base/check", "base/reference", "base/rk4_dt0.002"]
@@ -113,4 +125,76 @@ def test_another_program_reruns_and_merge_refuses_stale_runs(setup, monkeypatch)
     # Another build of pumasim: everything again.
     monkeypatch.setattr(sweep, "program_identity", lambda pumasim: "pumasim 0000000 (another build)")
     assert run_sweep()[1] == ALL
+    assert run_sweep()[1] == []
+
+
+def _urdf_scene(tmp_path):
+    """passive_arm on a copy of the shipped PUMA URDF and its side file."""
+    robots = os.path.join(pumasim_io.ROOT, "models", "robots")
+    for f in ("puma560.urdf", "puma560.urdf.toml"):
+        shutil.copy(os.path.join(robots, f), tmp_path / f)
+    scene = tmp_path / "passive_arm.toml"
+    text = open(os.path.join(SCENES, "passive_arm.toml")).read()
+    scene.write_text(text.replace('robot = "puma560"', f'robot = "{tmp_path / "puma560.urdf"}"'))
+    return scene
+
+
+def _copied_scene(name, csv):
+    def make(tmp_path):
+        shutil.copy(os.path.join(SCENES, csv), tmp_path / csv)
+        shutil.copy(os.path.join(SCENES, name), tmp_path / name)
+        return tmp_path / name
+    return make
+
+
+def _bump_last_digit(path):
+    """Changes the last digit of the CSV's first value after a comma (the
+    first row's first joint value): still a valid file."""
+    text = path.read_text()
+    m = re.search(r"(?<=,)-?\d+\.\d+", text)
+    assert m, f"{path}: no value to change"
+    d = m.end() - 1
+    path.write_text(text[:d] + str((int(text[d]) + 1) % 10) + text[d + 1:])
+
+
+def _rotor_inertia_times_100(path):
+    """The side file's rotor inertias x 100 (the issue's reproducer)."""
+    text, n = re.subn(r"(rotor_inertia\s*=\s*)([0-9.e+-]+)", lambda m: m.group(1) + repr(float(m.group(2)) * 100),
+                      path.read_text())
+    assert n > 0, f"{path}: no rotor_inertia"
+    path.write_text(text)
+
+
+def _urdf_mass_changed(path):
+    """The first link with mass: its mass x 1.01."""
+    text = path.read_text()
+    m = next(m for m in re.finditer(r'<mass value="([^"]*)"', text) if float(m.group(1)) > 0)
+    path.write_text(text[:m.start(1)] + repr(float(m.group(1)) * 1.01) + text[m.end(1):])
+
+
+# (scene maker, file edited, edit): every kind of file a scene reads besides
+# the scene file (tested above) re-runs the sweep when its content changes.
+EDITS = {
+    "urdf side file": (_urdf_scene, "puma560.urdf.toml", _rotor_inertia_times_100),
+    "urdf": (_urdf_scene, "puma560.urdf", _urdf_mass_changed),
+    "joint-space reference csv": (_copied_scene("joint_space_csv.toml", "joint_space_csv.csv"),
+                                  "joint_space_csv.csv", _bump_last_digit),
+    "open-loop input csv": (_copied_scene("open_loop_voltage.toml", "open_loop_voltage.csv"),
+                            "open_loop_voltage.csv", _bump_last_digit),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(EDITS))
+def test_editing_any_file_the_scene_reads_reruns_and_merge_refuses_the_old_runs(tmp_path, monkeypatch, kind):
+    make, edited, edit = EDITS[kind]
+    scene = make(tmp_path)
+    work, run_sweep = _tiny_sweep(tmp_path, monkeypatch, scene)
+    s, ran = run_sweep()
+    assert ran == ALL
+    assert run_sweep()[1] == []
+    edit(tmp_path / edited)
+    sweep.resolved_scene.cache_clear()
+    with pytest.raises(sweep.SweepError, match="was made from another scene, setting or program"):
+        sweep.merge(s, work, str(tmp_path / "out"))
+    assert run_sweep()[1] == ALL, f"{kind} edited: every run again"
     assert run_sweep()[1] == []

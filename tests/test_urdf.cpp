@@ -9,6 +9,7 @@
 // axis sign, a link without <inertial>, a continuous joint); and every
 // refusal (a tree, a closed loop, floating and planar joints, ...) naming the
 // file, the line and what was found, with exit status 2 from the command line.
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -219,24 +220,25 @@ TEST(UrdfPuma, ASceneFollowsThePathWithIt) {
   }
 }
 
-// A run's meta.json names the side file with its hash (it holds the drive);
-// a robot file's run has none.
+// A run's meta.json names the side file with its hash (it holds the drive),
+// as the bytes read hash by FNV-1a (its published test vectors in
+// tests/test_cli.cpp); a robot file's run has none.
 TEST(UrdfPuma, MetaJsonHashesTheSideFile) {
   const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/passive_arm.toml";
   const std::string urdf = fs::absolute(kPumaUrdf).lexically_normal().string();
   const RunContext c = run_context({"pumasim"}, load_scene(scene, {"scene.robot=\"" + urdf + "\""}));
   EXPECT_EQ(c.robot_file, urdf);
-  EXPECT_EQ(c.robot_side_file, urdf + ".toml");
   std::ifstream f(urdf + ".toml", std::ios::binary);
   std::ostringstream bytes;
   bytes << f.rdbuf();
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
-  EXPECT_EQ(c.robot_side_fnv1a64, hex);
-  EXPECT_NE(meta_json(c).find("\"robot_side_file\""), std::string::npos);
+  const auto side = std::find_if(c.inputs.begin(), c.inputs.end(),
+                                 [&](const InputFile& i) { return i.path == urdf + ".toml"; });
+  ASSERT_NE(side, c.inputs.end());
+  EXPECT_EQ(side->fnv1a64, fnv1a64(bytes.str()));
+  EXPECT_EQ(side->bytes, bytes.str().size());
+  EXPECT_NE(meta_json(c).find("\"" + urdf + ".toml\""), std::string::npos);
   const RunContext t = run_context({"pumasim"}, load_scene(scene));
-  EXPECT_EQ(t.robot_side_file, "");
-  EXPECT_EQ(meta_json(t).find("robot_side_file"), std::string::npos);
+  EXPECT_EQ(meta_json(t).find(".urdf.toml"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- written from other models

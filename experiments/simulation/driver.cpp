@@ -1,6 +1,7 @@
 #include "experiments/simulation/driver.hpp"
 
 #include "integrators/time_rule.hpp"
+#include "models/plant/physical_bounds.hpp"
 #include "models/plant/profile.hpp"
 
 #include <algorithm>
@@ -49,10 +50,79 @@ class StepClock {
   long count_ = 0, every_ = 1;
 };
 
+// Chattering at a friction switching surface. A set-valued friction row's
+// branch (at rest within its zero-speed band, or slipping either way) has
+// switching surfaces at the band's edges (zero speed for an exact law).
+// Counted over the accepted steps: branch changes, in all and in the last two
+// windows of kWindow steps. Diagnosed where the run fails: when the step has
+// collapsed (the last one under kCollapse times the run's length) and a row's
+// speed reaches its surface within kNear of those last steps at its current
+// rate, the step is pinned there (an adaptive method rejects every step that
+// crosses it), and more steps will not help.
+class ChatterCount {
+ public:
+  explicit ChatterCount(const OdeSystem& sys) {
+    for (int c = 0; c < sys.set_valued_rows(); ++c) {
+      const SetValuedRow r = sys.set_valued_row(c);
+      velocity_.push_back(r.velocity);
+      band_.push_back(r.band / std::abs(r.scale));  // on the state's speed
+    }
+    last_.assign(velocity_.size(), 2);  // no branch yet
+    total_.assign(velocity_.size(), 0);
+    window_.assign(velocity_.size(), 0);
+    previous_.assign(velocity_.size(), 0);
+  }
+  void step(const double* x) {
+    if (velocity_.empty()) return;
+    if (++steps_ % kWindow == 0) previous_.swap(window_), std::fill(window_.begin(), window_.end(), 0);
+    for (std::size_t k = 0; k < velocity_.size(); ++k) {
+      const double v = x[velocity_[k]];
+      const signed char branch = std::abs(v) <= band_[k] ? 0 : (v > 0 ? 1 : -1);
+      if (last_[k] != 2 && branch != last_[k]) ++total_[k], ++window_[k];
+      last_[k] = branch;
+    }
+  }
+  // "" or the diagnosis at (t, x) after `steps` steps, the last one h long.
+  std::string diagnosis(OdeSystem& sys, double t, const double* x, double h, double t_end, long rejected) const {
+    if (velocity_.empty() || !(h < kCollapse * t_end)) return {};
+    std::vector<double> f(static_cast<std::size_t>(sys.size()));
+    sys.rhs(t, x, f.data());
+    std::size_t worst = 0;
+    double soonest = HUGE_VAL;  // [s] to the nearest surface at the current rate
+    for (std::size_t k = 0; k < velocity_.size(); ++k) {
+      const double v = x[velocity_[k]], rate = std::abs(f[static_cast<std::size_t>(velocity_[k])]);
+      const double gap = band_[k] > 0 ? std::abs(std::abs(v) - band_[k]) : std::abs(v);
+      if (gap / rate < soonest) soonest = gap / rate, worst = k;
+    }
+    if (!(soonest <= kNear * h)) return {};
+    char buf[200];
+    std::snprintf(buf, sizeof buf, " = %.4g reaches its friction switching surface (|%s| = %.4g) in %.3g s at its "
+                  "current rate, %.3g of the last steps (h = %.3g s)", x[velocity_[worst]],
+                  sys.state_name(velocity_[worst]).c_str(), band_[worst], soonest, soonest / h, h);
+    return "chattering at a friction switching surface: " + sys.state_name(velocity_[worst]) + buf + "; " +
+           std::to_string(rejected) + " rejected steps, and its friction branch changed " +
+           std::to_string(window_[worst] + previous_[worst]) + " times in the last accepted steps (" +
+           std::to_string(total_[worst]) + " in all); the friction law is discontinuous in the state there and the "
+           "step collapses on it, so more steps will not help: use a fixed-step method, friction.model = \"hybrid\" "
+           "or the integrator moreau-jean";
+  }
+
+ private:
+  static constexpr long kWindow = 1000;
+  static constexpr double kCollapse = 1e-6;  // the last step under this times the run's length: collapsed
+  static constexpr double kNear = 1000;      // the surface within this many of the last steps: pinned there
+  std::vector<int> velocity_;
+  std::vector<double> band_;
+  std::vector<signed char> last_;
+  std::vector<long> total_, window_, previous_;
+  long steps_ = 0;
+};
+
 // The failure that ends the run when a budget is exhausted, or "".
 // wall: the wall-clock time at this step, or < 0 when the clock was not read.
-std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, const double* xs, long max_steps,
-                           double max_wall, double wall) {
+// chatter_count: its diagnosis replaces the advice to allow more.
+std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, double t_end, const double* xs,
+                           long max_steps, double max_wall, double wall, const ChatterCount& chatter_count) {
   const auto g = [](double x) {  // all the digits a time needs (std::to_string's %f shows 1e-7 s as 0.000000)
     char b[32];
     std::snprintf(b, sizeof b, "%.9g", x);
@@ -65,12 +135,40 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, c
            fastest_scaled_component(sys, t, xs);
   };
   if (max_wall > 0 && wall > max_wall) {
-    return std::string(integrator.name()) + ": wall-clock budget of " + g(max_wall) + " s" + where() +
-           "; more time: pumasim run --max-wall S (0: no limit)";
+    const std::string chatter = chatter_count.diagnosis(sys, t, xs, integrator.time() - integrator.step_start(),
+                                                        t_end, integrator.stats().rejected_steps);
+    return std::string(integrator.name()) + ": wall-clock budget of " + g(max_wall) + " s" + where() + "; " +
+           (chatter.empty() ? "more time: pumasim run --max-wall S (0: no limit)" : chatter);
   }
   if (max_steps > 0 && integrator.stats().steps > max_steps) {
+    const std::string chatter = chatter_count.diagnosis(sys, t, xs, integrator.time() - integrator.step_start(),
+                                                        t_end, integrator.stats().rejected_steps);
     return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) + " steps" + where() +
-           "; more steps: pumasim run --max-steps N (0: no limit)";
+           "; " + (chatter.empty() ? "more steps: pumasim run --max-steps N (0: no limit)" : chatter);
+  }
+  return {};
+}
+
+// The components with a finite physical bound, checked after every step.
+std::vector<int> bounded_components(const OdeSystem& sys) {
+  std::vector<int> k;
+  for (int i = 0; i < sys.size(); ++i) {
+    if (std::isfinite(sys.physical_bound(i))) k.push_back(i);
+  }
+  return k;
+}
+
+// The failure that ends a run whose state left its physical range by more
+// than kUnstableFactor (a diverged method), or "".
+std::string unstable_failure(const OdeSystem& sys, const std::vector<int>& bounded, double t, const double* x) {
+  for (const int i : bounded) {
+    const double b = sys.physical_bound(i);
+    if (!(std::abs(x[i]) > kUnstableFactor * b)) continue;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "unstable at t = %.9g s: %s = %.6g, more than %g times its physical bound %.4g (",
+                  t, sys.state_name(i).c_str(), x[i], kUnstableFactor, b);
+    return buf + sys.physical_bound_why(i) + "); the method diverged: a smaller step, a stable method "
+           "(pumasim stiffness SCENE predicts the stable steps) or a tolerance";
   }
   return {};
 }
@@ -115,7 +213,8 @@ SetValuedRow PlantSystem::set_valued_row(int c) const {
   // A law with Fs < Fk holds up to Fk (else a joint at rest could neither
   // stick nor slip consistently): s = max(Fs, Fk), as in the hybrid model's solve.
   return {p_.layout().qd + j, p_.config().robot.joints[static_cast<std::size_t>(j)].gear_ratio,
-          std::max(f.static_torque, f.kinetic_torque), f.kinetic_torque};
+          std::max(f.static_torque, f.kinetic_torque), f.kinetic_torque,
+          friction_keys(f.model).zero_speed && !has_stick_slip_events(f.model) ? f.zero_speed : 0.0};
 }
 
 SetValuedSolve PlantSystem::solve_set_valued(int k, const double* W, const double* b, const double* s,
@@ -151,6 +250,8 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   StepClock clock(start);
   double next_report = progress.delay;  // [s] of wall-clock time
   PlantSystem sys(plant);
+  const std::vector<int> bounded = bounded_components(sys);
+  ChatterCount chatter(sys);
   std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
   integrator.reset(sys, 0.0, x.data());
@@ -172,6 +273,19 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     if (o.status == Outcome::kFailed) {
       res.ok = false;
       res.failure = o.message;
+      if (const std::string c = chatter.diagnosis(sys, t, integrator.state(), integrator.time() - integrator.step_start(),
+                                                  t_end, integrator.stats().rejected_steps);
+          !c.empty()) {
+        res.failure += "; " + c;
+      }
+      res.failure_kind = "integrator";
+      break;
+    }
+    chatter.step(integrator.state());
+    if (std::string why = unstable_failure(sys, bounded, t, integrator.state()); !why.empty()) {
+      res.ok = false;
+      res.failure = std::move(why);
+      res.failure_kind = "unstable";
       break;
     }
     if (on_step) on_step(t, integrator.state());
@@ -195,9 +309,11 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       }
     }
     if (max_steps > 0 || wall > 0) {
-      if (std::string why = budget_failure(integrator, sys, t, xs, max_steps, max_wall, wall); !why.empty()) {
+      if (std::string why = budget_failure(integrator, sys, t, t_end, xs, max_steps, max_wall, wall, chatter);
+          !why.empty()) {
         res.ok = false;
         res.failure = std::move(why);
+        res.failure_kind = "budget";
         break;
       }
     }

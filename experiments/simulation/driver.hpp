@@ -29,6 +29,8 @@ class PlantSystem final : public OdeSystem {
   void linear_diagonal(double* lambda) const override { p_.linear_diagonal(lambda); }
   std::string state_name(int i) const override { return p_.layout().names[static_cast<std::size_t>(i)]; }
   double tolerance_scale(int i) const override { return p_.tolerance_scale(i); }
+  double physical_bound(int i) const override { return p_.physical_bound(i); }
+  std::string physical_bound_why(int i) const override { return p_.physical_bound_why(i); }
   int num_roots() const override { return p_.num_roots(); }
   void roots(double t, const double* x, double* g) override { p_.roots(t, x, g); }
   // Set-valued friction for time-stepping (Plant::rhs_smooth and the rest).
@@ -48,6 +50,10 @@ class PlantSystem final : public OdeSystem {
 struct RunResult {
   bool ok = true;
   std::string failure;  // what, when, which state components
+  // "budget" (steps or wall-clock time), "unstable" (a state past
+  // kUnstableFactor times its physical bound), "integrator" (the method's own:
+  // a non-finite state, step-size underflow, a convergence failure); "" when ok.
+  std::string failure_kind;
   double t_final = 0;
   long time_events = 0;
   long root_events = 0;

@@ -47,11 +47,17 @@ void settings(Json& js, const Scene& sc, const RunControls& rc, const SceneRun& 
   js["backend"] = sc.plant.backend;
   js["ok"] = run.result.ok;
   js["failure"] = run.result.failure;
+  js["failure_kind"] = run.result.failure_kind;
   js["t_end"] = json_number(sc.duration);
   js["t_reached"] = json_number(run.result.t_final);
   js["dt"] = json_number(adaptive ? std::nan("") : io.dt);
   js["rtol"] = json_number(adaptive ? io.rtol : std::nan(""));
   js["atol"] = json_number(adaptive ? io.atol : std::nan(""));
+  Json& bounds = js["physical_bounds"] = Json::object();  // finite ones; the run ends past kUnstableFactor x
+  for (std::size_t k = 0; k < run.physical_bounds.size(); ++k) {
+    if (!std::isfinite(run.physical_bounds[k])) continue;
+    bounds[run.state_names[k]] = {{"bound", run.physical_bounds[k]}, {"why", run.physical_bounds_why[k]}};
+  }
   Json& atol = js["atol_per_component"] = Json::object();  // atol * the plant's typical magnitude of each state
   for (std::size_t k = 0; k < run.state_names.size(); ++k) {
     atol[run.state_names[k]] = json_number(adaptive ? io.atol * run.tolerance_scales[k] : std::nan(""));
@@ -130,15 +136,6 @@ std::string stats_json(const Scene& sc, const RunControls& rc, const SceneRun& r
   return js.dump(2) + "\n";
 }
 
-std::uint64_t fnv1a64(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (const char c : bytes) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 std::string shell_quoted(const std::vector<std::string>& argv) {
   std::string out;
   for (const std::string& a : argv) {
@@ -174,22 +171,6 @@ std::string cpu_model() {
   return "unknown";
 }
 
-namespace {
-
-// FNV-1a 64 of a file's bytes as 16 hex digits, or "" if it cannot be read.
-std::string file_fnv1a64(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return "";
-  std::ostringstream bytes;
-  bytes << f.rdbuf();
-  if (f.bad()) return "";
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a64(bytes.str())));
-  return hex;
-}
-
-}  // namespace
-
 RunContext run_context(const std::vector<std::string>& argv, const Scene& sc) {
   namespace fs = std::filesystem;
   RunContext c;
@@ -203,11 +184,10 @@ RunContext run_context(const std::vector<std::string>& argv, const Scene& sc) {
   std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%SZ", &utc);
   c.started_utc = stamp;
   c.robot_file = fs::absolute(sc.plant.robot.source, ec).lexically_normal().string();
-  c.robot_fnv1a64 = file_fnv1a64(sc.plant.robot.source);
-  if (is_urdf_path(sc.plant.robot.source) && fs::exists(urdf_side_file(sc.plant.robot.source), ec)) {
-    c.robot_side_file = fs::absolute(urdf_side_file(sc.plant.robot.source), ec).lexically_normal().string();
-    c.robot_side_fnv1a64 = file_fnv1a64(urdf_side_file(sc.plant.robot.source));
+  for (const InputFile& f : sc.inputs) {
+    if (f.path == c.robot_file) c.robot_fnv1a64 = hex64(f.fnv1a64);
   }
+  c.inputs = sc.inputs;
   return c;
 }
 
@@ -234,11 +214,11 @@ std::string meta_json(const RunContext& context) {
   meta["cpu_model"] = cpu_model();
   meta["robot_file"] = {{"path", context.robot_file},
                         {"fnv1a64", context.robot_fnv1a64.empty() ? Json(nullptr) : Json(context.robot_fnv1a64)}};
-  if (!context.robot_side_file.empty()) {
-    meta["robot_side_file"] = {
-        {"path", context.robot_side_file},
-        {"fnv1a64", context.robot_side_fnv1a64.empty() ? Json(nullptr) : Json(context.robot_side_fnv1a64)}};
+  Json inputs = Json::array();
+  for (const InputFile& f : context.inputs) {
+    inputs.push_back({{"path", f.path}, {"bytes", f.bytes}, {"fnv1a64", hex64(f.fnv1a64)}});
   }
+  meta["input_files"] = inputs;
   return meta.dump(2) + "\n";
 }
 

@@ -22,20 +22,17 @@ struct RunContext {
   std::string working_directory;  // where it was run
   std::string started_utc;        // ISO 8601, "2024-05-01T12:00:00Z"
   std::string robot_file;         // the robot file the scene loaded, absolute
-  std::string robot_fnv1a64;      // FNV-1a 64 of its bytes, 16 hex digits; "" if it could not be read
-  // A URDF robot's side file (its rotor inertias, gear ratios, ...), absolute,
-  // and its hash; both "" when the robot is no URDF file or it has none.
-  std::string robot_side_file;
-  std::string robot_side_fnv1a64;
+  std::string robot_fnv1a64;      // FNV-1a 64 of its bytes as loaded, 16 hex digits
+  std::vector<InputFile> inputs;  // every file the scene's load read (Scene::inputs), by content
 };
 
 // The context of a run starting now: argv (the program first), the working
-// directory, the time, the scene's robot file and its hash (read now), and a
-// URDF robot's side file and its hash.
+// directory, the time, and the files the scene's load read with their hashes
+// (of the bytes it parsed: no second read).
 RunContext run_context(const std::vector<std::string>& argv, const Scene& scene);
 
 // The run's context (command line, working directory, start time, robot file
-// and its hash; robot_side_file too for a URDF robot with a side file), then the git revision (with "-dirty" when the tree had
+// and its hash, every input file with its size and hash), then the git revision (with "-dirty" when the tree had
 // changes) and whether it was dirty, compiler, flags and build type (from the
 // build: cmake/build_info.cmake), the libraries' versions, the machine, its
 // CPU count and CPU model.
@@ -45,8 +42,6 @@ std::string meta_json(const RunContext& context);
 // it ('it'\''s'), so that the line pastes back into a shell as the same argv.
 std::string shell_quoted(const std::vector<std::string>& argv);
 
-// FNV-1a, 64 bits (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
-std::uint64_t fnv1a64(std::string_view bytes);
 
 // "pumasim 161cd97 (GNU 12.2.0, -O3 -DNDEBUG -march=native, Release)": the
 // build information of meta.json on one line (pumasim --version).

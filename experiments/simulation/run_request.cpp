@@ -2,11 +2,16 @@
 
 #include <charconv>
 #include <cmath>
+#include <complex>
+#include <cstdio>
 #include <stdexcept>
+
+#include <Eigen/Eigenvalues>
 
 #include "experiments/simulation/run_documents.hpp"
 #include "experiments/simulation/run_folder.hpp"
 #include "integrators/registry.hpp"
+#include "integrators/stability.hpp"
 
 namespace pumasim {
 namespace {
@@ -23,7 +28,8 @@ void check_value(const char* option, const std::optional<double>& v, const char*
 
 void check_request(const RunRequest& r) {
   check_value("--dt", r.dt, "a number > 0", r.dt > 0.0);
-  check_value("--rtol", r.rtol, "a number > 0", r.rtol > 0.0);
+  check_value("--rtol", r.rtol, "a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no digit controlled)",
+              r.rtol >= kRtolMin && r.rtol <= kRtolMax);
   check_value("--atol", r.atol, "a number > 0", r.atol > 0.0);
   check_value("--t-end", r.t_end, "a number > 0", r.t_end > 0.0);
   if (r.jacobian && *r.jacobian != "exact" && *r.jacobian != "differences") {
@@ -79,6 +85,9 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
     if (!adaptive) throw std::invalid_argument("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
     if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
     if (a.atol) io.atol = sc.integrator.atol = *a.atol;
+    // --rtol alone: atol follows it (1e-3 rtol per unit of each state's
+    // scale), so that a tolerance study does not plateau at the scene's atol.
+    if (a.rtol && !a.atol) io.atol = sc.integrator.atol = kAtolPerRtol * *a.rtol;
   }
   if (a.jacobian) io.exact_jacobian = jacobian_choice(sc.integrator.name, info, *a.jacobian);
   if (sc.integrator.name.starts_with("moreau-jean") && sc.plant.energy_ledger) {
@@ -133,6 +142,33 @@ RunControls run_controls(Scene& sc, const RunRequest& a) {
              : a.stop_at_outputs ? Stops::kEventsAndOutputs
                                  : Stops::kEvents;
   return rc;
+}
+
+std::string stability_warning(const Scene& sc, const RunControls& rc) {
+  if (rc.adaptive) return {};
+  Plant plant(sc.plant);
+  std::vector<double> x(static_cast<std::size_t>(plant.size()));
+  plant.initial_state(x.data());
+  Eigen::MatrixXd J(plant.size(), plant.size());
+  plant.jacobian_exact(0.0, x.data(), J);
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(J, false);
+  if (es.info() != Eigen::Success) return {};
+  std::vector<std::complex<double>> decaying;
+  std::complex<double> fastest = 0;
+  for (const std::complex<double>& l : es.eigenvalues()) {
+    if (l.real() >= 0) continue;
+    decaying.push_back(l);
+    if (std::abs(l) > std::abs(fastest)) fastest = l;
+  }
+  const std::optional<double> h = max_stable_step(sc.integrator.name, decaying);
+  if (!h || !(rc.options.dt > *h)) return {};
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "warning: the step %.4g s exceeds the largest stable step %.4g s that %s's stability region "
+                "predicts from the plant's Jacobian at t = 0 (fastest mode lambda = %.4g%+.4gi 1/s); the run may "
+                "diverge (pumasim stiffness %s shows the prediction along the run)",
+                rc.options.dt, *h, sc.integrator.name.c_str(), fastest.real(), fastest.imag(), sc.file.c_str());
+  return buf;
 }
 
 CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,

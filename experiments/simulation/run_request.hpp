@@ -46,6 +46,13 @@ Scene load_checked_scene(const std::string& file, const std::vector<std::string>
 // the option ("--dt: cvode-bdf is adaptive; expected --rtol and --atol").
 RunControls run_controls(Scene& scene, const RunRequest& request);
 
+// A fixed-step run whose step exceeds the largest stable step that its
+// method's stability region predicts from the plant's Jacobian at t = 0
+// (what `pumasim stiffness` computes along the run): a warning naming both
+// steps and the fastest mode, or "" (an adaptive method, a method without a
+// stability table, a step within the prediction).
+std::string stability_warning(const Scene& scene, const RunControls& controls);
+
 struct CompletedRun {
   SceneRun run;
   std::string stats;  // stats.json's text

@@ -96,7 +96,11 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
     run.stats.friction_worst_residual = std::max(run.stats.friction_worst_residual, s.worst_residual);
   }
   run.state_names = plant.layout().names;
-  for (int k = 0; k < plant.size(); ++k) run.tolerance_scales.push_back(plant.tolerance_scale(k));
+  for (int k = 0; k < plant.size(); ++k) {
+    run.tolerance_scales.push_back(plant.tolerance_scale(k));
+    run.physical_bounds.push_back(plant.physical_bound(k));
+    run.physical_bounds_why.push_back(plant.physical_bound_why(k));
+  }
   return run;
 }
 

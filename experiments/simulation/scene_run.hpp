@@ -41,6 +41,8 @@ struct SceneRun {
   IntegratorStats stats;
   std::vector<std::string> state_names;
   std::vector<double> tolerance_scales;  // the plant's typical magnitude of each state
+  std::vector<double> physical_bounds;   // |x_k| <= bound (+inf: none; models/plant/physical_bounds.hpp)
+  std::vector<std::string> physical_bounds_why;
   std::string trajectory_csv;
   std::string events_csv;         // the friction modes (mode_log.hpp); "" when no joint has modes
   long mode_changes = 0;          // its rows

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "models/dynamics/chain.hpp"
+#include "models/plant/physical_bounds.hpp"
 #include "models/plant/profile.hpp"
 #include "models/dynamics/tangent_backend.hpp"
 
@@ -92,6 +93,7 @@ Plant::Plant(PlantConfig config)
   motor_.declare(layout_, full_command);
   std::visit([&](const auto& c) { c.declare(layout_); }, controller_);
   ledger_.declare(layout_);
+  declare_bounds(full_command);
 
   wd_ = std::make_unique<Workspace<double>>(n);
   wd_->backend = find_backend(cfg_.backend).make(model_);
@@ -134,6 +136,23 @@ Plant::Plant(PlantConfig config)
 }
 
 Plant::~Plant() = default;
+
+void Plant::declare_bounds(const std::vector<double>& full_command) {
+  const int n = layout_.n;
+  PhysicalBounds b;
+  if (cfg_.drive) {
+    b = drive_bounds(cfg_.amplifier, cfg_.motor, gear_ratios(cfg_), full_command);
+  } else if (cfg_.controller == ControllerMode::kNone) {  // passive: at rest at q0
+    Eigen::MatrixXd H(n, n);
+    find_backend(cfg_.backend).make(model_)->mass_matrix(cfg_.q0, H);
+    b = passive_bounds(model_, cfg_.q0, H);
+  }
+  for (int j = 0; j < n && !b.qd.empty(); ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    layout_.set_bound(layout_.qd + j, b.qd[k], b.qd_why[k]);
+    if (layout_.i >= 0) layout_.set_bound(layout_.i + j, b.current[k], b.current_why[k]);
+  }
+}
 
 const ReferenceSample& Plant::current_reference(double t) {
   if (cfg_.setpoint_interval > 0 || !cfg_.reference) return ds_.ref_held;

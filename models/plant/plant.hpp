@@ -137,6 +137,10 @@ class Plant {
   // A typical magnitude of state component i, in its unit (the integrators'
   // absolute tolerance is atol times this).
   double tolerance_scale(int i) const { return layout_.scale[static_cast<std::size_t>(i)]; }
+  // |x_i| <= physical_bound(i) on every trajectory of the model (+inf: no
+  // bound known; models/plant/physical_bounds.hpp), and the formula.
+  double physical_bound(int i) const { return layout_.bound[static_cast<std::size_t>(i)]; }
+  const std::string& physical_bound_why(int i) const { return layout_.bound_why[static_cast<std::size_t>(i)]; }
 
   // x(0): on the reference at rest, currents and integrals in equilibrium
   // with gravity (an open-loop input: the currents its first output drives at
@@ -282,6 +286,7 @@ class Plant {
   template <class S>
   using Workspace = PlantWorkspace<S>;
   static PlantConfig checked(PlantConfig config);
+  void declare_bounds(const std::vector<double>& full_command);
   template <class S>
   void eval(double t, const S* x, S* xdot, Workspace<S>& w);
   template <class S>

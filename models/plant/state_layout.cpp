@@ -1,5 +1,7 @@
 #include "models/plant/state_layout.hpp"
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace pumasim {
@@ -9,8 +11,16 @@ int StateLayout::add(const std::vector<std::string>& slice_names, const std::vec
   const int offset = size;
   names.insert(names.end(), slice_names.begin(), slice_names.end());
   scale.insert(scale.end(), slice_scale.begin(), slice_scale.end());
+  bound.insert(bound.end(), slice_names.size(), std::numeric_limits<double>::infinity());
+  bound_why.insert(bound_why.end(), slice_names.size(), std::string());
   size += static_cast<int>(slice_names.size());
   return offset;
+}
+
+void StateLayout::set_bound(int k, double value, const std::string& why) {
+  if (!(value > 0) || !std::isfinite(value)) return;
+  bound.at(static_cast<std::size_t>(k)) = value;
+  bound_why.at(static_cast<std::size_t>(k)) = why;
 }
 
 int StateLayout::index(const std::string& name) const {

@@ -20,9 +20,16 @@ struct StateLayout {
   // A typical magnitude of each component, in its unit (the integrators'
   // absolute tolerance is atol times this).
   std::vector<double> scale;
+  // The physically possible range of each component, |x_k| <= bound[k] in
+  // its unit (+inf: none), and the formula it came from
+  // (models/plant/physical_bounds.hpp).
+  std::vector<double> bound;
+  std::vector<std::string> bound_why;
 
   // Appends a slice; returns its offset.
   int add(const std::vector<std::string>& slice_names, const std::vector<double>& slice_scale);
+  // Sets component k's bound (a finite bound > 0; others leave it +inf).
+  void set_bound(int k, double value, const std::string& why);
   int index(const std::string& name) const;  // -1 if absent
 };
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "models/robot/input_files.hpp"
 #include "models/robot/toml_guard.hpp"
 
 namespace pumasim {
@@ -48,24 +49,8 @@ std::string Bounds::describe() const {
   return "a finite number";
 }
 
-namespace {
-// The whole file, or nothing when it cannot be read (absent, a directory, unreadable).
-std::optional<std::string> read_file(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return std::nullopt;
-  std::string text;
-  char buf[65536];
-  std::size_t got = 0;
-  while ((got = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, got);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return std::nullopt;
-  return text;
-}
-}  // namespace
-
 toml::table parse_toml_file(const std::string& path) {
-  const std::optional<std::string> text = read_file(path);
+  const std::optional<std::string> text = read_input_file(path);
   if (!text) throw ConfigError(path + ": cannot open file (expected a readable TOML file)");
   // What toml++ 3.3 would mishandle is refused first (models/robot/toml_guard.hpp);
   // the guard and the parser read the same bytes.
@@ -423,6 +408,21 @@ void StrictTable::finish() const {
     const std::string o = override_of(k);
     throw ConfigError((o.empty() ? file_ + ":" + line_of(k.source()) : o) + ": unknown key '" +
                       key_path(k.str()) + "'; expected one of: " + known + why_not_applicable(k));
+  }
+}
+
+}  // namespace pumasim
+
+namespace pumasim {
+
+void StrictTable::expect_only(const std::vector<std::string>& known) const {
+  for (const auto& [k, v] : *table_) {
+    if (std::find(known.begin(), known.end(), k.str()) != known.end()) continue;
+    std::string list;
+    for (const auto& a : known) list += (list.empty() ? "" : ", ") + a;
+    const std::string o = override_of(k);
+    throw ConfigError((o.empty() ? file_ + ":" + line_of(k.source()) : o) + ": unknown key '" + key_path(k.str()) +
+                      "'; expected one of: " + list);
   }
 }
 

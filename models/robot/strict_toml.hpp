@@ -77,6 +77,9 @@ class StrictTable {
 
   // Rejects every key that no accessor asked for.
   void finish() const;
+  // Rejects, before anything is read, every key not among `known` (a
+  // misspelt section is then named as unknown, not as a missing partner).
+  void expect_only(const std::vector<std::string>& known) const;
 
   // The file the table was read from (a path as given to the reader).
   const std::string& file() const { return file_; }

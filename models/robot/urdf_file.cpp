@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -19,6 +18,7 @@
 
 #include <Eigen/Geometry>
 
+#include "models/robot/input_files.hpp"
 #include "models/robot/link_inertia.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/robot/strict_toml.hpp"
@@ -577,11 +577,9 @@ bool is_urdf_path(const std::string& path) {
 std::string urdf_side_file(const std::string& urdf_path) { return urdf_path + ".toml"; }
 
 RobotModel load_urdf_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path + ": cannot open file (expected a readable URDF file)");
-  std::ostringstream text;
-  text << in.rdbuf();  // an empty file inserts nothing: urdfdom then says what it expected
-  const UrdfText t(path, text.str());
+  const std::optional<std::string> text = read_input_file(path);
+  if (!text) throw ConfigError(path + ": cannot open file (expected a readable URDF file)");
+  const UrdfText t(path, *text);  // an empty file: urdfdom then says what it expected
   const urdf::ModelInterfaceSharedPtr m = parse_urdf(t);
   check_joints(*m, t);
   const UrdfChain chain = walk(*m, t);

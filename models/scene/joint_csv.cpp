@@ -2,9 +2,10 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <optional>
 #include <sstream>
 
+#include "models/robot/input_files.hpp"
 #include "models/robot/strict_toml.hpp"
 
 namespace pumasim {
@@ -76,8 +77,9 @@ void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const
 }
 
 std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, std::string_view column) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot be opened");
+  const std::optional<std::string> text = read_input_file(path);
+  if (!text) throw ConfigError(path + ": cannot be opened");
+  std::istringstream in(*text);
   std::vector<std::vector<double>> rows;
   std::vector<std::string> header;
   std::string line;

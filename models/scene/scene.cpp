@@ -149,7 +149,7 @@ const std::vector<Entry<IntegratorSettings>> kIntegratorEntries = {
     {"name", scene_io::text(PUMASIM_AT(s.name)), "integrator (pumasim integrators; checked by the command line)",
      Need::kOptional, {}, note_name_where},
     {"dt", scene_io::number(kPositive, PUMASIM_AT(s.dt)), "[s] step of the fixed-step methods"},
-    {"rtol", scene_io::number(kPositive, PUMASIM_AT(s.rtol)), "relative tolerance of the adaptive methods"},
+    {"rtol", scene_io::number(Bounds{kRtolMin, kRtolMax}, PUMASIM_AT(s.rtol)), "relative tolerance of the adaptive methods"},
     {"atol", scene_io::number(kPositive, PUMASIM_AT(s.atol)), "absolute tolerance (times each state's scale)"},
 };
 
@@ -851,10 +851,15 @@ void check_start_inertia(StrictTable& root, const Scene& sc, Plant& plant) {
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
                  const std::vector<std::string>& unsets) {
+  const InputRecord record;  // every file read from here on
   toml::table doc = parse_toml_file(path);
   remove_keys(doc, unsets, path);
   apply_overrides(doc, overrides);
   StrictTable root(doc, path, "");
+  // The scene's sections, checked first (every key inside them is checked as
+  // it is read, and root.finish() below rejects what no reader asked for).
+  root.expect_only({"scene", "integrator", "amplifier", "motor", "friction", "controller", "reference", "planning",
+                    "initial"});
   Scene sc;
   sc.file = path;
   PlantConfig& pc = sc.plant;
@@ -879,6 +884,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   } catch (const std::invalid_argument& e) {
     throw ConfigError(path + ": " + e.what());
   }
+  sc.inputs = record.files();
   return sc;
 }
 
@@ -912,7 +918,22 @@ std::string resolved_toml(const Scene& sc) {
   write_initial(doc, pc);
   std::ostringstream out;
   out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << write_toml(doc) << "\n";
+  for (const InputFile& f : sc.inputs) out << "# input file: " << describe(f) << "\n";
   return out.str();
+}
+
+std::string discontinuity_note(const Scene& sc) {
+  for (const FrictionParams& f : sc.plant.friction) {
+    if (!is_set_valued(f.model) || has_stick_slip_events(f.model)) continue;
+    if (!(f.static_torque > 0) && !(f.kinetic_torque > 0)) continue;
+    return std::string("friction.model = \"") + to_string(f.model) +
+           "\" is discontinuous in the state (the friction jumps between the kinetic level and the applied torque at "
+           "|w_m| = friction.zero_speed, with no event to stop at): adaptive methods stall on it, their step "
+           "collapsing at the switching surface; use a fixed-step method (the paper's: integrator ab2, dt = 5e-4 s), "
+           "friction.model = \"hybrid\" (the exact stick/slip model with events) or the integrator moreau-jean "
+           "(time-stepping)";
+  }
+  return {};
 }
 
 std::string discrete_state(const Scene& sc) {

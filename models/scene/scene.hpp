@@ -8,10 +8,20 @@
 #include <string>
 
 #include "models/plant/plant.hpp"
+#include "models/robot/input_files.hpp"
 #include "models/robot/strict_toml.hpp"
 #include "models/reference/time_optimal.hpp"
 
 namespace pumasim {
+
+// The relative tolerances a run accepts: below 1e-14 a tolerance asks for
+// less than about 50 units of rounding (2.2e-16) of a state, which no method
+// can deliver; above 0.1 it controls no digit. (`--rtol` and integrator.rtol.)
+inline constexpr double kRtolMin = 1e-14;
+inline constexpr double kRtolMax = 0.1;
+// `--rtol` without `--atol`: atol = kAtolPerRtol * rtol, times each state's
+// typical magnitude (tolerance_scales), as the sweeps set it.
+inline constexpr double kAtolPerRtol = 1e-3;
 
 struct IntegratorSettings {
   std::string name = "rk4";  // checked against the integrator registry by the command line
@@ -71,6 +81,10 @@ struct Scene {
   bool has_reference = false;
   ReferenceSettings reference;
   PlantConfig plant;
+  // Every file the load read (the scene file, the robot file, a URDF's side
+  // file, every CSV), by content: read through read_input_file, so a reader
+  // of a new kind of file is here with no other edit.
+  std::vector<InputFile> inputs;
 };
 
 // What reference.timing = "time-optimal" plans with: the path's reference at
@@ -89,7 +103,8 @@ PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSe
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
                  const std::vector<std::string>& unsets = {});
 
-// The scene with every default filled in, as TOML.
+// The scene with every default filled in, as TOML, then a footer naming
+// every input file with its hash ("# input file: PATH (fnv1a64 H, N bytes)").
 std::string resolved_toml(const Scene& scene);
 
 // What the plant's right-hand side depends on besides (t, x): discrete state
@@ -99,5 +114,14 @@ std::string resolved_toml(const Scene& scene);
 // plant (its time events are then the reference's breakpoints, where f has
 // kinks, and an open-loop input's rows, where f jumps or kinks).
 std::string discrete_state(const Scene& scene);
+
+// What an adaptive method meets in this scene's right-hand side: "" when f is
+// smooth between events; else a note naming the friction law that is
+// discontinuous in the state without events (a set-valued law such as the
+// paper's rule or Karnopp's: the friction jumps at |w_m| = zero_speed), why
+// adaptive methods stall on it (their error estimate sees the jump at the
+// switching surface, and the step collapses there), and what to use instead:
+// a fixed step, friction.model = "hybrid" (exact events) or moreau-jean.
+std::string discontinuity_note(const Scene& scene);
 
 }  // namespace pumasim
