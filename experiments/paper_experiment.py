@@ -1,7 +1,11 @@
 #!/usr/bin/python3
-"""The paper's experiment re-run: writes results/paper/.
+"""The paper's experiment re-run: writes results/paper/ (or --out DIR).
 
-    /usr/bin/python3 experiments/paper_experiment.py
+    /usr/bin/python3 experiments/paper_experiment.py [--out DIR]
+
+scripts/results.sh runs it into results/paper/; the README's main command
+(scripts/run.sh) into runs/paper/, which git ignores, so that the main job
+leaves the committed results as they are.
 
 Runs experiments/scenes/paper_slow.toml and paper_fast.toml with the paper's
 method (Adams-Bashforth, dt = 0.5 ms; order 2, see the scenes) through
@@ -10,6 +14,7 @@ with scripts/plot_run.py, keeps the stats, the resolved scene, the metadata
 and a trajectory decimated to 0.1 s, and writes results/paper/README.md from
 those files only.
 """
+import argparse
 import csv
 import os
 import shutil
@@ -19,7 +24,7 @@ import sys
 
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
-OUT = os.path.join(ROOT, "results", "paper")
+DEFAULT_OUT = os.path.join(ROOT, "results", "paper")
 WORK = os.path.join(ROOT, "build", "paper_runs")
 PAPER_MAX_ERROR_MM = 0.65   # Sokolov & Toth 1999, sec. 6, slow run
 PAPER_RUN_TIME_S = 337.0    # same: 48,000 steps on a 300 MHz Pentium II
@@ -45,7 +50,10 @@ def decimate(run_dir, dst, every):
 
 
 def main():
-    os.makedirs(OUT, exist_ok=True)
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=DEFAULT_OUT, help="the folder written (default: results/paper)")
+    out = os.path.abspath(ap.parse_args().out)
+    os.makedirs(out, exist_ok=True)
     results = {}
     for scene in ("paper_slow", "paper_fast"):
         runs = [run(scene, os.path.join(WORK, f"{scene}_{k}")) for k in range(REPEATS)]
@@ -54,16 +62,16 @@ def main():
         st["wall_time_median_s"] = statistics.median(r["wall_time_s"] for r in runs)
         st["wall_time_runs_s"] = [r["wall_time_s"] for r in runs]
         results[scene] = st
-        dst = os.path.join(OUT, scene)
+        dst = os.path.join(out, scene)
         os.makedirs(dst, exist_ok=True)
         for name in ("scene.resolved.toml", "meta.json"):
             shutil.copy(os.path.join(last, name), dst)
         pumasim_io.write_json_atomic(os.path.join(dst, "stats.json"), st, indent=2)
         decimate(last, os.path.join(dst, "trajectory_0.1s.csv"), 10)
-        subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "plot_run.py"), last, OUT,
+        subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "plot_run.py"), last, out,
                         "--prefix", scene + "_"], check=True)
     slow, fast = results["paper_slow"], results["paper_fast"]
-    meta = pumasim_io.read_json(os.path.join(OUT, "paper_slow", "meta.json"))  # the copy kept in results/paper/
+    meta = pumasim_io.read_json(os.path.join(out, "paper_slow", "meta.json"))  # the copy kept in results/paper/
     lines = [
         "# The paper's experiment, re-run (a calibration, not a reproduction)",
         "",
@@ -111,8 +119,8 @@ def main():
         "  reference wrist-centre positions at the same time, sampled every 10 ms.",
         "",
     ]
-    pumasim_io.write_text_atomic(os.path.join(OUT, "README.md"), "\n".join(lines))
-    print(f"results: {os.path.relpath(OUT, ROOT)}/")
+    pumasim_io.write_text_atomic(os.path.join(out, "README.md"), "\n".join(lines))
+    print(f"results: {os.path.relpath(out, ROOT)}/")
 
 
 if __name__ == "__main__":
