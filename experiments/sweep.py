@@ -44,12 +44,15 @@ reference at the output times in every error measure (tool position [mm],
 tool orientation [rad], joint angles [rad], motor currents [A], RMS position,
 final state), the reference with its cross-check in the same measures, and
 writes results/<sweep>/: <sweep>.csv (every run, failures with their reason,
-runs below the reference's accuracy flagged, the wall-time spread),
-<sweep>.png (the ranking error, sweep.rank_by, against wall time and against
-right-hand-side evaluations, one line per integrator and a panel row per
-variant, hollow markers below the reference's accuracy), <sweep>_cost.png when
-the sweep has several variants (the RHS evaluations each integrator needs to
-reach the target in the ranking measure, against the variant value) and
+runs below the reference's accuracy flagged, each adaptive run's global error
+over its rtol, the wall-time spread), <sweep>.png (the ranking error,
+sweep.rank_by, against wall time and against right-hand-side evaluations, one
+line per integrator and a panel row per variant, hollow markers below the
+reference's accuracy), <sweep>_precision.md (experiments/precision_table.py:
+per adaptive method its error over rtol and the slope of log error against
+log rtol), <sweep>_cost.png when the sweep has several variants (the RHS
+evaluations each integrator needs to reach the target in the ranking measure,
+against the variant value) and
 <sweep>_summary.json for the report (with each variant's reference verdict:
 too weak where it differs from its check by more than target/100). These are
 written to temporaries first and then renamed into place, the summary last,
@@ -79,8 +82,11 @@ import sys
 import threading
 import tomllib
 
+import numpy as np
+
 import mode_sequence
 import mode_table
+import precision_table
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
 
@@ -526,8 +532,10 @@ def compare(ref, run):
     joint-angle difference over every q column [rad]; max motor-current
     difference over every i_motor column [A] (nan without current states); and
     the final-state error max_i |dx_i| / max(1, |x_i|) over q, qd, i_motor,
-    z_piv (nan unless both reached the same final time). Keys: the CSV
-    columns."""
+    z_piv (nan unless both reached the same final time); the same over every
+    common output row (max_state_error, the global error relative to the
+    state's scale, which error_over_rtol divides by the tolerance). Keys: the
+    CSV columns."""
     n = min(len(ref["t"]), len(run["t"]))
     d = [1e3 * math.dist((ref["x"][k], ref["y"][k], ref["z"][k]), (run["x"][k], run["y"][k], run["z"][k]))
          for k in range(n)]
@@ -547,7 +555,20 @@ def compare(ref, run):
     return {"max_tool_position_error_mm": _max(d),
             "rms_tool_position_error_mm": math.sqrt(sum(e * e for e in d) / n) if n else math.nan,
             "max_tool_orientation_error_rad": rot, "max_joint_error_rad": dq, "max_current_error_A": di,
-            "final_state_error": final}
+            "final_state_error": final, "max_state_error": _max_state_error(ref, run, states, n)}
+
+
+def _max_state_error(ref, run, states, n):
+    """The global error relative to the state's scale: max over the first n
+    output rows and the states of |x - x_ref| / max(1, |x_ref|) (nan without
+    rows or states; experiments/observed_order.py's error of a run)."""
+    if not (n and states):
+        return math.nan
+    worst = []
+    for h in states:
+        x, x_ref = np.asarray(run[h][:n], dtype=float), np.asarray(ref[h][:n], dtype=float)
+        worst.append(float(np.max(np.abs(x - x_ref) / np.maximum(1.0, np.abs(x_ref)))))
+    return _max(worst)
 
 
 def wall_spread(walls):
@@ -682,6 +703,7 @@ def _agreement_entry(s, c, ref_stats):
     CSV columns in which it is too weak."""
     a = {col: c[col] for col, *_ in MEASURES.values()}
     a["final_state_error"] = c["final_state_error"]
+    a["max_state_error"] = c["max_state_error"]
     too_weak = reference_too_weak(a, s["targets"])
     a["reference_too_weak"] = [m for m, spec in MEASURES.items() if spec[0] in too_weak]
     a["reference_steps"] = ref_stats["steps"]
@@ -689,23 +711,31 @@ def _agreement_entry(s, c, ref_stats):
     return a, too_weak
 
 
+def rtol_of(opts):
+    """A run's rtol, from its pumasim options; None for a fixed step."""
+    return float(opts[opts.index("--rtol") + 1]) if "--rtol" in opts else None
+
+
 def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
     """One run's CSV row: its error measures against its variant's reference
-    trajectory ref (nan in every one of `columns` if it failed), whether it is
-    below the reference's accuracy (agreement_rank: reference vs check in the
-    ranking measure rcol), wall-time spread, pinning, counters. The key
-    '_pinning' (the pinning method) is for the summary, not the table."""
+    trajectory ref (nan in every one of `columns` if it failed), its global
+    error over its rtol (adaptive runs), whether it is below the reference's
+    accuracy (agreement_rank: reference vs check in the ranking measure
+    rcol), wall-time spread, pinning, counters. The key '_pinning' (the pinning
+    method) is for the summary, not the table."""
     st = sm["stats"]
     if st["ok"]:
         e = compare(ref, trajectory(os.path.join(work, run[0])))
     else:
         e = dict.fromkeys(columns, math.nan)
     flag = below_reference_accuracy(e[rcol], agreement_rank)
+    rtol = rtol_of(run[4])
     row = {
         "variant": run[1]["label"], "value": run[1]["value"], "integrator": sm["integrator"],
         "setting": re.sub(r"^(dt|rtol)", r"\1=", run[2][len(sm["integrator"]) + 1:]),
         "ok": st["ok"], "failure": st["failure"],
         **e,
+        "error_over_rtol": "" if rtol is None else e["max_state_error"] / rtol,
         "below_reference_accuracy": "" if flag is None else flag,
         "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
         **wall_spread(sm["wall_times_s"]),
@@ -827,6 +857,9 @@ def _table_comments(s, agreement, weak, limit, held_creep, pinning):
         f"below_reference_accuracy: the run's {rcol} is within {BELOW_REFERENCE_FACTOR}x its variant's "
         f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
         f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}",
+        f"error_over_rtol (adaptive runs): max_state_error, the max over the "
+        f"output rows and the states q, qd, i_motor, z_piv of |x - x_ref| / max(1, |x_ref|), over the run's rtol; "
+        f"per method the slope of log(error) against log(rtol) is in {s['name']}_precision.md",
         f"wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
         f"(nan below 4 repeats); {pinning['pinned_runs']} of {pinning['runs']} runs pinned to one CPU "
         f"({', '.join(pinning['methods']) or 'none'}; pinned_cpu, empty: not pinned)"]
@@ -954,7 +987,8 @@ def _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cos
 def merge(s, work, out_dir):
     """Compares every run with its variant's reference, and each reference
     with its cross-check, and writes out_dir/<sweep>.csv, <sweep>.png,
-    <sweep>_cost.png (several variants only) and <sweep>_summary.json (the
+    <sweep>_precision.md, <sweep>_cost.png (several variants only) and
+    <sweep>_summary.json (the
     module's docstring describes them); returns the summary. SweepError if a
     run is missing, stale (another key) or a reference or check failed."""
     plt = _pyplot()
@@ -994,8 +1028,8 @@ def _write_csv(path, text):
 
 
 def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning, modes=None):
-    """Writes out_dir/<sweep>.csv, <sweep>.png, <sweep>_cost.png (several
-    variants only) and <sweep>_summary.json together
+    """Writes out_dir/<sweep>.csv, <sweep>.png, <sweep>_precision.md,
+    <sweep>_cost.png (several variants only) and <sweep>_summary.json together
     (pumasim_io.write_output_set: temporaries first, then renamed into place,
     the summary last with the others' SHA-256, which the report checks), so
     that a merge killed at any instant never leaves a table beside a summary
@@ -1007,13 +1041,18 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     integrators = sorted({r["integrator"] for r in rows})
     colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
     cost = _cost_to_target(s, rows, agreement, integrators)
+    slopes = precision_table.tolerance_slopes(rows, agreement, BELOW_REFERENCE_FACTOR)
+    precision = precision_table.markdown(s, slopes, BELOW_REFERENCE_FACTOR)
     plottable = {n: [p for p in pts if _usable(p["value"])] for n, pts in cost.items()}
     has_cost_plot = len(s["variants"]) > 1 and any(len(p) > 1 for p in plottable.values())
     files = {name + ".csv": lambda p: _write_csv(p, text),
-             name + ".png": lambda p: _plot_work_precision(plt, s, rows, agreement, colors, p)}
+             name + ".png": lambda p: _plot_work_precision(plt, s, rows, agreement, colors, p),
+             name + "_precision.md": lambda p: _write_csv(p, precision)}
     if has_cost_plot:
         files[name + "_cost.png"] = lambda p: _plot_cost(plt, s, plottable, colors, p)
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
+    summary["tolerance_slopes"] = [{k: m[k] for k in ("variant", "integrator", "options", "slope", "used", "mark")}
+                                   for m in slopes]
     summary["skipped_variants"] = s.get("skipped_variants", [])
     if modes:
         summary["modes"] = {k: v for k, v in modes.items() if k not in ("events", "marks", "events_speed", "marks_speed")}

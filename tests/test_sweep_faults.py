@@ -254,7 +254,8 @@ def finish_merge(sw):
     assert sw.run("--merge", fake=False).returncode == 0
     assert outputs_agree(sw.out, sw.name)
     assert sorted(os.listdir(sw.out)) == sorted(["notes.txt", sw.name + ".csv", sw.name + ".png",
-                                                 sw.name + "_summary.json"]), "leftover temporaries"
+                                                 sw.name + "_precision.md", sw.name + "_summary.json"]), \
+        "leftover temporaries"
     with open(os.path.join(sw.out, "notes.txt")) as f:
         assert f.read() == "not the program's\n"
 
@@ -303,14 +304,14 @@ def test_a_merge_killed_between_its_renames_leaves_no_undetected_mismatch(sw):
     """The instants a random kill rarely hits: after the table is in place
     and before the summary is, and so on for every rename into the folder."""
     assert sw.run(fake=False).returncode == 0
-    for k in (1, 2, 3):  # the table, the plot, the summary
+    for k in (1, 2, 3, 4):  # the table, the plot, the precision table, the summary
         sw.write(target=1.0 + k)  # each merge's files differ from every earlier one's
         code = KILL_AT_RENAME.format(experiments=os.path.join(ROOT, "experiments"), out=sw.out, k=k,
                                      argv=sw.args("--merge")[1:])
         p = subprocess.run([PY, "-c", code], capture_output=True, text=True, env=sw.env(fake=False))
         no_traceback(p)
         outcome = report_after_kill(sw, f"killed after rename {k}")
-        assert outcome == ("agree" if k == 3 else "refused"), f"killed after rename {k}: {outcome}"
+        assert outcome == ("agree" if k == 4 else "refused"), f"killed after rename {k}: {outcome}"
     finish_merge(sw)
 
 

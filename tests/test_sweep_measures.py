@@ -1,0 +1,52 @@
+"""Each adaptive run's error is reported over its rtol, and per method the
+slope of log(error) against log(rtol) (issue 31). On synthetic rows
+(experiments/sweep.py's merge step and experiments/precision_table.py; no
+pumasim run):
+
+    /usr/bin/python3 -m pytest -q tests/test_sweep_measures.py
+"""
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
+import precision_table  # noqa: E402
+import sweep  # noqa: E402
+
+POSITION, CURRENT = "max_tool_position_error_mm", "max_current_error_A"
+
+
+def _row(integrator, setting, rhs, position, current, ok=True, state=math.nan):
+    """A CSV row as _run_row makes it (the columns the tables read)."""
+    r = {"variant": "base", "value": 1.0, "integrator": integrator, "setting": setting, "ok": ok,
+         POSITION: position if ok else math.nan, "max_tool_orientation_error_rad": 1e-6 if ok else math.nan,
+         "max_joint_error_rad": 1e-6 if ok else math.nan, CURRENT: current if ok else math.nan,
+         "max_state_error": state if ok else math.nan, "rhs_evaluations": rhs, "below_reference_accuracy": False,
+         "wall_time_median_s": 0.01, "wall_time_min_s": 0.01, "wall_time_max_s": 0.01}
+    rtol = float(setting.split("=")[1].split("_")[0]) if setting.startswith("rtol=") else None
+    r["error_over_rtol"] = "" if rtol is None else r["max_state_error"] / rtol
+    return r
+
+
+AGREEMENT = {"base": {POSITION: 1e-6, CURRENT: 1e-6, "max_state_error": 1e-12, "reference_too_weak": []}}
+
+
+def test_error_over_rtol_and_its_slope_per_method():
+    # cvode-bdf: error 15 x rtol at every tolerance (slope 1); the tightest run
+    # within 10x of the reference's accuracy (1e-12): left out of the slope.
+    rows = [_row("cvode-bdf", f"rtol={r:g}", 100, 1e-3, 1e-3, state=15 * r) for r in (1e-3, 1e-5, 1e-7, 1e-9)]
+    rows.append(_row("cvode-bdf", "rtol=1e-12", 100, 1e-3, 1e-3, state=5e-12))
+    # odeint-rodas4p with late events: error ~ rtol^0.8, two runs (a marked slope); a failed run.
+    rows += [_row("odeint-rodas4p", f"rtol={r:g}_late-events", 100, 1e-3, 1e-3, state=r ** 0.8) for r in (1e-4, 1e-6)]
+    rows.append(_row("odeint-rodas4p", "rtol=1e-08_late-events", 100, 1e-3, 1e-3, ok=False))
+    rows.append(_row("rk4", "dt=0.001", 100, 1e-3, 1e-3, state=1e-9))  # fixed step: no ratio
+    assert rows[0]["error_over_rtol"] == 15 and rows[-1]["error_over_rtol"] == ""
+    slopes = {(m["integrator"], m["options"]): m for m in
+              precision_table.tolerance_slopes(rows, AGREEMENT, sweep.BELOW_REFERENCE_FACTOR)}
+    assert set(slopes) == {("cvode-bdf", ""), ("odeint-rodas4p", "late-events")}
+    bdf, rodas = slopes[("cvode-bdf", "")], slopes[("odeint-rodas4p", "late-events")]
+    assert abs(bdf["slope"] - 1) < 1e-12 and bdf["used"] == 4 and bdf["mark"] == ""
+    assert abs(rodas["slope"] - 0.8) < 1e-12 and rodas["used"] == 2 and rodas["mark"] == "fewer than 3 runs"
+    text = "\n".join(precision_table.proportionality_section(list(slopes.values()), sweep.BELOW_REFERENCE_FACTOR))
+    assert "| base | cvode-bdf | – | 1e-03: 15, 1e-05: 15, 1e-07: 15, 1e-09: 15, 1e-12: 5* | 1.00 (4) |" in text
+    assert "| base | odeint-rodas4p | late-events | 1e-04: 6.31, 1e-06: 15.8, 1e-08: –* | 0.80 (2) † |" in text
