@@ -16,19 +16,25 @@
 #   outputgrid  cost against the output grid (experiments/output_grid.py)
 #   extreme     extreme but valid scenes x every integrator (tests/check_extreme_runs.py)
 #   rosenbrock  rosenbrock4's error estimate against its true local error
+#   buildspread adaptive counts of the native build against the portable one
+#               (experiments/build_spread.py)
 #   paper       the paper's experiment re-run (experiments/paper_experiment.py)
 #   bench       the dynamics back-end benchmark (scripts/bench_dynamics.sh)
 #   report      results/README.md from all of the above (experiments/report.py)
 #
-# A fresh full run takes about 20 minutes on 2 cores (the report's header
-# states how long its last full run took). Runs already complete under
-# build/sweeps/ are skipped: delete that folder for a fresh run. Uses a
-# private copy of the pumasim binary, so that rebuilding meanwhile does not
-# change the program under measurement.
+# Every figure comes from the portable build (preset portable: the x86-64
+# baseline, no -march=native), so that results/ does not depend on this
+# machine's instruction set; each run's meta.json and the benchmark's table
+# record the flags and the CPU. (The native release build is built too: the
+# buildspread stage compares the two.) A fresh full run takes about 20 minutes
+# on 2 cores (the report's header states how long its last full run took).
+# Runs already complete under build/sweeps/ are skipped: delete that folder
+# for a fresh run. Uses private copies of the binaries (build/results-bin/),
+# so that rebuilding meanwhile does not change the program under measurement.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
-all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock paper bench report)
+all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper bench report)
 stages=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -43,10 +49,14 @@ while [ $# -gt 0 ]; do
 done
 full=0
 if [ ${#stages[@]} -eq 0 ]; then stages=("${all[@]}"); full=1; fi
-scripts/build.sh > /dev/null
+scripts/build.sh > /dev/null   # the dependencies, and the native build (buildspread)
+cmake --preset portable > /dev/null
+cmake --build --preset portable -j "$(nproc)" > /dev/null
 mkdir -p build/results-bin
-cp build/release/bin/pumasim build/results-bin/pumasim
-export PUMASIM=$PWD/build/results-bin/pumasim
+for b in pumasim testset rosenbrock_local_error bench_dynamics; do
+  cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
+done
+export PUMASIM=$PWD/build/results-bin/pumasim PUMASIM_BIN=$PWD/build/results-bin
 start=$(date +%s)
 
 stage_sweeps() {
@@ -64,7 +74,7 @@ stage_order() {
   /usr/bin/python3 experiments/observed_order.py
   /usr/bin/python3 experiments/rounding_spread.py   # steps of the same run over the back-ends (rounding-level changes of f)
 }
-stage_testset() { /usr/bin/python3 experiments/testset.py; }
+stage_testset() { /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"; }
 stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
 stage_extreme() {
   # extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
@@ -73,9 +83,12 @@ stage_extreme() {
 stage_rosenbrock() {
   # rosenbrock4's error estimate against its true local error (README, "Is the instrument right?")
   for lam in -1050 -1e4; do
-    build/release/bin/rosenbrock_local_error "$lam" > "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp"
+    "$PUMASIM_BIN/rosenbrock_local_error" "$lam" > "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp"
     mv "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp" "results/testset/rosenbrock_local_error_lambda$lam.tsv"
   done
+}
+stage_buildspread() {
+  /usr/bin/python3 experiments/build_spread.py --native build/release/bin/pumasim --portable "$PUMASIM"
 }
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
 stage_bench() { scripts/bench_dynamics.sh --out results; }
