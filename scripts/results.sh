@@ -56,6 +56,7 @@ mkdir -p build/results-bin
 for b in pumasim testset rosenbrock_local_error bench_dynamics; do
   cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
 done
+cp build/release/bin/pumasim build/results-bin/pumasim-native.tmp && mv build/results-bin/pumasim-native.tmp build/results-bin/pumasim-native
 export PUMASIM=$PWD/build/results-bin/pumasim PUMASIM_BIN=$PWD/build/results-bin
 start=$(date +%s)
 
@@ -88,7 +89,7 @@ stage_rosenbrock() {
   done
 }
 stage_buildspread() {
-  /usr/bin/python3 experiments/build_spread.py --native build/release/bin/pumasim --portable "$PUMASIM"
+  /usr/bin/python3 experiments/build_spread.py --native "$PUMASIM_BIN/pumasim-native" --portable "$PUMASIM"
 }
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
 stage_bench() { scripts/bench_dynamics.sh --out results; }
