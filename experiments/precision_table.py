@@ -1,5 +1,6 @@
 """A sweep's <sweep>_precision.md (experiments/sweep.py --merge writes it
-beside <sweep>.csv): tolerance proportionality (issue 31).
+beside <sweep>.csv): tolerance proportionality and the cheapest run within
+every target (issue 31).
 
 Tolerance proportionality: each adaptive run's error_over_rtol, its global
 error relative to the state's scale (max_state_error: the max over the output
@@ -10,6 +11,11 @@ log(error) against log(rtol) over its finished runs above the reference's
 accuracy in that measure (error more than below_factor times the
 reference-vs-check difference): 1 for an error proportional to the
 tolerance. Fewer than MIN_RUNS runs: the slope is marked.
+
+Cheapest within every target: a run qualifies only if it finished and is
+within every target the sweep sets (sweep.disqualified_by); where the
+cheapest run within the ranking measure's target misses another, the table
+names the measure, the run's error in it and the target.
 """
 import math
 import re
@@ -75,10 +81,45 @@ def proportionality_section(slopes, below_factor):
     return L + [""]
 
 
-def markdown(s, slopes, below_factor):
+def _missed_text(d, measures):
+    """'dt=0.0005 (80,971 RHS) misses max motor-current error 48.3 A > 1 A'."""
+    what = "; ".join(f"{measures[x['measure']][3]} {x['error']:.3g} {measures[x['measure']][1]} > "
+                     f"{x['target']:g} {measures[x['measure']][1]}" for x in d["measures"])
+    return f"{d['setting']} ({d['rhs']:,} RHS) misses {what}"
+
+
+def targets_section(s, rows, cost, disqualified, measures):
+    """The file's lines on the cheapest run within every target (measures:
+    sweep.MEASURES; cost, disqualified: sweep's _cost_to_target and
+    disqualified_cheapest)."""
+    targets = ", ".join(f"{spec[3]} {s['targets'][spec[0]]:g} {spec[1]}" for spec in measures.values()
+                        if spec[0] in s["targets"])
+    rlabel = measures[s["rank_by"]][3]
+    variants = [v["label"] for v in s["variants"]]
+    L = ["## Cheapest run within every target", "",
+         f"Targets: {targets}. A run qualifies only if it finished and is within every one of them. Per "
+         "integrator and variant: the cheapest qualifying run's RHS evaluations (setting), `–` if none qualifies, "
+         f"`fail` if every run failed; and where the cheapest run within the {rlabel} target (the ranking "
+         "measure) misses another target: that run, the measure, its error and the target.", "",
+         "| integrator | " + " | ".join(variants) + " |", "|---|" + "---|" * len(variants)]
+    for n in sorted({r["integrator"] for r in rows}):
+        cells = []
+        for v in variants:
+            best = next((c for c in cost.get(n, []) if c["variant"] == v), None)
+            mine = [r for r in rows if r["integrator"] == n and r["variant"] == v]
+            cell = (f"{best['rhs']:,} ({best['setting']})" if best else
+                    "fail" if mine and not any(r["ok"] for r in mine) else "–")
+            d = next((d for d in disqualified if d["integrator"] == n and d["variant"] == v), None)
+            cells.append(cell + (f"; {_missed_text(d, measures)}" if d else ""))
+        L.append(f"| {n} | " + " | ".join(cells) + " |")
+    return L + [""]
+
+
+def markdown(s, rows, slopes, cost, disqualified, measures, below_factor):
     """<sweep>_precision.md's text."""
-    L = [f"# {s['title']}: error against tolerance", "",
+    L = [f"# {s['title']}: error against tolerance, cheapest run within every target", "",
          f"Written by `experiments/sweep.py {s['file']} --merge` with `{s['name']}.csv` beside it, whose rows "
          "hold every number below (experiments/precision_table.py).", ""]
     L += proportionality_section(slopes, below_factor)
+    L += targets_section(s, rows, cost, disqualified, measures)
     return "\n".join(L)

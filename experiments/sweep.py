@@ -44,15 +44,18 @@ reference at the output times in every error measure (tool position [mm],
 tool orientation [rad], joint angles [rad], motor currents [A], RMS position,
 final state), the reference with its cross-check in the same measures, and
 writes results/<sweep>/: <sweep>.csv (every run, failures with their reason,
-runs below the reference's accuracy flagged, each adaptive run's global error
+runs below the reference's accuracy flagged, whether each is within every
+target the sweep sets and which it misses, each adaptive run's global error
 over its rtol, the wall-time spread), <sweep>.png (the ranking error,
 sweep.rank_by, against wall time and against right-hand-side evaluations, one
 line per integrator and a panel row per variant, hollow markers below the
 reference's accuracy), <sweep>_precision.md (experiments/precision_table.py:
 per adaptive method its error over rtol and the slope of log error against
-log rtol), <sweep>_cost.png when the sweep has several variants (the RHS
-evaluations each integrator needs to reach the target in the ranking measure,
-against the variant value) and
+log rtol; per integrator and variant the cheapest run within every target,
+and the measure that disqualifies a run cheaper on the ranking measure
+alone), <sweep>_cost.png when the sweep has several variants (the RHS
+evaluations each integrator needs to be within every target, against the
+variant value) and
 <sweep>_summary.json for the report (with each variant's reference verdict:
 too weak where it differs from its check by more than target/100). These are
 written to temporaries first and then renamed into place, the summary last,
@@ -716,12 +719,25 @@ def rtol_of(opts):
     return float(opts[opts.index("--rtol") + 1]) if "--rtol" in opts else None
 
 
-def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
+def disqualified_by(row, targets):
+    """The error measures (MEASURES' names, in its order) whose target
+    (targets: {CSV column: target}) a finished run misses, its error above the
+    target or not finite; ["failed"] for a run that did not finish. A run
+    qualifies ("within target") only with none: within every target the
+    sweep sets, not the ranking measure's alone."""
+    if not row["ok"]:
+        return ["failed"]
+    return [m for m, (col, *_) in MEASURES.items()
+            if col in targets and not (math.isfinite(row[col]) and row[col] <= targets[col])]
+
+
+def _run_row(work, run, sm, ref, columns, rcol, agreement_rank, targets):
     """One run's CSV row: its error measures against its variant's reference
     trajectory ref (nan in every one of `columns` if it failed), its global
     error over its rtol (adaptive runs), whether it is below the reference's
     accuracy (agreement_rank: reference vs check in the ranking measure
-    rcol), wall-time spread, pinning, counters. The key '_pinning' (the pinning
+    rcol), whether it is within every target (and which it misses),
+    wall-time spread, pinning, counters. The key '_pinning' (the pinning
     method) is for the summary, not the table."""
     st = sm["stats"]
     if st["ok"]:
@@ -730,6 +746,7 @@ def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
         e = dict.fromkeys(columns, math.nan)
     flag = below_reference_accuracy(e[rcol], agreement_rank)
     rtol = rtol_of(run[4])
+    missed = disqualified_by({"ok": st["ok"], **e}, targets)
     row = {
         "variant": run[1]["label"], "value": run[1]["value"], "integrator": sm["integrator"],
         "setting": re.sub(r"^(dt|rtol)", r"\1=", run[2][len(sm["integrator"]) + 1:]),
@@ -737,6 +754,7 @@ def _run_row(work, run, sm, ref, columns, rcol, agreement_rank):
         **e,
         "error_over_rtol": "" if rtol is None else e["max_state_error"] / rtol,
         "below_reference_accuracy": "" if flag is None else flag,
+        "within_targets": not missed, "disqualified_by": " ".join(missed),
         "max_path_error_mm": st["max_path_error_mm"] if st["ok"] else math.nan,
         **wall_spread(sm["wall_times_s"]),
         "wall_times_s": " ".join(f"{w:.6g}" for w in sm["wall_times_s"]),
@@ -763,7 +781,7 @@ def _variant_rows(s, work, v, summaries, ref, c, a, modes):
     for run in run_list(s):
         if run[1] is not v or run[2] in ("reference", "check"):
             continue
-        rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol]))
+        rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol], s["targets"]))
         if modes:
             events = mode_sequence.read_events(os.path.join(work, run[0])) if rows[-1]["ok"] else None
             # The hybrid model's own events against the reference's own; a
@@ -857,7 +875,8 @@ def _table_comments(s, agreement, weak, limit, held_creep, pinning):
         f"below_reference_accuracy: the run's {rcol} is within {BELOW_REFERENCE_FACTOR}x its variant's "
         f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
         f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}",
-        f"error_over_rtol (adaptive runs): max_state_error, the max over the "
+        f"within_targets: the run finished and is within every target above (disqualified_by: the measures "
+        f"whose target it misses, or failed); error_over_rtol (adaptive runs): max_state_error, the max over the "
         f"output rows and the states q, qd, i_motor, z_piv of |x - x_ref| / max(1, |x_ref|), over the run's rtol; "
         f"per method the slope of log(error) against log(rtol) is in {s['name']}_precision.md",
         f"wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "
@@ -924,17 +943,23 @@ def _plot_work_precision(plt, s, rows, agreement, colors, path):
     plt.close(fig)
 
 
+def _cheapest(rows):
+    """The row with the fewest RHS evaluations (None for no rows)."""
+    return min(rows, key=lambda r: r["rhs_evaluations"]) if rows else None
+
+
 def _cost_to_target(s, rows, agreement, integrators):
     """{integrator: per variant, its cheapest run (fewest RHS evaluations)
-    within the target in the ranking measure} (variants without one left out)."""
-    rcol, _, _, rtarget = _ranking(s)
+    within every target the sweep sets (within_targets: the ranking measure's
+    and every other one's)} (variants without one left out; a cheaper run
+    that misses another target is in disqualified_cheapest)."""
+    rcol = _ranking(s)[0]
     cost = {}
     for n in integrators:
         for v in s["variants"]:
-            ok = [r for r in rows if r["variant"] == v["label"] and r["integrator"] == n and r["ok"] and
-                  math.isfinite(r[rcol]) and r[rcol] <= rtarget]
-            if ok:
-                best = min(ok, key=lambda r: r["rhs_evaluations"])
+            best = _cheapest([r for r in rows if r["variant"] == v["label"] and r["integrator"] == n
+                              and r["within_targets"]])
+            if best:
                 cost.setdefault(n, []).append({
                     "value": v["value"], "variant": v["label"], "rhs": best["rhs_evaluations"],
                     "setting": best["setting"], "wall_s": best["wall_time_median_s"],
@@ -944,9 +969,29 @@ def _cost_to_target(s, rows, agreement, integrators):
     return cost
 
 
+def disqualified_cheapest(s, rows, integrators):
+    """Per (integrator, variant) whose cheapest run within the ranking
+    measure's target misses another target the sweep sets: that run's
+    setting and RHS evaluations and the measures it misses, with its error
+    and the target in each (a list: the summary's and the precision table's)."""
+    rcol, _, _, rtarget = _ranking(s)
+    out = []
+    for n in integrators:
+        for v in s["variants"]:
+            r = _cheapest([r for r in rows if r["variant"] == v["label"] and r["integrator"] == n and
+                           r["ok"] and math.isfinite(r[rcol]) and r[rcol] <= rtarget])
+            if r is not None and not r["within_targets"]:
+                out.append({"integrator": n, "variant": v["label"], "setting": r["setting"],
+                            "rhs": r["rhs_evaluations"],
+                            "measures": [{"measure": m, "error": r[MEASURES[m][0]],
+                                          "target": s["targets"][MEASURES[m][0]]}
+                                         for m in r["disqualified_by"].split()]})
+    return out
+
+
 def _plot_cost(plt, s, plottable, colors, path):
     """<sweep>_cost.png: the RHS evaluations of each integrator's cheapest run
-    within the target, against the variant value."""
+    within every target, against the variant value."""
     _, runit, rlabel, rtarget = _ranking(s)
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for n, pts in sorted(plottable.items()):
@@ -956,7 +1001,8 @@ def _plot_cost(plt, s, plottable, colors, path):
     ax.plot([], [], ls="none", marker="o", ms=4, color="k", mfc="none",
             label=f"hollow: error within {BELOW_REFERENCE_FACTOR}× of reference vs check")
     ax.set(xscale="log", yscale="log", xlabel=s["x"], ylabel="RHS evaluations (cheapest run within target)")
-    ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)", fontsize=8)
+    ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)"
+                 + (" and every other target" if len(s["targets"]) > 1 else ""), fontsize=8)
     ax.grid(True, which="major", lw=0.3)
     ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
@@ -1041,8 +1087,9 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     integrators = sorted({r["integrator"] for r in rows})
     colors = {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
     cost = _cost_to_target(s, rows, agreement, integrators)
+    disqualified = disqualified_cheapest(s, rows, integrators)
     slopes = precision_table.tolerance_slopes(rows, agreement, BELOW_REFERENCE_FACTOR)
-    precision = precision_table.markdown(s, slopes, BELOW_REFERENCE_FACTOR)
+    precision = precision_table.markdown(s, rows, slopes, cost, disqualified, MEASURES, BELOW_REFERENCE_FACTOR)
     plottable = {n: [p for p in pts if _usable(p["value"])] for n, pts in cost.items()}
     has_cost_plot = len(s["variants"]) > 1 and any(len(p) > 1 for p in plottable.values())
     files = {name + ".csv": lambda p: _write_csv(p, text),
@@ -1051,6 +1098,7 @@ def _write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cre
     if has_cost_plot:
         files[name + "_cost.png"] = lambda p: _plot_cost(plt, s, plottable, colors, p)
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
+    summary["disqualified_cheapest"] = disqualified
     summary["tolerance_slopes"] = [{k: m[k] for k in ("variant", "integrator", "options", "slope", "used", "mark")}
                                    for m in slopes]
     summary["skipped_variants"] = s.get("skipped_variants", [])
