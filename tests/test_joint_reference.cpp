@@ -286,6 +286,10 @@ TEST(JointCsv, BadFilesAreRefusedNamingFileLineAndColumn) {
       {"header", "t,q1,q2\n0,0.1,0.2\n", ":1: ", "expected 4 columns"},
       {"late_start", "t,q1,q2,q3\n0.5,0.1,0.2,0.3\n1,0,0,0\n", ":2: column 1 (t)", "first point at t = 0"},
       {"one_row", head, ": ", "at least two points"},
+      // Points whose curve is not finite (issue 32: `check` passed them, `run` failed unnamed).
+      {"huge_value", head + "1.0,1e308,0.2,0.3\n", ":3: ", "slope or curvature overflows"},
+      {"tiny_step", head + "1e-300,0.2,0.2,0.3\n", ":3: ", "at least 1e-06 s after the previous row's"},
+      {"denormal_step", head + "5e-324,0.2,0.2,0.3\n", ":3: ", "at least 1e-06 s after"},
   };
   for (const Case& c : cases) {
     const std::string path = write_temp("pumasim_csv_" + c.name + ".csv", c.body);

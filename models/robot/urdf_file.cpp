@@ -106,15 +106,50 @@ class UrdfText {
 };
 
 // urdfdom reports through console_bridge; its messages are collected while
-// it parses (one parse at a time: the handler is global).
+// it parses (one parse at a time: the handler is global). Errors are kept
+// apart: urdfdom may log one ("Could not parse inertial element for Link
+// [x]": a mass of "17.4kg" or "nan") and still return a model with that
+// element left at its default (a mass of 0).
 class CollectedLog : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
     messages += (messages.empty() ? "" : "; ") + text;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors.push_back(text);
   }
   std::string messages;
+  std::vector<std::string> errors;
 };
+
+// The errors urdfdom logged while returning a model anyway: refused, naming
+// the file, the line of the element they concern and urdfdom's words. It
+// logs the detail first ("Inertial: mass [17.4kg] is not a float") and then
+// the element it dropped ("Could not parse inertial element for Link [l1]").
+// An error in a <visual> or <collision> (the group ending with such a
+// summary) is not refused: pumasim reads neither, so the model it simulates
+// does not depend on them.
+void refuse_logged_errors(const std::vector<std::string>& errors, const UrdfText& t) {
+  std::vector<std::string> group;
+  for (const std::string& e : errors) {
+    group.push_back(e);
+    const bool summary = e.rfind("Could not parse ", 0) == 0;
+    if (!summary) continue;
+    const bool ignored = e.find("visual element") != std::string::npos || e.find("collision element") != std::string::npos;
+    if (!ignored) break;
+    group.clear();
+  }
+  if (group.empty()) return;
+  std::string words;
+  for (const std::string& e : group) words += (words.empty() ? "" : "; ") + e;
+  const std::string& last = group.back();
+  const std::size_t open = last.find('['), close = last.find(']', open == std::string::npos ? 0 : open);
+  if (last.rfind("Could not parse ", 0) == 0 && open != std::string::npos && close != std::string::npos) {
+    const bool link = last.find("Link [") != std::string::npos;
+    t.fail(link ? "link" : "joint", last.substr(open + 1, close - open - 1), "elements urdfdom parses without error",
+           "urdfdom's error: " + words);
+  }
+  throw ConfigError(t.path() + ": URDF error: expected a document urdfdom parses without error, got: " + words);
+}
 
 urdf::ModelInterfaceSharedPtr parse_urdf(const UrdfText& t) {
   static std::mutex one_at_a_time;
@@ -133,6 +168,7 @@ urdf::ModelInterfaceSharedPtr parse_urdf(const UrdfText& t) {
     throw ConfigError(t.path() + ": URDF error: expected a URDF document that urdfdom reads, got: " +
                       (log.messages.empty() ? "(urdfdom gave no message)" : log.messages));
   }
+  refuse_logged_errors(log.errors, t);
   return model;
 }
 
@@ -400,9 +436,14 @@ void place_axes(const UrdfChain& c, const UrdfText& t, std::vector<AxisLine>& L,
   for (std::size_t k = 0; k < c.joints.size(); ++k) {
     const urdf::Joint& j = *c.joints[k];
     const Vec3 axis(j.axis.x, j.axis.y, j.axis.z);
-    if (!axis.allFinite() || axis.norm() < 1e-12) t.fail("joint", j.name, "a non-zero <axis xyz>", vec_str(axis));
+    // Scaled by its largest component before the norm: (1e200, 1e200, 0)'s
+    // squared norm overflows, and normalized() then returned (0, 0, 0).
+    const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
+    if (!axis.allFinite() || !(largest > 0) || largest * (axis / largest).norm() < 1e-12) {
+      t.fail("joint", j.name, "a non-zero <axis xyz>", vec_str(axis));
+    }
     const Frame F = bodies.back() * c.clusters[k].next_origin;  // joint frame = child link frame at q = 0
-    L.push_back({F.p, F.R * axis.normalized()});
+    L.push_back({F.p, F.R * (axis / largest).normalized()});
     bodies.push_back(F);
   }
 }

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <sstream>
 
@@ -49,6 +50,32 @@ std::vector<double> parse_row(const std::vector<std::string>& fields, const std:
   return row;
 }
 
+// Why the curve through rows a then b (t, then the values) cannot be finite,
+// or "": a time step below kMinRowStep, or a value jump whose slope or
+// curvature scale (dq/dt, dq/dt^2) overflows within a factor of 1e3: the
+// spline's coefficients are sums of a few such terms from neighbouring
+// segments with small integer weights (a quintic's reach 10 dq/dt^2), so a
+// point of 1e308 rad, finite itself, gave an infinite curve.
+std::string step_problem(const std::vector<double>& a, const std::vector<double>& b, std::string_view column) {
+  const double dt = b[0] - a[0];
+  if (!(dt >= kMinRowStep)) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "expected a time at least %g s after the previous row's %.17g s, got %.17g s",
+                  kMinRowStep, a[0], b[0]);
+    return buf;
+  }
+  for (std::size_t c = 1; c < a.size() && c < b.size(); ++c) {
+    const double dq = b[c] - a[c];
+    if (!std::isfinite(dq) || !std::isfinite(1e3 * (dq / dt)) || !std::isfinite(1e3 * (dq / dt / dt))) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "expected values whose curve is finite, got %s%zu going from %.6g to %.6g in "
+                    "%.6g s (its slope or curvature overflows)", std::string(column).c_str(), c, a[c], b[c], dt);
+      return buf;
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const std::string& where,
@@ -72,6 +99,11 @@ void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const
     if (k > 0 && !(rows[k][0] > rows[k - 1][0])) {
       throw ConfigError(where + row + "expected t after the previous row's " + std::to_string(rows[k - 1][0]) +
                         " s (strictly increasing times), got " + std::to_string(rows[k][0]));
+    }
+    if (k > 0) {
+      if (const std::string why = step_problem(rows[k - 1], rows[k], column); !why.empty()) {
+        throw ConfigError(where + row + why);
+      }
     }
   }
 }
@@ -103,6 +135,11 @@ std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, 
     if (k > 0 && !(rows[k][0] > rows[k - 1][0])) {
       throw ConfigError(at + "column 1 (" + header[0] + "): expected a time after the previous row's " +
                         std::to_string(rows[k - 1][0]) + " s (strictly increasing), got " + fields[0]);
+    }
+    if (k > 0) {
+      if (const std::string why = step_problem(rows[k - 1], rows[k], column); !why.empty()) {
+        throw ConfigError(at + why);
+      }
     }
   }
   if (header.empty()) {
