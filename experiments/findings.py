@@ -26,8 +26,9 @@ a mechanism, a remark on the method). An assertion's keys:
   rows    {column = value or [values]}: the rows kept; every value listed must
           match some kept row (a renamed integrator or a dropped setting fails
           instead of leaving the assertion vacuous).
-  pick    "cheapest": per variant and integrator, its cheapest run within the
-          target (the one the report's table shows); pairs without one drop out.
+  pick    "cheapest": per variant and integrator, its cheapest run that is
+          `within` (the one the report's table shows); pairs without one drop
+          out.
   group, values
           group the kept rows by these columns; each group becomes one row with
           them, `n` (its size) and each of `values` ({name = "expression"}, in
@@ -45,8 +46,13 @@ a mechanism, a remark on the method). An assertion's keys:
 
 Expressions are Python expressions over a row's columns (numbers as floats,
 True/False as booleans, empty as None) and: `target` (the ranking measure's
-accuracy target), `error` (the run's error in that measure), `within` (the run
-finished and error <= target: the report's criterion), `dt`, `rtol` and
+accuracy target), `error` (the run's error in that measure), `within_ranking`
+(the run finished and error <= target), `within` (the report's criterion: a
+table with the column within_targets, which sweep.py writes since issue 31,
+judges a run on every target the sweep sets, so `within` is within_ranking and
+within_targets, and a run within the ranking target that misses another one,
+named in its disqualified_by, is not within; a table without that column is
+judged on the ranking measure alone, `within` = within_ranking), `dt`, `rtol` and
 `setting_value` (from the setting "dt=0.001"), `options` (what follows it, e.g.
 "late-events"), `failed_at` (the time in the failure's "at t = ..."), `value`
 (the variant's value); functions abs, min, max, sum, len, all, any, sorted,
@@ -114,7 +120,9 @@ def run_row(raw, rank_column, target):
     r["failed_at"] = float(f.group(1)) if f else None
     r["target"] = target
     r["error"] = typed(raw[rank_column])
-    r["within"] = r["ok"] is True and isinstance(r["error"], float) and r["error"] <= target
+    r["within_ranking"] = r["ok"] is True and isinstance(r["error"], float) and r["error"] <= target
+    # Every target the sweep sets where the table says (within_targets); else the ranking one's alone.
+    r["within"] = r["within_ranking"] and r.get("within_targets", True) is True
     return r
 
 
@@ -152,9 +160,10 @@ def evaluate(code, row, other=None):
 
 def describe(row, names=()):
     """A row for a message: its identifying columns, then the named ones
-    (with the error and target behind `within`)."""
+    (with the error and target behind `within`, and the measures that
+    disqualify it if any)."""
     if "within" in names:
-        names = [*names, "ok", "error", "target"]
+        names = [*names, "ok", "error", "target", *(["disqualified_by"] if row.get("disqualified_by") else [])]
     ident = [str(row[k]) for k in IDENTITY if row.get(k) is not None]
     shown = [f"{k}={fmt_value(row[k])}" for k in dict.fromkeys(names) if k in row and k not in IDENTITY]
     return " ".join(ident) + (" (" + ", ".join(shown) + ")" if shown else "")
@@ -192,8 +201,10 @@ class AssertionFailed(Exception):
 
 
 def cheapest(rows):
-    """Per (variant, integrator) the cheapest row within the target, in the
-    order of the rows (report.cheapest_runs picks the same)."""
+    """Per (variant, integrator) the cheapest row that is `within` (every
+    target the sweep sets where the table has within_targets, else the
+    ranking one's), in the order of the rows (report.cheapest_runs picks the
+    same)."""
     best = {}
     for r in rows:
         key = (r.get("variant"), r.get("integrator"))

@@ -160,27 +160,94 @@ def limit_and_creep(summary, checks):
     return out
 
 
-def cheapest_runs(summary, rows):
-    """(lines: per integrator and variant the cheapest run within the target
-    in the ranking measure, the runs chosen)."""
+def judged_on_every_target(rows):
+    """True if the sweep's table says which runs are within every target the
+    sweep sets (the columns within_targets and disqualified_by, which
+    experiments/sweep.py writes since issue 31); a table without them is
+    judged on the ranking measure alone."""
+    return bool(rows) and "within_targets" in rows[0]
+
+
+def within_ranking(r, rank):
+    """The run finished within the ranking measure's target (a CSV row)."""
+    return r["ok"] == "True" and float(r[rank["column"]]) <= rank["target"]
+
+
+def qualifies(r, rank, judged):
+    """The report's criterion: within the ranking target and, where the table
+    is judged on every target (judged), within_targets too."""
+    return within_ranking(r, rank) and (not judged or r["within_targets"] == "True")
+
+
+def cheapest_caption(summary, judged, weak):
+    """The cheapest-run table's caption: on a table judged on every target,
+    the targets and what the lines under it show; else the ranking measure's
+    criterion (the words of the tables before within_targets)."""
     rank = summary["rank_by"]
     rcol, runit, rlabel, target = rank["column"], rank["unit"], rank["label"], rank["target"]
+    def dagger(error):
+        return (f"; † its {error} is within {summary['below_reference_factor']}× of the reference-vs-check "
+                "difference (below the reference's accuracy)")
+    if not judged:
+        return (f"Cheapest run per integrator and variant whose {rlabel} stays within {target:g} {runit} of the "
+                "reference (ranked by that measure): RHS evaluations (setting; wall time median [min–max] of the "
+                "repeats); `fail` if every setting failed, `–` if none was accurate enough" + dagger("error")
+                + ("; (weak ref.) the variant's reference is too weak in this measure." if weak else "."))
+    targets = ", ".join(f"{spec['label']} {spec['target']:g} {spec['unit']}"
+                        for spec in summary["measures"].values() if spec["target"] is not None)
+    return (f"Cheapest run per integrator and variant within every target the sweep sets ({targets}): a run "
+            f"qualifies only if it finished and is within each of them (the CSV's `within_targets`; ranked by "
+            f"the {rlabel}, `{rcol}`): RHS evaluations (setting; wall time median [min–max] of the repeats); "
+            "`fail` if every setting failed, `–` if none qualified" + dagger("ranking error")
+            + ("; (weak ref.) the variant's reference is too weak in one of these measures" if weak else "")
+            + f". Under the table: each run cheaper than the one shown that is within the {rlabel} target but "
+            "misses another (its `disqualified_by`), with its error and the target.")
+
+
+def disqualified_lines(summary, rows):
+    """Lines under the cheapest-run table (a table judged on every target):
+    per integrator and variant whose cheapest run within the ranking target
+    misses another target, that run, each measure it misses (its
+    disqualified_by) with its error and the target (the summary's
+    disqualified_cheapest, from the same rows); nothing if there is none."""
+    rank, measures = summary["rank_by"], summary["measures"]
+    out = []
+    for n in sorted({r["integrator"] for r in rows}):
+        for v in [v["label"] for v in summary["variants"]]:
+            alone = [r for r in rows if r["integrator"] == n and r["variant"] == v and within_ranking(r, rank)]
+            b = min(alone, key=lambda r: float(r["rhs_evaluations"])) if alone else None
+            if b is None or b["within_targets"] == "True":
+                continue
+            missed = "; ".join(f"{measures[m]['label']} {fmt_num(b[measures[m]['column']])} {measures[m]['unit']} "
+                               f"> target {measures[m]['target']:g} {measures[m]['unit']}"
+                               for m in b["disqualified_by"].split())
+            out.append(f"- {n}, {v}: {b['setting']} ({fmt_int(b['rhs_evaluations'])} RHS; {rank['label']} "
+                       f"{fmt_num(b[rank['column']])} {rank['unit']}) misses {missed} "
+                       f"(`disqualified_by` = `{b['disqualified_by']}`)")
+    if not out:
+        return []
+    return ["", f"Cheaper on the {rank['label']} alone, but past another target (not counted above):", ""] + out
+
+
+def cheapest_runs(summary, rows):
+    """(lines: per integrator and variant the cheapest run that qualifies,
+    within every target the sweep sets where the table says so
+    (within_targets) and else within the ranking measure's, with the runs
+    disqualified by another measure under it; the runs chosen)."""
+    rank = summary["rank_by"]
+    judged = judged_on_every_target(rows)
     variants = [v["label"] for v in summary["variants"]]
-    weak_rank = {lab for lab, a in summary["agreement"].items() if rank["measure"] in a["reference_too_weak"]}
-    out = [f"Cheapest run per integrator and variant whose {rlabel} stays within {target:g} {runit} of the "
-           "reference (ranked by that measure): RHS evaluations (setting; wall time median [min–max] of the "
-           f"repeats); `fail` if every setting failed, `–` if none was accurate enough; † its error is within "
-           f"{summary['below_reference_factor']}× of the reference-vs-check difference (below the reference's "
-           "accuracy)" + ("; (weak ref.) the variant's reference is too weak in this measure." if weak_rank else "."),
-           "",
-           "| integrator | " + " | ".join(v + (" (weak ref.)" if v in weak_rank else "") for v in variants) + " |",
+    weak = {lab for lab, a in summary["agreement"].items()
+            if (a["reference_too_weak"] if judged else rank["measure"] in a["reference_too_weak"])}
+    out = [cheapest_caption(summary, judged, weak), "",
+           "| integrator | " + " | ".join(v + (" (weak ref.)" if v in weak else "") for v in variants) + " |",
            "|---|" + "---:|" * len(variants)]
     chosen = []
     for n in sorted({r["integrator"] for r in rows}):
         cells = []
         for v in variants:
             rs = [r for r in rows if r["integrator"] == n and r["variant"] == v]
-            good = [r for r in rs if r["ok"] == "True" and float(r[rcol]) <= target]
+            good = [r for r in rs if qualifies(r, rank, judged)]
             if good:
                 b = min(good, key=lambda r: float(r["rhs_evaluations"]))
                 chosen.append(b)
@@ -191,7 +258,7 @@ def cheapest_runs(summary, rows):
             else:
                 cells.append("–")
         out.append(f"| {n} | " + " | ".join(cells) + " |")
-    return out, chosen
+    return out + (disqualified_lines(summary, rows) if judged else []), chosen
 
 
 def chosen_runs_table(summary, chosen):

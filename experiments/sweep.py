@@ -731,6 +731,15 @@ def disqualified_by(row, targets):
             if col in targets and not (math.isfinite(row[col]) and row[col] <= targets[col])]
 
 
+def variant_targets(targets, agreement, rcol):
+    """The targets a variant's runs are judged on (disqualified_by): every
+    target the sweep sets but those in a measure the variant has no states
+    for, its reference-vs-check difference nan (agreement: its entry; the
+    motor currents of a variant with La = 0), which, as in
+    reference_too_weak, is not judged; the ranking measure's always."""
+    return {col: t for col, t in targets.items() if col == rcol or math.isfinite(agreement.get(col, math.nan))}
+
+
 def _run_row(work, run, sm, ref, columns, rcol, agreement_rank, targets):
     """One run's CSV row: its error measures against its variant's reference
     trajectory ref (nan in every one of `columns` if it failed), its global
@@ -781,7 +790,8 @@ def _variant_rows(s, work, v, summaries, ref, c, a, modes):
     for run in run_list(s):
         if run[1] is not v or run[2] in ("reference", "check"):
             continue
-        rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol], s["targets"]))
+        rows.append(_run_row(work, run, summaries[run[0]], ref, c, rcol, a[rcol],
+                             variant_targets(s["targets"], a, rcol)))
         if modes:
             events = mode_sequence.read_events(os.path.join(work, run[0])) if rows[-1]["ok"] else None
             # The hybrid model's own events against the reference's own; a
@@ -876,7 +886,8 @@ def _table_comments(s, agreement, weak, limit, held_creep, pinning):
         f"reference-vs-check difference in that measure (empty: not judged, failed run); a reference is too "
         f"weak where that difference exceeds target/{WEAK_REFERENCE_FACTOR}",
         f"within_targets: the run finished and is within every target above (disqualified_by: the measures "
-        f"whose target it misses, or failed); error_over_rtol (adaptive runs): max_state_error, the max over the "
+        f"whose target it misses, or failed; a measure its variant has no states for, its reference vs check "
+        f"nan, is not judged); error_over_rtol (adaptive runs): max_state_error, the max over the "
         f"output rows and the states q, qd, i_motor, z_piv of |x - x_ref| / max(1, |x_ref|), over the run's rtol; "
         f"per method the slope of log(error) against log(rtol) is in {s['name']}_precision.md",
         f"wall times: median [s] of the repeats (all in wall_times_s), min, max, interquartile range "

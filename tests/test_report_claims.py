@@ -1,7 +1,12 @@
 """experiments/report.py checks every hand-written finding against its table
 (experiments/findings.py): the committed tables support every sentence, a
 changed table fails the report naming the sentence and the row, and the
-checker's assertions mean what the format says. Runs no simulation.
+checker's assertions mean what the format says. A table with sweep.py's
+within_targets judges a run on every target the sweep sets: a run within the
+position target but past the current one is neither the report's cheapest
+nor `within` in a finding, and the report names the measure that
+disqualifies it; a table without the column is judged on the ranking measure
+alone, as before (issue 31). Runs no simulation.
 
     /usr/bin/python3 -m pytest -q tests/test_report_claims.py
 """
@@ -21,6 +26,7 @@ sys.path.insert(0, os.path.join(ROOT, "experiments"))
 import findings  # noqa: E402
 import pumasim_io  # noqa: E402
 import report  # noqa: E402
+import sweep  # noqa: E402
 
 PY = "/usr/bin/python3"
 RESULTS = os.path.join(ROOT, "results")
@@ -220,10 +226,152 @@ def test_every_finding_needs_assertions_or_a_reason_it_has_none():
 def test_a_sweep_file_with_findings_still_loads_in_sweep_py():
     """The findings sit in [sweep] (sweep.py's known key 'findings'), and
     sweep.py still reads every sweep file."""
-    import sweep
     for name in sweep_names():
         path = os.path.join(ROOT, "experiments", "sweeps", name + ".toml")
         with open(path, "rb") as f:
             assert isinstance(tomllib.load(f)["sweep"]["findings"], list)
         s, _ = sweep._sweep_table(path, sweep._read_toml(path))
         assert s["findings"], name
+
+
+POSITION, CURRENT = "max_tool_position_error_mm", "max_current_error_A"
+TARGETS = {POSITION: 5e-3, CURRENT: 0.05}  # the sweeps' target_mm and target_current_A
+NAN = float("nan")
+# The committed 6-joint hybrid sweep's case (issue 31): AB3 at 0.5 ms within the position target with
+# 48.3 A of current error; (integrator, setting, RHS, position error [mm], current error [A], ok).
+AB3_RUNS = [("ab3", "dt=0.002", 20_000, NAN, NAN, False), ("ab3", "dt=0.001", 40_000, 0.3, 200.0, True),
+            ("ab3", "dt=0.0005", 80_971, 0.00202, 48.3, True), ("ab3", "dt=0.00025", 160_000, 0.0004, 0.002, True),
+            ("cvode-bdf", "rtol=0.001", 3_000, 0.001, 0.004, True)]
+
+
+def synthetic_table(targets, judged=True):
+    """AB3_RUNS as sweep.py writes its CSV and report.read_csv reads it (rows
+    of strings), with within_targets and disqualified_by for the targets
+    given (judged), or without them (a table from before issue 31)."""
+    rows = []
+    for n, setting, rhs, position, current, ok in AB3_RUNS:
+        r = {"variant": "base", "value": 0.0, "integrator": n, "setting": setting, "ok": ok,
+             "failure": "" if ok else "non-finite state at t = 0.1 s", POSITION: position,
+             "rms_tool_position_error_mm": position / 10, "max_tool_orientation_error_rad": 1e-6 if ok else NAN,
+             "max_joint_error_rad": 1e-6 if ok else NAN, CURRENT: current, "final_state_error": 1e-6 if ok else NAN,
+             "below_reference_accuracy": False if ok else ""}
+        if judged:
+            missed = sweep.disqualified_by(r, targets)
+            r["within_targets"], r["disqualified_by"] = not missed, " ".join(missed)
+        rows.append({**r, "wall_time_median_s": 0.05, "wall_time_min_s": 0.04, "wall_time_max_s": 0.06,
+                     "rhs_evaluations": rhs})
+    return pumasim_io.parse_table(pumasim_io.table_text(rows, fmt=pumasim_io.fmt_6g)).rows
+
+
+def synthetic_summary(targets):
+    """The summary keys the report's tables read (sweep._summary's)."""
+    return {"rank_by": {"measure": "tool_position", "column": POSITION, "label": "max tool position error",
+                        "unit": "mm", "target": targets[POSITION]},
+            "measures": {m: {"column": col, "unit": unit, "label": label, "target": targets.get(col)}
+                         for m, (col, unit, _, label) in sweep.MEASURES.items()},
+            "variants": [{"label": "base", "value": 0.0}], "agreement": {"base": {"reference_too_weak": []}},
+            "below_reference_factor": sweep.BELOW_REFERENCE_FACTOR}
+
+
+def test_a_run_within_the_position_target_but_past_the_current_one_is_not_named_cheapest():
+    summary, rows = synthetic_summary(TARGETS), synthetic_table(TARGETS)
+    lines, chosen = report.cheapest_runs(summary, rows)
+    assert lines[0].startswith("Cheapest run per integrator and variant within every target the sweep sets "
+                               "(max tool position error 0.005 mm, max motor-current error 0.05 A)")
+    assert next(x for x in lines if x.startswith("| ab3 |")).startswith("| ab3 | 160,000 (dt=0.00025;")
+    assert [(r["integrator"], r["setting"]) for r in chosen] == [("ab3", "dt=0.00025"), ("cvode-bdf", "rtol=0.001")]
+    # The run cheapest on position alone is shown under the table with the measure that disqualifies it.
+    (note,) = [x for x in lines if x.startswith("- ")]
+    assert note.startswith("- ab3, base: dt=0.0005 (80,971 RHS; max tool position error 0.00202 mm) misses "
+                           "max motor-current error 48.3 A > target 0.05 A"), note
+    assert "`disqualified_by` = `current`" in note
+    assert "48.3" not in "\n".join(report.chosen_runs_table(summary, chosen))
+
+
+def test_a_table_without_within_targets_is_judged_on_the_ranking_measure_alone():
+    """Committed tables from before issue 31: the same table, caption and picks as before."""
+    summary, rows = synthetic_summary(TARGETS), synthetic_table(TARGETS, judged=False)
+    assert not report.judged_on_every_target(rows)
+    lines, chosen = report.cheapest_runs(summary, rows)
+    assert lines[0].startswith("Cheapest run per integrator and variant whose max tool position error stays "
+                               "within 0.005 mm of the reference (ranked by that measure)")
+    assert next(x for x in lines if x.startswith("| ab3 |")).startswith("| ab3 | 80,971 (dt=0.0005;")
+    assert not any(x.startswith("- ") for x in lines)
+    # A judged table whose sweep sets no current target picks the same run, and names none.
+    targets = {POSITION: 5e-3}
+    lines, _ = report.cheapest_runs(synthetic_summary(targets), synthetic_table(targets))
+    assert next(x for x in lines if x.startswith("| ab3 |")).startswith("| ab3 | 80,971 (dt=0.0005;")
+    assert not any(x.startswith("- ") for x in lines) and "(max tool position error 0.005 mm)" in lines[0]
+
+
+def runs_verdict(table_rows, **assertion):
+    """check_assertion's answer on the synthetic table's runs (as the report builds them)."""
+    table = report.sweep_tables(synthetic_summary(TARGETS), table_rows)["runs"]
+    return findings.check_assertion(assertion, table, "issue 31")
+
+
+def test_a_finding_judges_within_on_every_target_the_table_has():
+    rows = synthetic_table(TARGETS)
+    at_half_ms = {"integrator": "ab3", "setting": "dt=0.0005"}
+    problem = runs_verdict(rows, rows=at_half_ms, all="within")
+    assert "ab3 dt=0.0005" in problem and "within=False" in problem and "disqualified_by='current'" in problem
+    assert runs_verdict(rows, rows=at_half_ms, all="within_ranking and not within") is None
+    # pick = "cheapest" is the report's cheapest: the 0.25 ms run.
+    assert runs_verdict(rows, rows={"integrator": "ab3"}, pick="cheapest", all="setting == 'dt=0.00025'") is None
+    # Without the column (a table from before issue 31): the ranking measure alone, as before.
+    old = synthetic_table(TARGETS, judged=False)
+    assert runs_verdict(old, rows=at_half_ms, all="within and within_ranking") is None
+    assert runs_verdict(old, rows={"integrator": "ab3"}, pick="cheapest", all="setting == 'dt=0.0005'") is None
+
+
+def with_current_target(folder, name, target):
+    """The committed sweep's CSV in folder rewritten as sweep.py now writes it
+    with target_current_A = target (within_targets and disqualified_by after
+    below_reference_accuracy), its summary's current target and hash updated."""
+    table = pumasim_io.read_table(os.path.join(folder, name + ".csv"))
+    summary_path = os.path.join(folder, name + "_summary.json")
+    summary = pumasim_io.read_json(summary_path)
+    targets = {POSITION: summary["rank_by"]["target"], CURRENT: target}
+    rows = []
+    for raw in table.rows:
+        typed = {"ok": raw["ok"] == "True", **{col: pumasim_io.fnum(raw[col]) for col, *_ in sweep.MEASURES.values()}}
+        missed = sweep.disqualified_by(typed, targets)
+        r = {}
+        for k, v in raw.items():
+            r[k] = v
+            if k == "below_reference_accuracy":
+                r.update(within_targets=str(not missed), disqualified_by=" ".join(missed))
+        rows.append(r)
+    with open(os.path.join(folder, name + ".csv"), "w", newline="") as f:
+        f.write(pumasim_io.table_text(rows, comments=table.comments))
+    summary["measures"]["current"]["target"] = target
+    summary["outputs"][name + ".csv"] = sha256(os.path.join(folder, name + ".csv"))
+    with open(summary_path, "w") as f:
+        json.dump(summary, f)
+
+
+def test_the_report_on_the_hybrid_sweep_with_a_current_target_names_the_48_A_run(tmp_path):
+    """Issue 31's case end to end: the committed 6-joint hybrid table judged
+    with target_current_A = 0.05 (as a merge with the sweep file's target
+    writes it). Its finding that every fixed-step method reaches the target
+    at 0.5 ms fails, naming AB2's current error; without the findings the
+    report shows AB3's 0.25 ms run and, under the table, the 0.5 ms run and
+    its 48.3 A."""
+    folder = tmp_path / "results" / "work_precision"
+    folder.mkdir(parents=True)
+    for ext in (".csv", ".png", "_summary.json"):
+        shutil.copy(os.path.join(RESULTS, "work_precision", HYBRID + ext), folder)
+    with_current_target(str(folder), HYBRID, 0.05)
+    out = tmp_path / "README.md"
+    cmd = [PY, os.path.join(ROOT, "experiments", "report.py"), "--results", str(tmp_path / "results"),
+           "--out", str(out)]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    assert p.returncode == 1 and not out.exists() and "Traceback" not in p.stderr
+    assert "every one reaches the target at 0.5 ms and less" in p.stderr
+    assert "ab2 dt=0.0005" in p.stderr and "disqualified_by='current'" in p.stderr, p.stderr
+    p = subprocess.run(cmd + ["--omit-findings"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    text = out.read_text()
+    assert "| ab3 | 96,353 (dt=0.00025;" in text
+    assert ("- ab3, base: dt=0.0005 (80,971 RHS; max tool position error 0.00202 mm) misses max motor-current "
+            "error 48.3 A > target 0.05 A (`disqualified_by` = `current`)") in text

@@ -1,5 +1,6 @@
 """A sweep's "cheapest within target" judges a run on every error measure
-the sweep has a target for, and names the measure that disqualifies a run
+the sweep has a target for (but a measure a variant has no states for, as
+the currents with La = 0), and names the measure that disqualifies a run
 cheaper on the ranking measure alone; each adaptive run's error is reported
 over its rtol, and per method the slope of log(error) against log(rtol)
 (issue 31). On synthetic rows (experiments/sweep.py's merge step and
@@ -114,3 +115,17 @@ def test_error_over_rtol_and_its_slope_per_method():
     text = "\n".join(precision_table.proportionality_section(list(slopes.values()), sweep.BELOW_REFERENCE_FACTOR))
     assert "| base | cvode-bdf | – | 1e-03: 15, 1e-05: 15, 1e-07: 15, 1e-09: 15, 1e-12: 5* | 1.00 (4) |" in text
     assert "| base | odeint-rodas4p | late-events | 1e-04: 6.31, 1e-06: 15.8, 1e-08: –* | 0.80 (2) † |" in text
+
+
+def test_a_variant_without_current_states_is_not_judged_on_currents():
+    """stiff_armature's La=0 has no motor-current states (its current errors,
+    and its reference vs check, nan): with target_current_A its runs are
+    judged on the other targets, not all disqualified; a variant with
+    currents keeps the current target, and the ranking one is always kept."""
+    no_currents = {POSITION: 2e-9, CURRENT: math.nan}
+    assert sweep.variant_targets(TARGETS, no_currents, POSITION) == {POSITION: 5e-3}
+    assert sweep.variant_targets(TARGETS, AGREEMENT["base"], POSITION) == TARGETS
+    assert sweep.variant_targets(TARGETS, no_currents, CURRENT) == TARGETS
+    run = _row("rk4", "dt=1e-05", 100, 1e-4, math.nan)
+    assert sweep.disqualified_by(run, TARGETS) == ["current"]
+    assert sweep.disqualified_by(run, sweep.variant_targets(TARGETS, no_currents, POSITION)) == []
