@@ -204,10 +204,22 @@ class PyScene {
   }
 
   // The times in (0, t_end] where the driver stops because f changes.
+  // t_end is checked as pumasim run checks --t-end, and the count is bounded
+  // by the default step budget (each event is a stop) before it is listed.
   std::vector<double> time_events(std::optional<double> t_end) const {
+    if (t_end && !(std::isfinite(*t_end) && *t_end > 0)) {
+      throw std::invalid_argument("t_end: expected a number > 0, got " + std::to_string(*t_end));
+    }
     const double end = t_end.value_or(scene_.duration);
     std::vector<double> times;
-    for (double t = plant_->next_time_event(0.0); t <= end; t = plant_->next_time_event(t)) times.push_back(t);
+    for (double t = plant_->next_time_event(0.0); t <= end; t = plant_->next_time_event(t)) {
+      if (static_cast<long>(times.size()) >= kDefaultStepBudget) {
+        throw std::invalid_argument("t_end: expected at most " + std::to_string(kDefaultStepBudget) +
+                                    " time events before it (the default step budget), got more by t = " +
+                                    std::to_string(t) + " s");
+      }
+      times.push_back(t);
+    }
     return times;
   }
 

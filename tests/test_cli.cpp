@@ -235,7 +235,7 @@ TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
 // A run over its step budget: a reported failure (exit 1, files written)
 // naming --max-steps, the time, the last step and the state changing fastest
 // relative to its typical magnitude. (On a smooth scene: on the paper's rule
-// the budget is diagnosed as chattering instead, tests/test_named_failures.)
+// the budget is diagnosed as chattering instead, tests/test_named_failures.cpp.)
 TEST(CliOutput, AStepBudgetFailureNamesMaxStepsAndTheFastestState) {
   const fs::path d = scratch("budget");
   const Result r = cli({"run", std::string(PUMASIM_SCENES_DIR) + "/paper_slow_viscous.toml", "--integrator",

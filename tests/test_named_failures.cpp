@@ -215,3 +215,32 @@ TEST(NamedFailures, AMisspeltTableIsNamedUnknown) {
 
 }  // namespace
 }  // namespace pumasim
+
+namespace pumasim {
+namespace {
+
+// Sizes bounded before they are spent (issue 32): each case is refused at
+// once with exit status 2, naming what bounded it, instead of allocating
+// gigabytes (a derived duration, a file without end) or looping in place.
+TEST(Bounded, SizesAreRefusedBeforeTheyAreSpent) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"check", "/dev/zero"}, "expected an input file of at most 16 MiB"},
+      {{"check", kScenes + "/paper_slow.toml", "--set", "reference.max_speed=1e-9"}, "the reference's duration"},
+      {{"check", kScenes + "/planning.toml", "--set", "friction.viscous=0x7fffffff"}, "output rows over"},
+      {{"run", kScenes + "/sampled_control.toml", "--set", "controller.mode=\"sampled\"", "--set",
+        "controller.servo_period=1e-30", "--max-steps", "0"},
+       "controller.servo_period: expected a period that advances the time"},
+  };
+  for (const Case& c : cases) {
+    std::ostringstream out, err;
+    EXPECT_EQ(run_cli(c.args, out, err), kExitBadInput) << c.args[1] << ": " << err.str();
+    EXPECT_NE(err.str().find(c.says), std::string::npos) << err.str();
+  }
+}
+
+}  // namespace
+}  // namespace pumasim

@@ -212,6 +212,9 @@ def test_a_scene_with_discrete_state_refuses_rhs():
     assert "controller.mode" in sampled.discrete_state
     assert sampled.time_events(0.0105) == pytest.approx([0.001 * k for k in range(1, 11)])
     assert pumasim.run(sampled, integrator="cvode-bdf", t_end=0.05).ok  # run() takes it, with its events
+    for bad in (float("inf"), float("nan"), -1.0):  # as --t-end: refused, not 16 GB or [] (issue 32)
+        with pytest.raises(ValueError, match="t_end: expected a number > 0"):
+            sampled.time_events(bad)
 
 
 def test_the_papers_rule_warns_an_ode_solver_and_an_adaptive_run():

@@ -13,6 +13,15 @@ namespace {
 // A period whose stops alone exceed the step budget is refused.
 void check_stops(const char* key, double period, double duration, long max_steps) {
   if (!(period > 0)) return;
+  // A period that the run's last time does not move (t + period == t) would
+  // stop the event loop in place: refused whatever the budget (0: none).
+  if (!(duration + period > duration)) {
+    std::ostringstream m;
+    m << key << ": expected a period that advances the time near the run's end, " << duration
+      << " s (at least " << duration * 4e-16 << " s), got " << period << " s";
+    throw std::invalid_argument(m.str());
+  }
+  if (max_steps <= 0) return;
   const double stops = duration / period;
   if (stops > static_cast<double>(max_steps)) {
     std::ostringstream m;
@@ -30,11 +39,11 @@ void check_run_size(const Scene& sc, long max_steps) {
   // once): their number is bounded before anything is allocated.
   if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
     std::ostringstream m;
-    m << "scene.duration / scene.output_interval: expected at most " << kMaxOutputRows
-      << " output rows (a longer output_interval, or a shorter duration), got " << rows;
+    m << "the run's end time / scene.output_interval: expected at most " << static_cast<long>(kMaxOutputRows)
+      << " output rows (a longer output_interval, or an earlier end: the run's end time, " << sc.duration
+      << " s, is the end time asked for, else the scene's duration), got " << rows;
     throw std::invalid_argument(m.str());
   }
-  if (max_steps <= 0) return;
   if (sc.plant.controller == ControllerMode::kSampled) {
     check_stops("controller.servo_period", sc.plant.servo_period, sc.duration, max_steps);
   }

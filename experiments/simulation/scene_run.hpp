@@ -18,7 +18,6 @@ namespace pumasim {
 
 inline constexpr long kDefaultStepBudget = 10'000'000;  // pumasim run --max-steps
 inline constexpr double kDefaultWallBudget = 600.0;      // [s], pumasim run --max-wall
-inline constexpr double kMaxOutputRows = 1e7;            // rows held in memory until the run ends
 
 // How a run is driven, beyond the scene.
 struct RunControls {

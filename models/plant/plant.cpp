@@ -116,7 +116,8 @@ Plant::Plant(PlantConfig config)
   jx_.resize(layout_.size);
   jf_.resize(layout_.size);
   if (cfg_.tabulate_reference && cfg_.reference && cfg_.reference->has_path() &&
-      cfg_.reference->interpolation() == Interpolation::kCartesian) {
+      cfg_.reference->interpolation() == Interpolation::kCartesian &&
+      ReferenceTable::sub_intervals(*cfg_.reference) <= ReferenceTable::kMaxSubs) {
     ref_table_ = std::make_unique<ReferenceTable>(*cfg_.reference);
   }
   wt_ = std::make_unique<Workspace<Tangent>>(n);

@@ -3,10 +3,26 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 namespace pumasim {
 
+double ReferenceTable::sub_intervals(const Reference& ref) {
+  const std::vector<double>& bp = ref.breakpoints();
+  double total = 0;
+  for (std::size_t s = 0; s < bp.size(); ++s) {
+    const double a = s == 0 ? 0.0 : bp[s - 1], b = bp[s];
+    total += std::max(1.0, std::ceil((b - a) / kSpan));
+  }
+  return total;
+}
+
 ReferenceTable::ReferenceTable(const Reference& ref, bool truncate) : ref_(ref), truncate_(truncate) {
+  if (!(sub_intervals(ref) <= kMaxSubs)) {
+    throw std::invalid_argument("reference table: expected at most " + std::to_string(static_cast<long>(kMaxSubs)) +
+                                " sub-intervals (ReferenceTable::sub_intervals: check before making one)");
+  }
   const std::vector<double>& bp = ref.breakpoints();
   // Segment s is [bp[s-1], bp[s]] (bp[-1] = 0); the one after the last
   // breakpoint (the hold at the end) is not tabulated.

@@ -42,6 +42,14 @@ class ReferenceTable {
   // table's whole cost per lookup.
   static constexpr double kChopTol = 1e-14;
   static constexpr int kComponents = 24;     // q, qd, qdd (6 each), p, v (3 each)
+  // The most sub-intervals a table holds (65,536 s of reference at kSpan;
+  // about 200 MB of coefficients): a longer reference is not tabulated (the
+  // plant then evaluates it exactly), so that a derived duration (a speed of
+  // 1e-9 m/s) allocates nothing before the run's own bounds are checked.
+  static constexpr double kMaxSubs = 32768;
+  // How many sub-intervals ref's table would have, counted without
+  // allocating (a double: it may exceed any integer type).
+  static double sub_intervals(const Reference& ref);
 
   // The reference must outlive the table. Allocates all storage. truncate:
   // cut each series as above (false: every series keeps kDegree; for tests).

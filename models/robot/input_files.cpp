@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "models/robot/strict_toml.hpp"
+
 namespace pumasim {
 
 namespace {
@@ -36,7 +38,14 @@ std::optional<std::string> read_input_file(const std::string& path) {
   std::string text;
   char buf[65536];
   std::size_t got = 0;
-  while ((got = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, got);
+  while ((got = std::fread(buf, 1, sizeof buf, f)) > 0) {
+    text.append(buf, got);
+    if (text.size() > kMaxInputBytes) {
+      std::fclose(f);
+      throw ConfigError(path + ": expected an input file of at most " + std::to_string(kMaxInputBytes >> 20) +
+                          " MiB (pumasim's limit on a scene, robot or CSV file), got more");
+    }
+  }
   const bool failed = std::ferror(f) != 0;
   std::fclose(f);
   if (failed) return std::nullopt;

@@ -33,8 +33,14 @@ std::uint64_t fnv1a64(std::string_view bytes);
 // 16 lower-case hex digits.
 std::string hex64(std::uint64_t h);
 
+// The largest input file pumasim reads (a scene, robot, URDF, side file or
+// CSV): 16 MiB, over a hundred times the largest shipped one's size, so that
+// /dev/zero or a mistaken file fails at once instead of filling memory.
+inline constexpr std::size_t kMaxInputBytes = std::size_t{16} << 20;
+
 // The whole file, or nothing when it cannot be read (absent, a directory,
-// unreadable); recorded in the open records when read.
+// unreadable); recorded in the open records when read. A file longer than
+// kMaxInputBytes is a ConfigError naming it, read no further.
 std::optional<std::string> read_input_file(const std::string& path);
 
 // Collects the files read on this thread while it is alive (records nest: an

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <sstream>
 
@@ -870,7 +871,8 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   read_controller(root, pc);
   read_reference(root, sc);
   if (!pc.reference) read_initial(root, pc);
-  if (sc.duration == 0) {  // scene.duration absent (a given one is > 0): the reference's, or the input's
+  const bool given = sc.duration != 0;
+  if (!given) {  // scene.duration absent (a given one is > 0): the reference's, or the input's
     const double end = pc.controller == ControllerMode::kNone ? HUGE_VAL : controller_input_end(pc.controller_params);
     if (!pc.reference && !std::isfinite(end)) {
       root.fail("scene", "a duration (no reference or open-loop input to take it from)", "none");
@@ -878,6 +880,19 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
     sc.duration = pc.reference ? pc.reference->timing().duration() : end;
   }
   root.finish();
+  // The rows a run will hold, bounded before anything sized by the duration
+  // is made (the plant below builds the reference's table), naming where the
+  // duration came from.
+  if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
+    const std::string from = given          ? "scene.duration"
+                             : pc.reference ? "the reference's duration (its timing: reference.max_speed, the "
+                                              "profile, the planner's limits or the CSV's last time)"
+                                            : "the open-loop input's last time (controller.file)";
+    char got[64];
+    std::snprintf(got, sizeof got, "%.6g s / %.6g s = %.6g rows", sc.duration, sc.output_interval, rows);
+    root.table("scene").fail("output_interval", "at most " + std::to_string(static_cast<long>(kMaxOutputRows)) +
+                             " output rows over " + from + " (a longer output_interval or a shorter duration)", got);
+  }
   try {
     Plant check(pc);  // the last consistency checks
     check_start_inertia(root, sc, check);

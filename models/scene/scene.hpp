@@ -19,6 +19,11 @@ namespace pumasim {
 // can deliver; above 0.1 it controls no digit. (`--rtol` and integrator.rtol.)
 inline constexpr double kRtolMin = 1e-14;
 inline constexpr double kRtolMax = 0.1;
+// The output rows a run holds in memory until it ends: duration /
+// output_interval is bounded by it when the scene loads (whatever gave the
+// duration) and again when a run's end time is set.
+inline constexpr double kMaxOutputRows = 1e7;
+
 // `--rtol` without `--atol`: atol = kAtolPerRtol * rtol, times each state's
 // typical magnitude (tolerance_scales), as the sweeps set it.
 inline constexpr double kAtolPerRtol = 1e-3;
