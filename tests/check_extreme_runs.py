@@ -135,7 +135,8 @@ def judge(p, out, t_end):
 
 def failure_kind(why):
     """The kind of a named failure, for the summary."""
-    for kind, words in (("step budget", "step budget"), ("wall-clock budget", "wall-clock budget"),
+    for kind, words in (("unstable (past a physical bound)", "unstable at t = "), ("step budget", "step budget"),
+                        ("wall-clock budget", "wall-clock budget"),
                         ("non-finite state", "non-finite"), ("step size", "step size"),
                         ("step size", "h ="), ("convergence", "converge"), ("error test", "error test")):
         if words in why:

@@ -240,6 +240,21 @@ TEST(Bounded, SizesAreRefusedBeforeTheyAreSpent) {
     EXPECT_EQ(run_cli(c.args, out, err), kExitBadInput) << c.args[1] << ": " << err.str();
     EXPECT_NE(err.str().find(c.says), std::string::npos) << err.str();
   }
+  // An earlier end time rescues the run: the bound is on the rows a run holds.
+  std::ostringstream out, err;
+  EXPECT_EQ(run_cli({"run", kScenes + "/paper_slow.toml", "--set", "reference.max_speed=1e-9", "--t-end", "0.05",
+                     "--out", ::testing::TempDir() + "/pumasim_slow_reference", "--force", "--quiet"},
+                    out, err),
+            kExitOk)
+      << err.str();
+}
+
+// A scene's rtol without atol: atol = 1e-3 rtol, as --rtol alone sets it.
+TEST(Bounded, SceneRtolAloneSetsAtol) {
+  EXPECT_DOUBLE_EQ(load_scene(kScenes + "/passive_arm.toml", {"integrator.rtol=1e-10"}).integrator.atol, 1e-13);
+  EXPECT_DOUBLE_EQ(load_scene(kScenes + "/passive_arm.toml", {"integrator.rtol=1e-10", "integrator.atol=1e-9"})
+                       .integrator.atol,
+                   1e-9);
 }
 
 }  // namespace

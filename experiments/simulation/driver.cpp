@@ -50,9 +50,11 @@ class StepClock {
   long count_ = 0, every_ = 1;
 };
 
-// Chattering at a friction switching surface. A set-valued friction row's
-// branch (at rest within its zero-speed band, or slipping either way) has
-// switching surfaces at the band's edges (zero speed for an exact law).
+// Chattering at a friction switching surface. A set-valued friction row
+// without events (the paper's rule, Karnopp's: a zero-speed band) has a
+// branch (at rest within the band, or slipping either way) and switching
+// surfaces at the band's edges; the hybrid model's rows are left out, its
+// events stopping at each switch.
 // Counted over the accepted steps: branch changes, in all and in the last two
 // windows of kWindow steps. Diagnosed where the run fails: when the step has
 // collapsed (the last one under kCollapse times the run's length) and a row's
@@ -64,6 +66,7 @@ class ChatterCount {
   explicit ChatterCount(const OdeSystem& sys) {
     for (int c = 0; c < sys.set_valued_rows(); ++c) {
       const SetValuedRow r = sys.set_valued_row(c);
+      if (!(r.band > 0)) continue;  // an exact law (the hybrid model): its events stop at every switch
       velocity_.push_back(r.velocity);
       band_.push_back(r.band / std::abs(r.scale));  // on the state's speed
     }
@@ -91,7 +94,7 @@ class ChatterCount {
     double soonest = HUGE_VAL;  // [s] to the nearest surface at the current rate
     for (std::size_t k = 0; k < velocity_.size(); ++k) {
       const double v = x[velocity_[k]], rate = std::abs(f[static_cast<std::size_t>(velocity_[k])]);
-      const double gap = band_[k] > 0 ? std::abs(std::abs(v) - band_[k]) : std::abs(v);
+      const double gap = std::abs(std::abs(v) - band_[k]);
       if (gap / rate < soonest) soonest = gap / rate, worst = k;
     }
     if (!(soonest <= kNear * h)) return {};
@@ -149,28 +152,36 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, d
   return {};
 }
 
-// The components with a finite physical bound, checked after every step.
-std::vector<int> bounded_components(const OdeSystem& sys) {
-  std::vector<int> k;
+// The components with a finite physical bound and kUnstableFactor times it,
+// read once (no virtual call in the step loop).
+struct BoundedComponent {
+  int index;
+  double limit;
+};
+std::vector<BoundedComponent> bounded_components(const OdeSystem& sys) {
+  std::vector<BoundedComponent> k;
   for (int i = 0; i < sys.size(); ++i) {
-    if (std::isfinite(sys.physical_bound(i))) k.push_back(i);
+    if (std::isfinite(sys.physical_bound(i))) k.push_back({i, kUnstableFactor * sys.physical_bound(i)});
   }
   return k;
 }
 
-// The failure that ends a run whose state left its physical range by more
-// than kUnstableFactor (a diverged method), or "".
-std::string unstable_failure(const OdeSystem& sys, const std::vector<int>& bounded, double t, const double* x) {
-  for (const int i : bounded) {
-    const double b = sys.physical_bound(i);
-    if (!(std::abs(x[i]) > kUnstableFactor * b)) continue;
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "unstable at t = %.9g s: %s = %.6g, more than %g times its physical bound %.4g (",
-                  t, sys.state_name(i).c_str(), x[i], kUnstableFactor, b);
-    return buf + sys.physical_bound_why(i) + "); the method diverged: a smaller step, a stable method "
-           "(pumasim stiffness SCENE predicts the stable steps) or a tolerance";
+// The first component past its limit, or -1 (after every step: compares only).
+int unstable_component(const std::vector<BoundedComponent>& bounded, const double* x) {
+  for (const BoundedComponent& c : bounded) {
+    if (std::abs(x[c.index]) > c.limit) return c.index;
   }
-  return {};
+  return -1;
+}
+
+// The failure that ends a run whose state left its physical range by more
+// than kUnstableFactor (a diverged method).
+std::string unstable_failure(const OdeSystem& sys, int i, double t, const double* x) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "unstable at t = %.9g s: %s = %.6g, more than %g times its physical bound %.4g (", t,
+                sys.state_name(i).c_str(), x[i], kUnstableFactor, sys.physical_bound(i));
+  return buf + sys.physical_bound_why(i) + "); the method diverged: a smaller step, a stable method "
+         "(pumasim stiffness SCENE predicts the stable steps) or a tolerance";
 }
 
 // The discrete changes due at t, applied to the state x: the root found, or
@@ -250,7 +261,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   StepClock clock(start);
   double next_report = progress.delay;  // [s] of wall-clock time
   PlantSystem sys(plant);
-  const std::vector<int> bounded = bounded_components(sys);
+  const std::vector<BoundedComponent> bounded = bounded_components(sys);
   ChatterCount chatter(sys);
   std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
@@ -282,9 +293,9 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       break;
     }
     chatter.step(integrator.state());
-    if (std::string why = unstable_failure(sys, bounded, t, integrator.state()); !why.empty()) {
+    if (const int i = unstable_component(bounded, integrator.state()); i >= 0) {
       res.ok = false;
-      res.failure = std::move(why);
+      res.failure = unstable_failure(sys, i, t, integrator.state());
       res.failure_kind = "unstable";
       break;
     }

@@ -137,7 +137,7 @@ RunControls run_controls(Scene& sc, const RunRequest& a) {
   if (a.max_steps) rc.max_steps = static_cast<long>(*a.max_steps);
   if (rc.max_steps > 0) rc.options.max_steps = rc.max_steps;  // also each integrator's own per-call limit
   if (a.max_wall) rc.max_wall = *a.max_wall;
-  if (a.t_end) sc.duration = *a.t_end;
+  if (a.t_end) sc.duration = *a.t_end, sc.duration_source = "the run's end time (t_end)";
   rc.stops = a.late_events       ? Stops::kOutputsLateEvents
              : a.stop_at_outputs ? Stops::kEventsAndOutputs
                                  : Stops::kEvents;

@@ -39,9 +39,9 @@ void check_run_size(const Scene& sc, long max_steps) {
   // once): their number is bounded before anything is allocated.
   if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
     std::ostringstream m;
-    m << "the run's end time / scene.output_interval: expected at most " << static_cast<long>(kMaxOutputRows)
-      << " output rows (a longer output_interval, or an earlier end: the run's end time, " << sc.duration
-      << " s, is the end time asked for, else the scene's duration), got " << rows;
+    m << "scene.output_interval: expected at most " << static_cast<long>(kMaxOutputRows) << " output rows over "
+      << sc.duration_source << " (a longer output_interval or a shorter duration), got " << sc.duration << " s / "
+      << sc.output_interval << " s = " << rows << " rows";
     throw std::invalid_argument(m.str());
   }
   if (sc.plant.controller == ControllerMode::kSampled) {

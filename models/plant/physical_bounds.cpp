@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <limits>
 
 #include <Eigen/Eigenvalues>
@@ -56,18 +57,33 @@ PhysicalBounds passive_bounds(const RobotModel& sim, const Eigen::VectorXd& q0, 
   const std::size_t n = static_cast<std::size_t>(sim.dof());
   PhysicalBounds b{std::vector<double>(n, kInf), std::vector<std::string>(n), std::vector<double>(n, kInf),
                    std::vector<std::string>(n)};
+  // The plant does not enforce joint limits: a prismatic joint's reach, and
+  // so the potential's lower bound, is then unknown.
+  for (const JointParams& J : sim.joints) {
+    if (J.prismatic()) return b;
+  }
+  // A lower bound of lambda_min(H(q)) over every q: the rotors' diag(Z^2 Im)
+  // (H = the links' H, positive semidefinite, + that diagonal). Without
+  // rotors, lambda_min(H(q0)) stands in: a bound at the start pose only.
+  double rotors = kInf;
+  for (const JointParams& J : sim.joints) rotors = std::min(rotors, J.gear_ratio * J.gear_ratio * J.rotor_inertia);
   double v_min = 0;  // a lower bound of the potential energy [J]
   for (int j = 0; j < sim.dof(); ++j) {
     v_min -= sim.joints[static_cast<std::size_t>(j)].mass * sim.gravity.norm() * reach_bound(sim, j);
   }
   const double e_avail = potential_energy(sim, q0) - v_min;  // at rest at q0
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H0, Eigen::EigenvaluesOnly);
-  const double lambda = eig.info() == Eigen::Success ? eig.eigenvalues().minCoeff() : 0.0;
+  double lambda = rotors;
+  std::string lambda_what = "min Z^2 Im";
+  if (!(rotors > 0)) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H0, Eigen::EigenvaluesOnly);
+    lambda = eig.info() == Eigen::Success ? eig.eigenvalues().minCoeff() : 0.0;
+    lambda_what = "lambda_min(H(q0))";
+  }
   if (!(e_avail > 0) || !std::isfinite(e_avail) || !(lambda > 0)) return b;
   const double w = std::sqrt(2 * e_avail / lambda);
   for (std::size_t j = 0; j < n; ++j) {
     b.qd[j] = w;
-    b.qd_why[j] = "a passive arm's energy: sqrt(2 E_avail / lambda_min(H(q0))) = sqrt(2 x " + g3(e_avail) +
+    b.qd_why[j] = "a passive arm's energy: sqrt(2 E_avail / " + lambda_what + ") = sqrt(2 x " + g3(e_avail) +
                   " J / " + g3(lambda) + ")";
   }
   return b;

@@ -13,11 +13,17 @@
 //   current obeys La di/dt = e_a - (R0 + R) i - K w_m with |e_a| <= V and
 //   |w_m| <= V / K, so it stays within (V + K w_max) / (R0 + R) = 2 V / (R0 + R)
 //   from rest.
-// - A passive arm (no controller): friction only dissipates, so the kinetic
-//   energy stays below E_avail = T(0) + V(q0) - V_min, with V_min >= -sum_i
-//   m_i |g| r_i, r_i a bound on the distance of link i's centre of mass from
-//   the base origin (|base_p| + sum_{k<=i} (|a_k| + |d_k|max) + |c_i|). Then
-//   qd' H qd <= 2 E_avail gives |qd_j| <= sqrt(2 E_avail / lambda_min(H(q0))).
+// - A passive arm (no controller) of revolute joints: friction only
+//   dissipates, so the kinetic energy stays below E_avail = T(0) + V(q0) -
+//   V_min, with V_min >= -sum_i m_i |g| r_i, r_i a bound on the distance of
+//   link i's centre of mass from the base origin (|base_p| + sum_{k<=i}
+//   (|a_k| + |d_k|) + |c_i|). Then qd' H qd <= 2 E_avail gives |qd_j| <=
+//   sqrt(2 E_avail / lambda), lambda a lower bound of H(q)'s eigenvalues over
+//   every q: min_j Z_j^2 Im_j (the rotors; H is the links' positive
+//   semidefinite part plus that diagonal), or without rotors
+//   lambda_min(H(q0)), valid at the start pose only (the 10x margin covers
+//   H's variation on the shipped arms). A prismatic joint's reach is not
+//   bounded (the plant enforces no joint limits): no bound then.
 // - A torque-driven arm, or a drive whose command is unbounded: no bound.
 #pragma once
 

@@ -155,7 +155,12 @@ const std::vector<Entry<IntegratorSettings>> kIntegratorEntries = {
 };
 
 void read_integrator(StrictTable& root, IntegratorSettings& it) {
-  if (auto t = root.optional_table("integrator")) read_entries(*t, kIntegratorEntries, it, 0);
+  auto t = root.optional_table("integrator");
+  if (!t) return;
+  read_entries(*t, kIntegratorEntries, it, 0);
+  // rtol without atol: atol follows it, as `--rtol` alone sets it, so that a
+  // tolerance study does not plateau at the default atol.
+  if (t->has("rtol") && !t->has("atol")) it.atol = kAtolPerRtol * it.rtol;
 }
 toml::table write_integrator(const IntegratorSettings& it) { return write_entries(kIntegratorEntries, it, 0); }
 
@@ -880,19 +885,10 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
     sc.duration = pc.reference ? pc.reference->timing().duration() : end;
   }
   root.finish();
-  // The rows a run will hold, bounded before anything sized by the duration
-  // is made (the plant below builds the reference's table), naming where the
-  // duration came from.
-  if (const double rows = sc.duration / sc.output_interval + 1; !(rows <= kMaxOutputRows)) {
-    const std::string from = given          ? "scene.duration"
-                             : pc.reference ? "the reference's duration (its timing: reference.max_speed, the "
-                                              "profile, the planner's limits or the CSV's last time)"
-                                            : "the open-loop input's last time (controller.file)";
-    char got[64];
-    std::snprintf(got, sizeof got, "%.6g s / %.6g s = %.6g rows", sc.duration, sc.output_interval, rows);
-    root.table("scene").fail("output_interval", "at most " + std::to_string(static_cast<long>(kMaxOutputRows)) +
-                             " output rows over " + from + " (a longer output_interval or a shorter duration)", got);
-  }
+  sc.duration_source = given        ? "scene.duration"
+                       : pc.reference ? "the reference's duration (its timing: reference.max_speed, the profile, "
+                                        "the planner's limits or the CSV's last time)"
+                                      : "the open-loop input's last time (controller.file)";
   try {
     Plant check(pc);  // the last consistency checks
     check_start_inertia(root, sc, check);

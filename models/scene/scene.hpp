@@ -20,8 +20,8 @@ namespace pumasim {
 inline constexpr double kRtolMin = 1e-14;
 inline constexpr double kRtolMax = 0.1;
 // The output rows a run holds in memory until it ends: duration /
-// output_interval is bounded by it when the scene loads (whatever gave the
-// duration) and again when a run's end time is set.
+// output_interval is bounded by it once the run's end time is known
+// (check_run_size; nothing sized by the duration is made before).
 inline constexpr double kMaxOutputRows = 1e7;
 
 // `--rtol` without `--atol`: atol = kAtolPerRtol * rtol, times each state's
@@ -81,6 +81,9 @@ struct Scene {
   std::string robot_spec;  // as written in the file; a file path made absolute
   bool rotor_inertia = true;  // false: the robot's rotor inertias removed (scene.rotor_inertia)
   double duration = 0.0;         // [s]
+  // Where the duration came from, for messages about it: "scene.duration",
+  // the reference's timing, the input's last time, or a run's end time.
+  std::string duration_source = "scene.duration";
   double output_interval = 0.01; // [s]
   IntegratorSettings integrator;
   bool has_reference = false;
