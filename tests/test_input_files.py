@@ -28,7 +28,8 @@ SYSTEM = ("/usr/", "/lib", "/etc/", "/proc/", "/sys/", "/dev/", "/bin/", "/sbin/
 
 # A file is opened by something other than read_input_file: a stream, a C
 # FILE, a POSIX descriptor, a mapping.
-OPENS = re.compile(r"\b(std::)?(i|o)?fstream\b|\bfopen\s*\(|(?<![\w.:])open\s*\(|\bmmap\s*\(")
+OPENS = re.compile(r"\b(std::)?(i|o)?fstream\b|\bfopen\s*\(|(?<![\w.:])open\s*\(|\bmmap\s*\(|"
+                   r"\bparse_file\s*\(|\bparseURDFFile\s*\(|\bloadFile\s*\(|\bLoadFile\s*\(")
 
 
 def test_no_model_source_opens_a_file_another_way():
@@ -112,6 +113,21 @@ def test_a_urdf_robot_and_its_side_file_are_opened_and_hashed(tmp_path):
     listed = set(footer(check(scene)))
     expected = {str(scene), str(tmp_path / "puma560.urdf"), str(tmp_path / "puma560.urdf.toml")}
     assert expected <= opened
+    assert opened <= listed, f"opened but not hashed: {sorted(opened - listed)}"
+
+
+@pytest.mark.skipif(shutil.which("strace") is None, reason="strace is not installed (scripts/install-deps.sh)")
+def test_every_file_a_run_reads_is_in_its_meta(tmp_path):
+    """`pumasim run`, not only `check`: every user file it opens (but the run
+    folder it writes) is among meta.json's input files."""
+    scene = urdf_scene(tmp_path)
+    out = tmp_path / "run"
+    opened = opened_user_files([PUMASIM, "run", str(scene), "--t-end", "0.01", "--out", str(out), "--quiet"],
+                               str(tmp_path))
+    meta = json.load(open(out / "meta.json"))
+    listed = {f["path"] for f in meta["input_files"]}
+    opened = {p for p in opened if not p.startswith(str(out)) and os.path.basename(os.path.dirname(p)) != "run"}
+    assert str(tmp_path / "puma560.urdf.toml") in opened
     assert opened <= listed, f"opened but not hashed: {sorted(opened - listed)}"
 
 
