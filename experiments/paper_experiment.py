@@ -25,7 +25,7 @@ import sys
 import pumasim_io
 from pumasim_io import ROOT, PUMASIM
 DEFAULT_OUT = os.path.join(ROOT, "results", "paper")
-WORK = os.path.join(ROOT, "build", "paper_runs")
+WORK = os.path.join(ROOT, "build", "paper_runs")  # a folder per --out below it: run.sh and results.sh apart
 PAPER_MAX_ERROR_MM = 0.65   # Sokolov & Toth 1999, sec. 6, slow run
 PAPER_RUN_TIME_S = 337.0    # same: 48,000 steps on a 300 MHz Pentium II
 REPEATS = 5
@@ -54,10 +54,11 @@ def main():
     ap.add_argument("--out", default=DEFAULT_OUT, help="the folder written (default: results/paper)")
     out = os.path.abspath(ap.parse_args().out)
     os.makedirs(out, exist_ok=True)
+    work = os.path.join(WORK, os.path.relpath(out, ROOT).replace(os.sep, "_").lstrip("._") or "out")
     results = {}
     for scene in ("paper_slow", "paper_fast"):
-        runs = [run(scene, os.path.join(WORK, f"{scene}_{k}")) for k in range(REPEATS)]
-        last = os.path.join(WORK, f"{scene}_{REPEATS - 1}")
+        runs = [run(scene, os.path.join(work, f"{scene}_{k}")) for k in range(REPEATS)]
+        last = os.path.join(work, f"{scene}_{REPEATS - 1}")
         st = runs[-1]
         st["wall_time_median_s"] = statistics.median(r["wall_time_s"] for r in runs)
         st["wall_time_runs_s"] = [r["wall_time_s"] for r in runs]
