@@ -150,3 +150,15 @@ def test_an_output_location_that_cannot_be_a_folder_is_an_error_naming_it(tmp_pa
     assert str(blocker / "run") in p.stderr, p.stderr
     assert "internal error" not in p.stderr, p.stderr
     assert sorted(os.listdir(tmp_path)) == ["file"]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full to stand for a full disk")
+@pytest.mark.parametrize("args", [["dynamics", "--robot", "puma560", "--backend", "crba", "--q=qn"],
+                                  ["check", SCENE]])
+def test_a_write_error_on_stdout_is_exit_2_naming_the_output(args):
+    """Issue 32: `pumasim dynamics ... > full_disk/out.json` exited 0 with an
+    empty file. /dev/full fails every write with ENOSPC."""
+    with open("/dev/full", "w") as full:
+        p = subprocess.run([pumasim_io.PUMASIM] + args, stdout=full, stderr=subprocess.PIPE, text=True)
+    assert p.returncode == 2, p.stderr
+    assert "standard output" in p.stderr and "write error" in p.stderr, p.stderr
