@@ -1191,6 +1191,10 @@ def main():
     ap.add_argument("--work", default=None, help="the runs' folder (default build/sweeps/<sweep>, "
                     "with --reduced build/sweeps-reduced/<sweep>)")
     args = ap.parse_args()
+    # Relative to the caller's folder: pumasim runs with its working directory
+    # at the project's root, where a relative --work would land otherwise.
+    args.work = os.path.abspath(args.work) if args.work else None
+    args.out = os.path.abspath(args.out) if args.out else None
     try:
         s = load_sweep(args.sweep, args.reduced)
         work = args.work or os.path.join(ROOT, "build", "sweeps-reduced" if args.reduced else "sweeps", s["name"])

@@ -198,3 +198,18 @@ def test_editing_any_file_the_scene_reads_reruns_and_merge_refuses_the_old_runs(
         sweep.merge(s, work, str(tmp_path / "out"))
     assert run_sweep()[1] == ALL, f"{kind} edited: every run again"
     assert run_sweep()[1] == []
+
+
+def test_relative_work_and_out_folders_are_the_callers(tmp_path):
+    """Issue 32: `sweep.py --work <relative>` wrote its runs under the project
+    root (pumasim runs there) and then found no run folder. Both folders are
+    taken relative to the caller's working directory."""
+    (tmp_path / "tiny.toml").write_text(SWEEP.format(t_end=0.02, dt=0.002, variant_set=""))
+    env = dict(os.environ, PUMASIM=pumasim_io.PUMASIM)
+    p = subprocess.run([sys.executable, os.path.join(pumasim_io.ROOT, "experiments", "sweep.py"), "tiny.toml",
+                        "--work", "rel_work", "--out", "rel_out", "--jobs", "1"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "rel_work" / "base" / "reference" / "stats.json").exists()
+    assert (tmp_path / "rel_out" / "tiny.csv").exists()
+    assert not os.path.exists(os.path.join(pumasim_io.ROOT, "rel_work"))
