@@ -350,10 +350,7 @@ int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   Scene sc = load_checked_scene(a.scene);
   const RunContext context = run_context(a.argv, sc);  // the start time, the robot file's hash as loaded
   const RunControls rc = run_controls(sc, a);
-  if (const std::string w = stability_warning(sc, rc); !w.empty()) err << "pumasim run: " << w << "\n";
-  if (const std::string note = discontinuity_note(sc); rc.adaptive && !note.empty()) {
-    err << "pumasim run: warning: " << sc.integrator.name << " is adaptive and " << note << "\n";
-  }
+  for (const std::string& w : run_start_warnings(sc, rc)) err << "pumasim run: warning: " << w << "\n";
   if (rc.adaptive && !a.quiet) {
     char tol[160];
     std::snprintf(tol, sizeof tol, "pumasim run: %s at rtol %.3g, atol %.3g (times each state's scale%s)\n",

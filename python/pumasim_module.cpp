@@ -271,12 +271,7 @@ PyRun run(const py::object& scene_in, const RunRequest& request, const py::objec
                                                : load_checked_scene(path_arg(scene_in), {});
   const RunControls rc = run_controls(sc, request);
   // What `pumasim run` says on stderr before it starts, as Python warnings.
-  std::vector<std::string> warnings;
-  if (const std::string note = discontinuity_note(sc); rc.adaptive && !note.empty()) {
-    warnings.push_back(sc.integrator.name + " is adaptive and " + note);
-  }
-  if (std::string w = stability_warning(sc, rc); !w.empty()) warnings.push_back(std::move(w));
-  for (const std::string& w : warnings) {
+  for (const std::string& w : run_start_warnings(sc, rc)) {
     if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
   }
   std::optional<std::filesystem::path> dir;

@@ -21,6 +21,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import pumasim_io  # noqa: E402
 import sweep  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_input_files  # noqa: E402  (its urdf_scene)
+
 SWEEP = """
 [sweep]
 name = "tiny"
@@ -129,14 +132,9 @@ def test_another_program_reruns_and_merge_refuses_stale_runs(setup, monkeypatch)
 
 
 def _urdf_scene(tmp_path):
-    """passive_arm on a copy of the shipped PUMA URDF and its side file."""
-    robots = os.path.join(pumasim_io.ROOT, "models", "robots")
-    for f in ("puma560.urdf", "puma560.urdf.toml"):
-        shutil.copy(os.path.join(robots, f), tmp_path / f)
-    scene = tmp_path / "passive_arm.toml"
-    text = open(os.path.join(SCENES, "passive_arm.toml")).read()
-    scene.write_text(text.replace('robot = "puma560"', f'robot = "{tmp_path / "puma560.urdf"}"'))
-    return scene
+    """passive_arm on a copy of the shipped PUMA URDF and its side file (the
+    input-file tests' scene)."""
+    return test_input_files.urdf_scene(tmp_path)
 
 
 def _copied_scene(name, csv):

@@ -137,17 +137,20 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, d
     return " exhausted at t = " + g(t) + " s" + h + "; fastest-changing component " +
            fastest_scaled_component(sys, t, xs);
   };
+  // The chattering diagnosis, made only once a budget is exhausted.
+  const auto chatter = [&] {
+    return chatter_count.diagnosis(sys, t, xs, integrator.time() - integrator.step_start(), t_end,
+                                   integrator.stats().rejected_steps);
+  };
   if (max_wall > 0 && wall > max_wall) {
-    const std::string chatter = chatter_count.diagnosis(sys, t, xs, integrator.time() - integrator.step_start(),
-                                                        t_end, integrator.stats().rejected_steps);
+    const std::string c = chatter();
     return std::string(integrator.name()) + ": wall-clock budget of " + g(max_wall) + " s" + where() + "; " +
-           (chatter.empty() ? "more time: pumasim run --max-wall S (0: no limit)" : chatter);
+           (c.empty() ? "more time: pumasim run --max-wall S (0: no limit)" : c);
   }
   if (max_steps > 0 && integrator.stats().steps > max_steps) {
-    const std::string chatter = chatter_count.diagnosis(sys, t, xs, integrator.time() - integrator.step_start(),
-                                                        t_end, integrator.stats().rejected_steps);
+    const std::string c = chatter();
     return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) + " steps" + where() +
-           "; " + (chatter.empty() ? "more steps: pumasim run --max-steps N (0: no limit)" : chatter);
+           "; " + (c.empty() ? "more steps: pumasim run --max-steps N (0: no limit)" : c);
   }
   return {};
 }

@@ -164,11 +164,20 @@ std::string stability_warning(const Scene& sc, const RunControls& rc) {
   if (!h || !(rc.options.dt > *h)) return {};
   char buf[320];
   std::snprintf(buf, sizeof buf,
-                "warning: the step %.4g s exceeds the largest stable step %.4g s that %s's stability region "
+                "the step %.4g s exceeds the largest stable step %.4g s that %s's stability region "
                 "predicts from the plant's Jacobian at t = 0 (fastest mode lambda = %.4g%+.4gi 1/s); the run may "
                 "diverge (pumasim stiffness %s shows the prediction along the run)",
                 rc.options.dt, *h, sc.integrator.name.c_str(), fastest.real(), fastest.imag(), sc.file.c_str());
   return buf;
+}
+
+std::vector<std::string> run_start_warnings(const Scene& sc, const RunControls& rc) {
+  std::vector<std::string> out;
+  if (const std::string note = discontinuity_note(sc); rc.adaptive && !note.empty()) {
+    out.push_back(sc.integrator.name + " is adaptive and " + note);
+  }
+  if (std::string w = stability_warning(sc, rc); !w.empty()) out.push_back(std::move(w));
+  return out;
 }
 
 CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,

@@ -53,6 +53,12 @@ RunControls run_controls(Scene& scene, const RunRequest& request);
 // stability table, a step within the prediction).
 std::string stability_warning(const Scene& scene, const RunControls& controls);
 
+// What a run warns of before it starts, each a sentence without a prefix:
+// an adaptive method on a friction law discontinuous in the state
+// (discontinuity_note), and the stability warning above. `pumasim run`
+// prints them on stderr, the Python module raises them as RuntimeWarnings.
+std::vector<std::string> run_start_warnings(const Scene& scene, const RunControls& controls);
+
 struct CompletedRun {
   SceneRun run;
   std::string stats;  // stats.json's text
