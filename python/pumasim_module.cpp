@@ -5,8 +5,10 @@
 // too (models/robot/dynamics_query, experiments/simulation/run_request), and
 // bad input raises ValueError with the message the command line prints after
 // "pumasim: ".
+#include <atomic>
 #include <charconv>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -258,6 +260,112 @@ class PyScene {
   bool warned_ = false;
 };
 
+// ---------------------------------------------------------------- interrupts
+
+// Ctrl-C during pumasim.run. The run releases the GIL, so that other Python
+// threads go on; but Python runs its signal handlers only on the main thread
+// and with the GIL, so a run used to notice Ctrl-C only when it ended (never,
+// with max_wall=0). The simplest design found that reaches every run:
+// - The driver reads each run's cancel flag at every clock read (every few
+//   ms) and calls the run's poll about every 50 ms (driver.hpp, ProgressHook).
+// - g_interrupts counts the process's interrupts. A run notes it when it
+//   starts, and its poll sets the run's flag once it has moved (an atomic
+//   load: no GIL), so one interrupt stops every run in progress, on any
+//   thread.
+// - On the main thread the poll also takes the GIL for a moment and calls
+//   PyErr_CheckSignals, which runs the Python handlers of the signals
+//   received, as Python itself would between two bytecodes. When a handler
+//   raises, the run keeps the exception and ends; a KeyboardInterrupt (the
+//   default handler's) moves the count, so runs on other threads stop too.
+// - When the main thread is in no run (it waits in Thread.join() for the
+//   threads that run), nothing of ours runs there: a SIGINT handler of ours,
+//   chained before Python's, moves the count itself (an atomic increment,
+//   which a signal handler may do) and calls Python's. It is put in place
+//   when a run starts, and only while Python's SIGINT handler is
+//   signal.default_int_handler (Ctrl-C means KeyboardInterrupt);
+//   signal.signal() replaces it, and a later run puts it back only then.
+// An interrupted run writes no run folder and raises: on the main thread the
+// handler's exception (KeyboardInterrupt) with a note saying where the run
+// stopped, on another thread KeyboardInterrupt saying so.
+std::atomic<unsigned long> g_interrupts{0};
+std::atomic<void (*)(int)> g_python_sigint{nullptr};  // the handler ours calls
+static_assert(std::atomic<unsigned long>::is_always_lock_free && std::atomic<void (*)(int)>::is_always_lock_free,
+              "used in a signal handler");
+
+void count_sigint(int sig) {
+  g_interrupts.fetch_add(1, std::memory_order_relaxed);
+  if (void (*next)(int) = g_python_sigint.load(std::memory_order_relaxed)) next(sig);
+}
+
+// With the GIL (which also keeps two threads from doing this at once).
+void chain_sigint_handler() {
+  const py::module_ signal = py::module_::import("signal");
+  if (!signal.attr("getsignal")(SIGINT).is(signal.attr("default_int_handler"))) return;
+  struct sigaction current {};
+  if (sigaction(SIGINT, nullptr, &current) != 0 || (current.sa_flags & SA_SIGINFO) != 0) return;
+  if (current.sa_handler == count_sigint || current.sa_handler == SIG_DFL || current.sa_handler == SIG_IGN) return;
+  g_python_sigint.store(current.sa_handler);
+  struct sigaction mine = current;  // the same flags and mask
+  mine.sa_handler = count_sigint;
+  sigaction(SIGINT, &mine, nullptr);
+}
+
+// One run's side of the above: made and raised with the GIL, polled without.
+class RunInterrupts {
+ public:
+  RunInterrupts()
+      : start_(g_interrupts.load()),
+        main_(py::module_::import("threading").attr("current_thread")().is(
+            py::module_::import("threading").attr("main_thread")())) {
+    chain_sigint_handler();
+  }
+  ~RunInterrupts() {  // an exception kept and not raised (the run failed otherwise)
+    Py_XDECREF(type_);
+    Py_XDECREF(value_);
+    Py_XDECREF(trace_);
+  }
+  RunInterrupts(const RunInterrupts&) = delete;
+  RunInterrupts& operator=(const RunInterrupts&) = delete;
+
+  const std::atomic<bool>* flag() const { return &cancel_; }
+
+  // From the driver's thread, without the GIL.
+  void poll() {
+    if (g_interrupts.load(std::memory_order_relaxed) != start_) {
+      cancel_.store(true, std::memory_order_relaxed);
+      return;
+    }
+    if (!main_) return;
+    const PyGILState_STATE gil = PyGILState_Ensure();
+    if (PyErr_CheckSignals() != 0) {
+      if (PyErr_ExceptionMatches(PyExc_KeyboardInterrupt)) g_interrupts.fetch_add(1);
+      PyErr_Fetch(&type_, &value_, &trace_);
+      cancel_.store(true, std::memory_order_relaxed);
+    }
+    PyGILState_Release(gil);
+  }
+
+  // With the GIL, after an interrupted run: what interrupted it, saying where.
+  [[noreturn]] void raise(const std::string& where) {
+    if (type_) {
+      PyErr_Restore(type_, value_, trace_);  // the reference passed on
+      type_ = value_ = trace_ = nullptr;
+    } else if (!(main_ && PyErr_CheckSignals() != 0)) {  // the handler not yet run (the count moved first)
+      PyErr_SetString(PyExc_KeyboardInterrupt, where.c_str());
+      throw py::error_already_set();
+    }
+    py::error_already_set e;
+    if (py::hasattr(e.value(), "add_note")) e.value().attr("add_note")(where);  // Python 3.11
+    throw e;
+  }
+
+ private:
+  unsigned long start_;
+  bool main_;
+  std::atomic<bool> cancel_{false};
+  PyObject *type_ = nullptr, *value_ = nullptr, *trace_ = nullptr;
+};
+
 // ---------------------------------------------------------------- runs
 
 struct PyRun {
@@ -277,11 +385,16 @@ PyRun run(const py::object& scene_in, const RunRequest& request, const py::objec
   std::optional<std::filesystem::path> dir;
   if (!out.is_none()) dir = path_arg(out);
   CompletedRun done;
+  RunInterrupts interrupts;
+  ProgressHook hook;
+  hook.cancel = interrupts.flag();
+  hook.poll = [&interrupts] { interrupts.poll(); };
   {
     py::gil_scoped_release release;
-    done = run_scene(sc, rc, dir, force, {}, nullptr, /*keep_rows=*/true);
+    done = run_scene(sc, rc, dir, force, hook, nullptr, /*keep_rows=*/true);
   }
   const SceneRun& r = done.run;
+  if (r.result.failure_kind == "interrupted") interrupts.raise("pumasim.run " + sc.name + ": " + r.result.failure);
   const auto m = static_cast<py::ssize_t>(r.state_names.size());
   const auto rows = static_cast<py::ssize_t>(r.rows.size()) / (m + 1);
   py::array_t<double> t(rows);

@@ -636,6 +636,38 @@ TEST(Run, EndsWithinItsBudgets) {
   std::filesystem::remove_all(dir);
 }
 
+// A run ends when its cancel flag is set from another thread (Ctrl-C in the
+// Python module, issue 32): at the next clock read, as the failure
+// "interrupted" naming the time reached; the poll is called before. The run
+// would take days otherwise (1e4 s at 1 us RK4 steps, no budget).
+TEST(Run, EndsWhenItsCancelFlagIsSet) {
+  const Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/passive_arm.toml",
+                              {"scene.duration=1e4", "scene.output_interval=1e3"});
+  Plant plant(sc.plant);
+  auto integ = make_integrator("rk4", fixed(1e-6));
+  std::atomic<bool> cancel{false};
+  std::atomic<long> polls{0};
+  ProgressHook hook;
+  hook.cancel = &cancel;
+  hook.poll = [&] { ++polls; };
+  const auto start = std::chrono::steady_clock::now();
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancel.store(true);
+  });
+  const RunResult r = run_plant(plant, *integ, sc.duration, sc.output_interval, {}, 0, Stops::kEvents, 0, hook);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stopper.join();
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.failure_kind, "interrupted");
+  EXPECT_EQ(r.failure.rfind("rk4: interrupted at t = ", 0), 0u) << r.failure;
+  EXPECT_GT(r.t_final, 0);
+  EXPECT_LT(r.t_final, sc.duration);
+  EXPECT_GE(seconds, 0.2);
+  EXPECT_LT(seconds, 2.0);  // about 0.2 s and a clock read (a few ms); a generous bound on a shared machine
+  EXPECT_GE(polls.load(), 2);  // the first clock read, then every 50 ms
+}
+
 TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
   const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
   const auto dir = std::filesystem::temp_directory_path() / "pumasim_run_test";

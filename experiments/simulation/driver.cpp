@@ -155,6 +155,14 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, d
   return {};
 }
 
+// The failure that ends a cancelled run (ProgressHook::cancel), with where it was.
+std::string interrupted_failure(const Integrator& integrator, double t, double wall) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "interrupted at t = %.9g s, after %ld steps and %.3g s of wall-clock time", t,
+                integrator.stats().steps, wall);
+  return std::string(integrator.name()) + ": " + buf;
+}
+
 // The components with a finite physical bound and kUnstableFactor times it,
 // read once (no virtual call in the step loop).
 struct BoundedComponent {
@@ -263,6 +271,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   const auto start = Clock::now();
   StepClock clock(start);
   double next_report = progress.delay;  // [s] of wall-clock time
+  double next_poll = 0;                 // [s] of wall-clock time
   PlantSystem sys(plant);
   const std::vector<BoundedComponent> bounded = bounded_components(sys);
   ChatterCount chatter(sys);
@@ -320,6 +329,16 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
       if (progress.report && wall >= next_report) {
         progress.report(RunProgress{t, integrator.stats().steps, integrator.time() - integrator.step_start(), wall});
         next_report = wall + progress.period;
+      }
+      if (progress.poll && wall >= next_poll) {
+        progress.poll();
+        next_poll = wall + progress.poll_period;
+      }
+      if (progress.cancel && progress.cancel->load(std::memory_order_relaxed)) {
+        res.ok = false;
+        res.failure = interrupted_failure(integrator, t, wall);
+        res.failure_kind = "interrupted";
+        break;
       }
     }
     if (max_steps > 0 || wall > 0) {

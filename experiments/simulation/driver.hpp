@@ -8,6 +8,7 @@
 // failure ends the run as a reported result.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <string>
 
@@ -52,7 +53,8 @@ struct RunResult {
   std::string failure;  // what, when, which state components
   // "budget" (steps or wall-clock time), "unstable" (a state past
   // kUnstableFactor times its physical bound), "integrator" (the method's own:
-  // a non-finite state, step-size underflow, a convergence failure); "" when ok.
+  // a non-finite state, step-size underflow, a convergence failure),
+  // "interrupted" (ProgressHook::cancel: Ctrl-C); "" when ok.
   std::string failure_kind;
   double t_final = 0;
   long time_events = 0;
@@ -77,17 +79,29 @@ struct RunProgress {
   double wall = 0;    // [s] wall-clock time since the run started
 };
 
-// A progress report by wall-clock time, from inside the step loop, so that a
-// method crawling through tiny steps shows where it is: first after `delay`
-// seconds, then about every `period` seconds. The loop does not read the
-// clock at every step: it counts steps and reads the clock every k of them, k
-// adapted as the run goes so that reads fall about 2.5-10 ms apart (cut at
-// once when steps turn slow); a step costs a counter, and report() is called
-// only when due (it may allocate, the loop does not).
+// The step loop's contact with the outside, by wall-clock time. The loop
+// does not read the clock at every step: it counts steps and reads the clock
+// every k of them, k adapted as the run goes so that reads fall about 2.5-10
+// ms apart (cut at once when steps turn slow); a step costs a counter, and
+// the rest happens only at clock reads:
+// - report: a progress report, so that a method crawling through tiny steps
+//   shows where it is: first after `delay` seconds, then about every
+//   `period` seconds (called only when due; it may allocate, the loop does
+//   not);
+// - cancel: when set, read at every clock read (a relaxed atomic load: no
+//   allocation, no call); once true, the run ends as the failure
+//   "interrupted" (RunResult). Another thread sets it: the thread that
+//   received Ctrl-C, or the one that waits for many runs at once;
+// - poll: called at the first clock read and then about every poll_period
+//   seconds, before cancel is read (the Python module checks for signals
+//   there and sets cancel: python/pumasim_module.cpp).
 struct ProgressHook {
   std::function<void(const RunProgress&)> report;  // empty: no reports
   double delay = 1.0;    // [s] before the first report
   double period = 0.25;  // [s] between reports
+  const std::atomic<bool>* cancel = nullptr;  // null: the run is never cancelled
+  std::function<void()> poll;                 // empty: no polls
+  double poll_period = 0.05;                  // [s] between polls
 };
 
 // How the driver stops the integrator.
@@ -106,8 +120,9 @@ enum class Stops {
 // tolerance scale); so does one still running after max_wall seconds of
 // wall-clock time (0: no limit), checked whenever the loop reads the clock
 // (every few ms, see ProgressHook; one step of any method is bounded: it
-// either succeeds or fails). progress.report, when set, is called as
-// ProgressHook says; neither changes a step. on_step, when set, sees the
+// either succeeds or fails); so does one whose progress.cancel is set, as
+// "interrupted" at the time reached. progress.report and progress.poll, when
+// set, are called as ProgressHook says; none of these changes a step. on_step, when set, sees the
 // state at the end of every accepted step, before the events there are
 // applied (the friction mode log: experiments/simulation/mode_log.hpp); it
 // must not change the plant's discrete state.
