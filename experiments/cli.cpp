@@ -102,7 +102,7 @@ constexpr NumberRule kRtol{"a number in [1e-14, 0.1] (below, less than about 50 
                            "digit controlled)",
                            [](double x) { return x >= kRtolMin && x <= kRtolMax; }};
 constexpr NumberRule kSecondsBudget{"seconds >= 0 (0: no limit)", [](double x) { return x >= 0; }};
-constexpr NumberRule kStepBudget{"a whole number >= 0 (0: no limit)",
+constexpr NumberRule kStepBudget{"a whole number in [0, 1e18] (0: no limit)",
                                  [](double x) { return x >= 0 && x <= 1e18 && x == std::floor(x); }};
 constexpr NumberRule kSamples{"a whole number in [1, 10000]",
                               [](double x) { return x >= 1 && x <= 10000 && x == std::floor(x); }};

@@ -92,7 +92,9 @@ TEST(CliParsing, AWrongTypeNamesTheOptionAndTheValue) {
 
 TEST(CliParsing, AnOutOfRangeValueNamesTheOptionAndTheRange) {
   expect_bad({"run", kScene, "--t-end=-1"}, {"--t-end: expected a number > 0, got '-1'"});
-  expect_bad({"run", kScene, "--max-steps", "-5"}, {"--max-steps: expected a whole number >= 0 (0: no limit)"});
+  expect_bad({"run", kScene, "--max-steps", "-5"}, {"--max-steps: expected a whole number in [0, 1e18] (0: no limit)"});
+  // Above the limit, the message says the limit.
+  expect_bad({"run", kScene, "--max-steps", "1e19"}, {"--max-steps: expected a whole number in [0, 1e18]", "'1e19'"});
   expect_bad({"run", kScene, "--max-wall", "-1"}, {"--max-wall: expected seconds >= 0 (0: no limit)"});
   expect_bad({"stiffness", kScene, "--samples", "0"}, {"--samples: expected a whole number in [1, 10000], got '0'"});
   expect_bad({"conditioning", kScene, "--samples", "100001"}, {"--samples: expected a whole number in [1, 100000]"});

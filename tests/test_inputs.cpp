@@ -74,7 +74,8 @@ TEST(Cli, BadInputExitsWithStatus2AndSaysWhatWasExpected) {
   expect_bad({"dynamics", "--robot", "puma560", "--backend", "lagrange", "--q=qz"},
              "unknown dynamics back-end 'lagrange'; expected one of: aba, crba");
   expect_bad({"dynamics", "--robot", "/nonexistent/robot.toml", "--backend", "crba", "--q=qz"},
-             "/nonexistent/robot.toml: cannot open file");
+             "/nonexistent/robot.toml: cannot be read (no such file)");
+  expect_bad({"dynamics", "--robot", "/tmp", "--backend", "crba", "--q=qz"}, "/tmp: cannot be read (a folder, not a file)");
   expect_bad({"dynamics", "--robot", "kuka", "--backend", "crba", "--q=qz"},
              "unknown robot 'kuka'; expected a robot file path or one of: planar2, puma560, stanford");
   expect_bad({"fly"}, "unknown command 'fly'");

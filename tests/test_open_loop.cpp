@@ -293,7 +293,15 @@ TEST(OpenLoop, BadFilesAreRefusedNamingTheKeyAndTheFilesLine) {
   // A file that is not there.
   std::string missing = scene;
   missing.replace(missing.find("input.csv"), 9, "absent.csv");
-  expect_refused({missing, "t,u1\n0,1\n1,1\n", (scratch() / "absent.csv").string() + ": cannot be opened",
+  expect_refused({missing, "t,u1\n0,1\n1,1\n",
+                  (scratch() / "absent.csv").string() + ": cannot be read (no such file); expected a CSV file",
+                  "controller.file: "});
+  // A folder where the file should be: said as such, not as an empty or unreadable file.
+  std::filesystem::create_directories(scratch() / "a_folder.csv");
+  std::string folder = scene;
+  folder.replace(folder.find("input.csv"), 9, "a_folder.csv");
+  expect_refused({folder, "t,u1\n0,1\n1,1\n",
+                  (scratch() / "a_folder.csv").string() + ": cannot be read (a folder, not a file)",
                   "controller.file: "});
 }
 

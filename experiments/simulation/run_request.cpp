@@ -35,7 +35,7 @@ void check_request(const RunRequest& r) {
   if (r.jacobian && *r.jacobian != "exact" && *r.jacobian != "differences") {
     throw std::invalid_argument("--jacobian: expected exact or differences, got '" + *r.jacobian + "'");
   }
-  check_value("--max-steps", r.max_steps, "a whole number >= 0 (0: no limit)",
+  check_value("--max-steps", r.max_steps, "a whole number in [0, 1e18] (0: no limit)",
               r.max_steps && *r.max_steps >= 0 && *r.max_steps <= 1e18 && *r.max_steps == std::floor(*r.max_steps));
   check_value("--max-wall", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
   if (r.late_events && r.stop_at_outputs) throw std::invalid_argument("--late-events excludes --stop-at-outputs");

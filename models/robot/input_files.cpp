@@ -1,6 +1,8 @@
 #include "models/robot/input_files.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "models/robot/strict_toml.hpp"
@@ -51,6 +53,17 @@ std::optional<std::string> read_input_file(const std::string& path) {
   if (failed) return std::nullopt;
   if (innermost) innermost->add(InputFile{absolute_path(path), text.size(), fnv1a64(text)});
   return text;
+}
+
+std::string unreadable_reason(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec) return ec == std::errc::no_such_file_or_directory ? "no such file" : ec.message();
+  if (std::filesystem::is_directory(st)) return "a folder, not a file";
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return std::strerror(errno);
+  std::fclose(f);
+  return "a read error";
 }
 
 InputRecord::InputRecord() : outer_(innermost) { innermost = this; }

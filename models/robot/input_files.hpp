@@ -43,6 +43,10 @@ inline constexpr std::size_t kMaxInputBytes = std::size_t{16} << 20;
 // kMaxInputBytes is a ConfigError naming it, read no further.
 std::optional<std::string> read_input_file(const std::string& path);
 
+// Why read_input_file(path) gave nothing, for a message: "no such file",
+// "a folder, not a file", "permission denied", ...
+std::string unreadable_reason(const std::string& path);
+
 // Collects the files read on this thread while it is alive (records nest: an
 // inner one's files are in the outer one's too). A file read twice with the
 // same bytes is listed once, in the order first read.

@@ -51,7 +51,7 @@ std::string Bounds::describe() const {
 
 toml::table parse_toml_file(const std::string& path) {
   const std::optional<std::string> text = read_input_file(path);
-  if (!text) throw ConfigError(path + ": cannot open file (expected a readable TOML file)");
+  if (!text) throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable TOML file");
   // What toml++ 3.3 would mishandle is refused first (models/robot/toml_guard.hpp);
   // the guard and the parser read the same bytes.
   if (const auto hazard = find_toml_hazard(*text)) {

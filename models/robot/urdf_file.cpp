@@ -619,7 +619,7 @@ std::string urdf_side_file(const std::string& urdf_path) { return urdf_path + ".
 
 RobotModel load_urdf_file(const std::string& path) {
   const std::optional<std::string> text = read_input_file(path);
-  if (!text) throw ConfigError(path + ": cannot open file (expected a readable URDF file)");
+  if (!text) throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable URDF file");
   const UrdfText t(path, *text);  // an empty file: urdfdom then says what it expected
   const urdf::ModelInterfaceSharedPtr m = parse_urdf(t);
   check_joints(*m, t);

@@ -110,7 +110,7 @@ void check_joint_rows(const std::vector<std::vector<double>>& rows, int n, const
 
 std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, std::string_view column) {
   const std::optional<std::string> text = read_input_file(path);
-  if (!text) throw ConfigError(path + ": cannot be opened");
+  if (!text) throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a CSV file");
   std::istringstream in(*text);
   std::vector<std::vector<double>> rows;
   std::vector<std::string> header;
