@@ -271,6 +271,7 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   // rows held in memory, more controller samples than steps.
   check_run_size(sc, kDefaultStepBudget);
   Plant plant(sc.plant);
+  check_output_size(sc, plant);
   std::vector<double> x(plant.size());
   plant.initial_state(x.data());
   std::ostringstream o;

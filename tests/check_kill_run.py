@@ -79,8 +79,14 @@ def main():
             if why:
                 sys.exit(f"check_kill_run: trial {trial}: killed run left {out} incomplete: {why}")
             kinds["complete"] += 1
+        # The killed runs' temporary folders (".run.<pid>-<k>.partial" / ".old") are removed by the
+        # next run to the target once their processes are gone (issue 32: they stayed forever).
+        subprocess.run([a.pumasim, "run", SCENE, *ARGS, "--out", out, "--force"], capture_output=True, check=True)
+        left = sorted(n for n in os.listdir(work) if n != "run")
+        if left:
+            sys.exit(f"check_kill_run: the killed runs' leftovers stayed beside {out}: {left}")
         print(f"check_kill_run: {a.trials} kills, the folder {kinds['complete']} times complete and "
-              f"{kinds['absent']} times absent, never incomplete")
+              f"{kinds['absent']} times absent, never incomplete; no leftover after the next run")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -47,14 +47,15 @@ int main() try {
   controls.options.rtol = scene.integrator.rtol;
   controls.options.atol = scene.integrator.atol;
   controls.adaptive = find_integrator(scene.integrator.name).kind == IntegratorKind::kAdaptive;
-  const SceneRun run = simulate_scene(scene, controls, {});
+  std::ostringstream trajectory;  // trajectory.csv's text, as `pumasim run` writes it
+  const SceneRun run = simulate_scene(scene, controls, {}, false, &trajectory);
   std::cout << "scene " << scene.name << " (robot from " << scene.plant.robot.source << "), "
             << scene.integrator.name << ": " << (run.result.ok ? "ok" : run.result.failure) << ", t = "
             << run.result.t_final << " s, " << run.stats.steps << " steps, " << run.stats.rhs_evaluations
             << " right-hand sides\n";
   // The final state, from the trajectory's last row (time, then the state in
   // the plant's order); the row itself too, to compare with `pumasim run`.
-  const std::string& csv = run.trajectory_csv;
+  const std::string csv = trajectory.str();
   const std::size_t end = csv.find_last_not_of('\n'), start = csv.rfind('\n', end) + 1;
   const std::string row = csv.substr(start, end + 1 - start);
   std::istringstream cells(row);

@@ -1,6 +1,7 @@
 #include "experiments/simulation/run_recorder.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -29,56 +30,15 @@ std::string unit_of_state(const std::string& state, const RobotModel* robot) {
   return "-";
 }
 
-RunRecorder::RunRecorder(Plant& plant, double duration, double output_interval)
-    : plant_(plant),
-      cfg_(plant.config()),
-      m_(plant.size()),
-      n_(plant.layout().n),
-      held_(plant.holds_drive_state()),
-      now_(static_cast<std::size_t>(plant.layout().n)) {
-  const auto outputs = static_cast<std::size_t>(duration / output_interval + 2);
-  saved_.reserve(outputs * static_cast<std::size_t>(m_ + 1));
-  if (held_) signals_.reserve(outputs * 3 * static_cast<std::size_t>(n_));
-}
-
-void RunRecorder::observe(double t, const double* x) {
-  saved_.push_back(t);
-  saved_.insert(saved_.end(), x, x + m_);
-  if (held_) {  // the controller's discrete state (held output or set-point) is only known now
-    plant_.drive_signals(t, x, now_.data());
-    for (const DriveSignals& d : now_) signals_.insert(signals_.end(), {d.u, d.ea, d.i});
-  }
-}
-
-std::string RunRecorder::header() const {
-  std::ostringstream csv;
-  csv << "t [s]";
-  for (const auto& name : plant_.layout().names) {
-    csv << "," << name << " [" << unit_of_state(name, &cfg_.robot) << "]";
-  }
-  if (cfg_.reference) {
-    for (int j = 0; j < n_; ++j) csv << ",q_ref" << j + 1 << " [" << unit_of_state("q" + std::to_string(j + 1), &cfg_.robot) << "]";
-  }
-  csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
-  if (cfg_.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
-  if (cfg_.drive) {
-    for (int j = 0; j < n_; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
-  }
-  if (plant_.layout().e >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
-  csv << "\n";
-  return csv.str();
-}
-
 struct RunRecorder::Csv {
-  std::ostringstream text;
+  std::string text;  // the chunk's rows
+  bool on = false;   // text is wanted
   char buf[40];
   void first(double v) {
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    text << buf;
+    if (on) text.append(buf, static_cast<std::size_t>(std::snprintf(buf, sizeof buf, "%.17g", v)));
   }
   void num(double v) {
-    std::snprintf(buf, sizeof buf, ",%.17g", v);
-    text << buf;
+    if (on) text.append(buf, static_cast<std::size_t>(std::snprintf(buf, sizeof buf, ",%.17g", v)));
   }
 };
 
@@ -89,64 +49,141 @@ struct RunRecorder::Sums {
   ReferenceSample ref;                // the reference at the row's time
 };
 
-std::string RunRecorder::finish() {
-  Csv csv;
-  csv.text << header();
-  fig_ = RunFigures{};
+RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::size_t expected_rows)
+    : plant_(plant),
+      rows_plant_(plant.config()),
+      cfg_(plant.config()),
+      m_(plant.size()),
+      n_(plant.layout().n),
+      drive_(plant.config().drive),
+      text_(text),
+      keep_rows_(keep_rows),
+      now_(static_cast<std::size_t>(plant.layout().n)),
+      csv_(std::make_unique<Csv>()),
+      sums_(std::make_unique<Sums>()) {
+  const std::size_t width = static_cast<std::size_t>(m_ + 1);
+  saved_.reserve(keep_rows ? (expected_rows + 1) * width : kChunkValues + width);
+  if (drive_) signals_.reserve((kChunkValues / static_cast<std::size_t>(m_ + 1) + 1) * 3 * static_cast<std::size_t>(n_));
+  csv_->on = text_ != nullptr;
+  if (text_) *text_ << header(plant_);
   fig_.ledger = plant_.layout().e >= 0;
   fig_.peak_u.assign(n_, 0.0), fig_.peak_ea.assign(n_, 0.0), fig_.peak_i.assign(n_, 0.0);
-  Sums sums;
-  sums.saturated.assign(n_, 0);
-  path_error_.clear(), path_deviation_.clear();
-  if (cfg_.reference) {
-    path_error_.reserve(saved_.size() / static_cast<std::size_t>(m_ + 1));
-    path_deviation_.reserve(path_error_.capacity());
+  sums_->saturated.assign(n_, 0);
+}
+
+RunRecorder::~RunRecorder() = default;
+
+void RunRecorder::observe(double t, const double* x) {
+  saved_.push_back(t);
+  saved_.insert(saved_.end(), x, x + m_);
+  if (drive_) {  // as the run applies them: its discrete state (set-point, held output, reference piece) is now
+    const auto start = std::chrono::steady_clock::now();
+    plant_.drive_signals(t, x, now_.data());
+    for (const DriveSignals& d : now_) signals_.insert(signals_.end(), {d.u, d.ea, d.i});
+    output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  for (std::size_t row = 0; row + m_ < saved_.size(); row += static_cast<std::size_t>(m_ + 1)) {
+  const std::size_t width = static_cast<std::size_t>(m_ + 1);
+  if (saved_.size() - formatted_ * width >= kChunkValues) format_pending();
+}
+
+std::string RunRecorder::header(const Plant& plant) {
+  const PlantConfig& cfg = plant.config();
+  const int n = plant.layout().n;
+  std::ostringstream csv;
+  csv << "t [s]";
+  for (const auto& name : plant.layout().names) {
+    csv << "," << name << " [" << unit_of_state(name, &cfg.robot) << "]";
+  }
+  if (cfg.reference) {
+    for (int j = 0; j < n; ++j) csv << ",q_ref" << j + 1 << " [" << unit_of_state("q" + std::to_string(j + 1), &cfg.robot) << "]";
+  }
+  csv << ",x [m],y [m],z [m],tool_qw [-],tool_qx [-],tool_qy [-],tool_qz [-]";  // flange frame: position, unit quaternion
+  if (cfg.reference) csv << ",x_ref [m],y_ref [m],z_ref [m],path_error [mm],path_deviation [mm]";
+  if (cfg.drive) {
+    for (int j = 0; j < n; ++j) csv << ",u" << j + 1 << " [V],e_a" << j + 1 << " [V]";
+  }
+  if (plant.layout().e >= 0) csv << ",E_mech [J],E_mag [J],ledger_residual [J]";
+  csv << "\n";
+  return csv.str();
+}
+
+int RunRecorder::columns(const Plant& plant) {
+  const std::string h = header(plant);
+  return static_cast<int>(std::count(h.begin(), h.end(), ',')) + 1;
+}
+
+// The rows not yet formatted: their text to the stream, their figures, then
+// (without keep_rows) they are let go.
+void RunRecorder::format_pending() {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t width = static_cast<std::size_t>(m_ + 1);
+  const std::size_t rows = saved_.size() / width;
+  if (cfg_.reference && keep_rows_) {
+    path_error_.reserve(rows), path_deviation_.reserve(rows);
+  }
+  csv_->text.clear();
+  for (std::size_t row = formatted_; row < rows; ++row) {
     ++fig_.rows;
-    write_row(saved_[row], &saved_[row + 1], csv, sums);
-    csv.text << "\n";
+    const double* signals = drive_ ? &signals_[3 * static_cast<std::size_t>(n_) * (row - formatted_)] : nullptr;
+    write_row(saved_[row * width], &saved_[row * width + 1], signals);
+    if (csv_->on) csv_->text += '\n';
   }
-  summarise(sums);
-  return csv.text.str();
+  if (text_) text_->write(csv_->text.data(), static_cast<std::streamsize>(csv_->text.size()));
+  signals_.clear();
+  if (keep_rows_) {
+    formatted_ = rows;
+  } else {
+    saved_.clear();
+  }
+  output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void RunRecorder::finish() {
+  format_pending();
+  csv_->text = std::string();  // its memory back
+  summarise();
+  if (text_) text_->flush();
 }
 
 RunRecorder::Rows RunRecorder::take_rows() {
   Rows r{std::move(saved_), std::move(path_error_), std::move(path_deviation_)};
   saved_.clear(), path_error_.clear(), path_deviation_.clear();
+  formatted_ = 0;
   return r;
 }
 
 // One row: time and state, the reference, the flange's pose, then the path,
 // drive and ledger columns where the plant has them.
-void RunRecorder::write_row(double t, const double* x, Csv& csv, Sums& sums) {
+void RunRecorder::write_row(double t, const double* x, const double* signals) {
+  Csv& csv = *csv_;
   csv.first(t);
   for (int i = 0; i < m_; ++i) csv.num(x[i]);
   Eigen::Matrix3d R_tool;
   Eigen::Vector3d p;
-  plant_.tool_pose(x, R_tool, p);
+  rows_plant_.tool_pose(x, R_tool, p);
   if (cfg_.reference) {
-    cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), sums.ref);
-    for (int j = 0; j < n_; ++j) csv.num(sums.ref.q[j]);
+    cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), sums_->ref);
+    for (int j = 0; j < n_; ++j) csv.num(sums_->ref.q[j]);
   }
   csv.num(p.x()), csv.num(p.y()), csv.num(p.z());
   Eigen::Quaterniond quat(R_tool);
   if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
   csv.num(quat.w()), csv.num(quat.x()), csv.num(quat.y()), csv.num(quat.z());
-  if (cfg_.reference) path_columns(p, csv, sums);
-  if (cfg_.drive) drive_columns(t, x, csv, sums);
-  if (plant_.layout().e >= 0) ledger_columns(x, fig_.rows == 1, csv, sums);
+  if (cfg_.reference) path_columns(p);
+  if (cfg_.drive) drive_columns(t, x, signals);
+  if (plant_.layout().e >= 0) ledger_columns(x, fig_.rows == 1);
 }
 
-void RunRecorder::path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums) {
+void RunRecorder::path_columns(const Eigen::Vector3d& p) {
+  Csv& csv = *csv_;
+  Sums& sums = *sums_;
   const ReferenceSample& ref = sums.ref;
   const double e = (p - ref.p).norm();
   // Deviation: the distance to the geometric path, whatever the timing
   // (a joint-space interpolation leaves the path between via-points).
   const double dev = cfg_.reference->deviation(p);
   csv.num(ref.p.x()), csv.num(ref.p.y()), csv.num(ref.p.z()), csv.num(1e3 * e), csv.num(1e3 * dev);
-  path_error_.push_back(e);
-  path_deviation_.push_back(dev);
+  if (keep_rows_) path_error_.push_back(e), path_deviation_.push_back(dev);
   fig_.max_path_error = std::max(fig_.max_path_error, e);
   sums.sum_sq += e * e;
   fig_.max_path_deviation = std::max(fig_.max_path_deviation, dev);
@@ -154,28 +191,28 @@ void RunRecorder::path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums) {
   ++fig_.samples;
 }
 
-void RunRecorder::drive_columns(double t, const double* x, Csv& csv, Sums& sums) {
-  if (!held_) plant_.drive_signals(t, x, now_.data());
+void RunRecorder::drive_columns(double t, const double* x, const double* signals) {
+  Csv& csv = *csv_;
   for (int j = 0; j < n_; ++j) {
-    const auto at = static_cast<std::size_t>(3 * ((fig_.rows - 1) * n_ + j));
-    const DriveSignals d = held_ ? DriveSignals{signals_[at], signals_[at + 1], signals_[at + 2]}
-                                 : now_[static_cast<std::size_t>(j)];
+    const DriveSignals d{signals[3 * j], signals[3 * j + 1], signals[3 * j + 2]};
     csv.num(d.u), csv.num(d.ea);
     fig_.peak_u[j] = std::max(fig_.peak_u[j], std::abs(d.u));
     fig_.peak_ea[j] = std::max(fig_.peak_ea[j], std::abs(d.ea));
     fig_.peak_i[j] = std::max(fig_.peak_i[j], std::abs(d.i));
     const double u_lim = controller_output_limit(cfg_.controller_params, j), v_lim = cfg_.amplifier[j].voltage_limit;
     if (std::abs(d.u) >= u_lim * (1 - 1e-12) || std::abs(cfg_.amplifier[j].gain * d.u) >= v_lim * (1 - 1e-12)) {
-      ++sums.saturated[j];
+      ++sums_->saturated[j];
     }
   }
 }
 
 // (E_mech + E_mag)(t) - (E_mech + E_mag)(0) - (e_in - e_copper - e_friction)
-void RunRecorder::ledger_columns(const double* x, bool first, Csv& csv, Sums& sums) {
+void RunRecorder::ledger_columns(const double* x, bool first) {
+  Csv& csv = *csv_;
+  Sums& sums = *sums_;
   const int led = plant_.layout().e;
   double kin = 0;
-  const double Em = plant_.mechanical_energy(x, &kin), Eg = plant_.magnetic_energy(x);
+  const double Em = rows_plant_.mechanical_energy(x, &kin), Eg = rows_plant_.magnetic_energy(x);
   if (first) sums.E0 = Em + Eg;
   const double res = (Em + Eg - sums.E0) - (x[led] - x[led + 1] - x[led + 2]);
   csv.num(Em), csv.num(Eg), csv.num(res);
@@ -184,7 +221,8 @@ void RunRecorder::ledger_columns(const double* x, bool first, Csv& csv, Sums& su
                                        std::abs(x[led]), std::abs(x[led + 1]), std::abs(x[led + 2])});
 }
 
-void RunRecorder::summarise(const Sums& sums) {
+void RunRecorder::summarise() {
+  const Sums& sums = *sums_;
   if (fig_.samples) {
     fig_.rms_path_error = std::sqrt(sums.sum_sq / fig_.samples);
     fig_.rms_path_deviation = std::sqrt(sums.sum_sq_dev / fig_.samples);

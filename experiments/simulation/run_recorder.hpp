@@ -1,12 +1,18 @@
 // The run recorder: what a run of the plant leaves behind, computed apart from
-// the command line. Its observe() is the driver's observer (it only copies the
-// state at each output, and the drive signals where they depend on a
-// discrete state, so the run's wall time is the simulation's); finish()
-// then formats the trajectory rows, with reference and kinematics, and
-// computes the run's figures: path error and deviation, drive peaks and
-// saturation, and the energy ledger's residual.
+// the command line. Its observe() is the driver's observer: it copies the
+// state at each output (and the drive signals, as the run applies them);
+// when the copied rows reach a chunk (kChunkValues numbers)
+// it formats them as trajectory.csv's rows into its text stream, computes
+// their figures (path error and deviation, drive peaks and saturation, the
+// energy ledger's residual) and lets them go. So its memory is bounded by the
+// chunk, whatever the run's length (unless the rows are kept for the
+// caller), and the formatting time, spent inside the run, is counted apart
+// (output_seconds) so that the run's wall time stays the simulation's.
 #pragma once
 
+#include <cstddef>
+#include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -30,40 +36,67 @@ struct RunFigures {
 
 class RunRecorder {
  public:
-  // Reserves room for duration / output_interval rows.
-  RunRecorder(Plant& plant, double duration, double output_interval);
+  // The numbers (times and states) held before a chunk is formatted: 512 KiB.
+  static constexpr std::size_t kChunkValues = std::size_t{1} << 16;
+  // text: where trajectory.csv's text goes (one header line, one row per
+  // output), chunk by chunk; nullptr: no text, the figures only. keep_rows:
+  // every row is also kept, for take_rows(), room reserved for expected_rows
+  // (the caller bounds their number).
+  RunRecorder(Plant& plant, std::ostream* text, bool keep_rows = false, std::size_t expected_rows = 0);
+  ~RunRecorder();
+  RunRecorder(const RunRecorder&) = delete;
+  RunRecorder& operator=(const RunRecorder&) = delete;
   // The driver's observer: the state at an output time.
   void observe(double t, const double* x);
-  // Formats trajectory.csv (one header line, one row per output) and computes
-  // the figures. Call once, after the run.
-  std::string finish();
+  // Formats the rows left and completes the figures. Call once, after the run.
+  void finish();
   const RunFigures& figures() const { return fig_; }
-  // After finish(): the observed rows, [t, x...] per output, and each row's
-  // path error and deviation [m] (empty without a reference), moved out.
+  // [s] of wall-clock time spent taking the drive signals, formatting rows
+  // and computing their figures.
+  double output_seconds() const { return output_seconds_; }
+  // After finish(), with keep_rows: the observed rows, [t, x...] per output,
+  // and each row's path error and deviation [m] (empty without a
+  // reference), moved out.
   struct Rows {
     std::vector<double> rows;
     std::vector<double> path_error, path_deviation;
   };
   Rows take_rows();
+  // trajectory.csv's header line for this plant, and its number of columns.
+  static std::string header(const Plant& plant);
+  static int columns(const Plant& plant);
 
  private:
-  struct Csv;   // the text of trajectory.csv, numbers at full precision
-  struct Sums;  // what finish() accumulates over the rows
-  std::string header() const;
-  void write_row(double t, const double* x, Csv& csv, Sums& sums);
-  void path_columns(const Eigen::Vector3d& p, Csv& csv, Sums& sums);
-  void drive_columns(double t, const double* x, Csv& csv, Sums& sums);
-  void ledger_columns(const double* x, bool first, Csv& csv, Sums& sums);
-  void summarise(const Sums& sums);
+  struct Csv;   // the text of a chunk of trajectory.csv, numbers at full precision
+  struct Sums;  // what the figures accumulate over the rows
+  void format_pending();
+  void write_row(double t, const double* x, const double* signals);
+  void path_columns(const Eigen::Vector3d& p);
+  void drive_columns(double t, const double* x, const double* signals);
+  void ledger_columns(const double* x, bool first);
+  void summarise();
+  // The run's plant: the drive signals at each output, as applied (they
+  // depend on its discrete state then: a held set-point or controller
+  // output, the reference's piece).
   Plant& plant_;
+  // A twin of it that computes the rows' other columns as the run goes (the
+  // flange's pose, the energies: functions of the state alone), so that the
+  // run's plant sees no evaluation but the drive signals' between its steps.
+  Plant rows_plant_;
   const PlantConfig& cfg_;
   int m_, n_;
-  bool held_;                    // drive signals depend on a discrete state: taken at each output
-  std::vector<double> saved_;    // [t, x...] per output
-  std::vector<double> signals_;  // [u, e_a, i] per joint per output (held_ only)
+  bool drive_;                   // the drive signals are taken at each output
+  std::ostream* text_;
+  bool keep_rows_;
+  std::vector<double> saved_;    // [t, x...] per output (from row `formatted_` on: not yet formatted)
+  std::vector<double> signals_;  // [u, e_a, i] per joint per output not yet formatted (with a drive)
+  std::size_t formatted_ = 0;    // rows of saved_ already formatted (with keep_rows; else 0)
   std::vector<DriveSignals> now_;
-  std::vector<double> path_error_, path_deviation_;  // [m] per row (with a reference)
+  std::vector<double> path_error_, path_deviation_;  // [m] per row (with a reference, keep_rows)
+  std::unique_ptr<Csv> csv_;
+  std::unique_ptr<Sums> sums_;
   RunFigures fig_;
+  double output_seconds_ = 0;
 };
 
 // The unit of a state component, from its name (q1 rad, qd1 rad/s, ...);

@@ -183,19 +183,21 @@ std::vector<std::string> run_start_warnings(const Scene& sc, const RunControls& 
 CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,
                        bool force, const ProgressHook& progress, const RunContext* context, bool keep_rows) {
   check_run_size(sc, rc.max_steps);
-  if (out) check_run_folder_target(*out, force);  // before the run: a refusal costs nothing
+  // Before the run: a refusal costs nothing; the trajectory then streams into
+  // the folder's temporary twin, which a failure below removes.
+  std::optional<RunFolderWriter> folder;
+  if (out) folder.emplace(*out, force);
   const RunContext started = context ? *context : run_context({}, sc);  // the start time, the robot file as loaded
   CompletedRun done;
-  done.run = simulate_scene(sc, rc, progress, keep_rows);
+  done.run = simulate_scene(sc, rc, progress, keep_rows, folder ? &folder->stream("trajectory.csv") : nullptr);
   done.stats = stats_json(sc, rc, done.run);
-  if (out) {
-    std::vector<std::pair<std::string, std::string>> files{{"trajectory.csv", done.run.trajectory_csv},
-                                                           {"stats.json", done.stats},
-                                                           {"meta.json", meta_json(started)},
-                                                           {"scene.resolved.toml", resolved_toml(sc)}};
-    if (!done.run.events_csv.empty()) files.emplace_back("events.csv", done.run.events_csv);
-    if (!done.run.events_speed_csv.empty()) files.emplace_back("events_speed.csv", done.run.events_speed_csv);
-    write_run_folder(*out, files, force);
+  if (folder) {
+    folder->write("stats.json", done.stats);
+    folder->write("meta.json", meta_json(started));
+    folder->write("scene.resolved.toml", resolved_toml(sc));
+    if (!done.run.events_csv.empty()) folder->write("events.csv", done.run.events_csv);
+    if (!done.run.events_speed_csv.empty()) folder->write("events_speed.csv", done.run.events_speed_csv);
+    folder->commit();
   }
   return done;
 }

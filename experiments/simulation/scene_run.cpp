@@ -1,6 +1,8 @@
 #include "experiments/simulation/scene_run.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -50,10 +52,25 @@ void check_run_size(const Scene& sc, long max_steps) {
   check_stops("controller.setpoint_interval", sc.plant.setpoint_interval, sc.duration, max_steps);
 }
 
-SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHook& progress, bool keep_rows) {
+void check_output_size(const Scene& sc, const Plant& plant) {
+  const double rows = std::floor(sc.duration / sc.output_interval) + 1;
+  const int columns = RunRecorder::columns(plant);
+  if (const double values = rows * columns; !(values <= kMaxOutputValues)) {
+    std::ostringstream m;
+    m << "scene.output_interval: expected at most " << kMaxOutputValues << " numbers in trajectory.csv (rows x "
+      << "columns) over " << sc.duration_source << " (a longer output_interval or a shorter duration), got "
+      << static_cast<long long>(std::min(rows, 1e18)) << " rows x " << columns << " columns = " << values;
+    throw std::invalid_argument(m.str());
+  }
+}
+
+SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHook& progress, bool keep_rows,
+                        std::ostream* trajectory) {
   Plant plant(sc.plant);
+  check_output_size(sc, plant);  // before anything is sized by the rows
   auto integ = make_integrator(sc.integrator.name, rc.options);
-  RunRecorder recorder(plant, sc.duration, sc.output_interval);
+  RunRecorder recorder(plant, trajectory, keep_rows,
+                       keep_rows ? static_cast<std::size_t>(sc.duration / sc.output_interval + 1) : 0);
   SceneRun run;
   bool modes = false;
   for (int j = 0; j < plant.layout().n; ++j) modes |= plant.joint_has_modes(j);
@@ -88,7 +105,9 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
     run.speed_sign_changes = classifier.speed_sign_changes();
     run.shortest_step = classifier.shortest_step();
   }
-  run.trajectory_csv = recorder.finish();
+  // The rows formatted inside the run are the output's cost, not the simulation's.
+  run.result.wall_time -= recorder.output_seconds();
+  recorder.finish();
   run.figures = recorder.figures();
   if (keep_rows) {
     RunRecorder::Rows rows = recorder.take_rows();

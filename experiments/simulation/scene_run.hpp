@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,18 @@ struct RunControls {
 // whole budget first.
 void check_run_size(const Scene& scene, long max_steps);
 
+// The numbers trajectory.csv may hold, rows times columns: 1e8, a file of
+// at most about 2.4 GB (a number at full precision takes up to 24
+// characters with its comma), or 800 MB of rows kept in memory (the Python
+// module's arrays). `pumasim run` itself streams the rows to the file and
+// holds at most a chunk of them (run_recorder.hpp).
+inline constexpr double kMaxOutputValues = 1e8;
+
+// Refuses (std::invalid_argument, naming the scene keys) a run whose
+// trajectory would hold more than kMaxOutputValues numbers with this plant's
+// columns (RunRecorder::columns).
+void check_output_size(const Scene& scene, const Plant& plant);
+
 struct SceneRun {
   RunResult result;
   IntegratorStats stats;
@@ -42,7 +55,6 @@ struct SceneRun {
   std::vector<double> tolerance_scales;  // the plant's typical magnitude of each state
   std::vector<double> physical_bounds;   // |x_k| <= bound (+inf: none; models/plant/physical_bounds.hpp)
   std::vector<std::string> physical_bounds_why;
-  std::string trajectory_csv;
   std::string events_csv;         // the friction modes (mode_log.hpp); "" when no joint has modes
   long mode_changes = 0;          // its rows
   bool modes_classified = false;  // from the accepted steps (else: the hybrid model's events)
@@ -65,7 +77,10 @@ struct SceneRun {
 // Runs the scene (integrator scene.integrator.name) over scene.duration;
 // progress.report (may be empty) by wall-clock time from the step loop
 // (driver.hpp: ProgressHook). keep_rows: SceneRun::rows and the path errors.
+// trajectory: where trajectory.csv's text is written as the run goes
+// (nullptr: no text). The run's wall time leaves out the time spent
+// formatting it; its wall-clock budget (controls.max_wall) does not.
 SceneRun simulate_scene(const Scene& scene, const RunControls& controls, const ProgressHook& progress = {},
-                        bool keep_rows = false);
+                        bool keep_rows = false, std::ostream* trajectory = nullptr);
 
 }  // namespace pumasim
