@@ -2,8 +2,9 @@
 (the passive arm over 1e6 s, RK4 at 0.5 ms, max_steps=0 and max_wall=0), the test sends it SIGINT
 once the run is under way, and the run raises KeyboardInterrupt within a second (the driver looks
 every 50 ms; the latency measured is printed, `pytest -s` shows it). Runs on other threads stop too,
-whether the main thread is in a run of its own or waits for them in Thread.join(). CTest runs this
-with the module's folder on PYTHONPATH (python/CMakeLists.txt); by hand:
+whether the main thread is in a run of its own or waits for them in Thread.join(). An interrupted run
+writes no run folder, and one it would replace (force=True) stays. CTest runs this with the module's
+folder on PYTHONPATH (python/CMakeLists.txt); by hand:
 
     PYTHONPATH=build/release/python /usr/bin/python3 -m pytest -q -s tests/test_python_interrupt.py
 """
@@ -23,7 +24,8 @@ BOUND = 1.0  # [s] from SIGINT to KeyboardInterrupt; the design gives about 0.05
 # The child: modes "main" (the run on the main thread), "threads" (two runs on threads, the main
 # thread in join()), "mixed" (one run on the main thread and one on a thread). It prints "running"
 # once the runs have gone for 0.5 s, then, after SIGINT, one JSON line: by name, the monotonic time at
-# which each run raised and what it said (its message and notes), and whether the run folder exists.
+# which each run raised and what it said (its message and notes), and the t_end of the run folder
+# `out` (None: none), which "main" writes with a short run first and then gives the long run to replace.
 CHILD = r"""
 import json, os, signal, sys, threading, time
 import pumasim
@@ -41,7 +43,7 @@ ended = {}  # by thread name: set when its run has ended (Thread.join() interrup
 
 def one(name, folder=None):
     try:
-        pumasim.run(scene, integrator="rk4", dt=5e-4, max_steps=0, max_wall=0, out=folder)
+        pumasim.run(scene, integrator="rk4", dt=5e-4, max_steps=0, max_wall=0, out=folder, force=True)
         raised[name] = "returned"
     except KeyboardInterrupt as e:
         raised[name] = {"t": time.monotonic(), "why": " ".join([str(e), *getattr(e, "__notes__", [])])}
@@ -53,6 +55,8 @@ def announce():
     time.sleep(0.5)
     print("running", flush=True)
 
+if mode == "main":  # a run folder that the interrupted run would replace
+    pumasim.run(scene, t_end=0.01, out=out)
 threading.Thread(target=announce, daemon=True).start()
 workers = []
 if mode in ("threads", "mixed"):
@@ -69,7 +73,8 @@ try:
 except KeyboardInterrupt:
     raised["main"] = {"t": time.monotonic(), "why": "join"}
 alive = [name for name, e in ended.items() if not e.wait(timeout=5)]
-print(json.dumps({"raised": raised, "alive": alive, "folder": os.path.exists(out)}), flush=True)
+kept = json.load(open(os.path.join(out, "stats.json")))["t_end"] if os.path.exists(out) else None
+print(json.dumps({"raised": raised, "alive": alive, "kept": kept}), flush=True)
 os._exit(3 if alive else 0)  # a run still going would keep the process alive
 """
 
@@ -114,3 +119,6 @@ def test_sigint_raises_keyboard_interrupt_in_every_run(mode, names, tmp_path):
         if not (mode == "threads" and name == "main"):
             assert "pumasim.run " in report["raised"][name]["why"] and \
                 "interrupted at t = " in report["raised"][name]["why"], report
+    # An interrupted run writes no run folder, and leaves the one it would replace as it was.
+    assert report["kept"] == (0.01 if mode == "main" else None), report
+    assert os.listdir(tmp_path) == (["run"] if mode == "main" else []), os.listdir(tmp_path)

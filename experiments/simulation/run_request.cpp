@@ -191,7 +191,9 @@ CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::option
   CompletedRun done;
   done.run = simulate_scene(sc, rc, progress, keep_rows, folder ? &folder->stream("trajectory.csv") : nullptr);
   done.stats = stats_json(sc, rc, done.run);
-  if (folder) {
+  // An interrupted run (ProgressHook::cancel: Ctrl-C in the Python module)
+  // leaves no folder: the twin goes, and a folder it would replace stays.
+  if (folder && done.run.result.failure_kind != "interrupted") {
     folder->write("stats.json", done.stats);
     folder->write("meta.json", meta_json(started));
     folder->write("scene.resolved.toml", resolved_toml(sc));

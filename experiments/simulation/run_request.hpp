@@ -72,7 +72,7 @@ struct CompletedRun {
 // folder replaced only with force; meta.json from context, or from a context
 // made now without a command line when null). keep_rows keeps the output rows in
 // SceneRun::rows. A run that fails is a result (run.result.ok false), not an
-// exception.
+// exception; one interrupted (progress.cancel) writes no folder.
 CompletedRun run_scene(const Scene& scene, const RunControls& controls, const std::optional<std::filesystem::path>& out,
                        bool force, const ProgressHook& progress = {}, const RunContext* context = nullptr,
                        bool keep_rows = false);
