@@ -118,6 +118,26 @@ class RobotFile : public ::testing::Test {
       "[robot]\nname = \"one\"\nconvention = \"standard\"\ngravity = [0.0, 0.0, -9.81]\n";
 };
 
+// A --set value is bounded, and messages echo at most 120 characters of it
+// (issue 32: a million-element list was echoed whole in the error).
+TEST(Cli, LongOverridesAreBoundedAndClippedInMessages) {
+  std::string list = "scene.name=[1";
+  for (int i = 0; i < 20000; ++i) list += ",1";
+  list += "]";
+  std::ostringstream out, err;
+  EXPECT_EQ(run_cli({"check", std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml", "--set", list}, out, err),
+            kExitBadInput);
+  EXPECT_NE(err.str().find("scene.name: expected a string"), std::string::npos) << err.str().substr(0, 400);
+  EXPECT_NE(err.str().find("(" + std::to_string(list.size()) + " characters)"), std::string::npos);
+  EXPECT_LT(err.str().size(), 400u);
+  std::string huge = "scene.name=\"" + std::string(70000, 'a') + "\"";
+  err.str("");
+  EXPECT_EQ(run_cli({"check", std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml", "--set", huge}, out, err),
+            kExitBadInput);
+  EXPECT_NE(err.str().find("expected at most 65536 characters"), std::string::npos) << err.str().substr(0, 400);
+  EXPECT_LT(err.str().size(), 400u);
+}
+
 TEST_F(RobotFile, AValidFileLoads) {
   const RobotModel m = load_robot_file(write(std::string(kHead) + joint()));
   EXPECT_EQ(m.dof(), 1);

@@ -84,13 +84,26 @@ void merge_into(toml::table& into, const toml::table& from) {
 }
 }  // namespace
 
+// An override as messages show it: whole up to kEchoChars characters, else its
+// start and its length (a value of a million characters is not echoed).
+std::string echoed_override(const std::string& o) {
+  constexpr std::size_t kEchoChars = 120;
+  if (o.size() <= kEchoChars) return o;
+  return o.substr(0, kEchoChars - 40) + "... (" + std::to_string(o.size()) + " characters)";
+}
+
 void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
-  for (const std::string& o : overrides) {
-    const auto eq = o.find('=');
+  for (const std::string& full : overrides) {
+    if (full.size() > kMaxOverrideChars) {
+      throw ConfigError("--set " + echoed_override(full) + ": expected at most " + std::to_string(kMaxOverrideChars) +
+                        " characters (a longer value belongs in the scene file)");
+    }
+    const std::string o = echoed_override(full);  // in messages and as the values' source name
+    const auto eq = full.find('=');
     if (eq == std::string::npos || eq == 0) {
       throw ConfigError("--set " + o + ": expected section.key=value (a TOML value, e.g. motor.inductance=1e-5)");
     }
-    const std::string text = o.substr(0, eq) + " = " + o.substr(eq + 1);
+    const std::string text = full.substr(0, eq) + " = " + full.substr(eq + 1);
     if (const auto hazard = find_toml_hazard(text)) {
       throw ConfigError("--set " + o + ": expected section.key=value with a TOML value (expected " +
                         hazard->expected + ", got " + hazard->got + ")");

@@ -32,7 +32,9 @@ toml::table parse_toml_file(const std::string& path);
 
 // Command-line overrides "section.key=value" (value in TOML syntax) merged
 // into a parsed document before it is checked; a bad value is reported as
-// "--set section.key=value: section.key: expected ...".
+// "--set section.key=value: section.key: expected ...". An override longer
+// than kMaxOverrideChars is refused; messages show at most 120 characters of one.
+inline constexpr std::size_t kMaxOverrideChars = std::size_t{1} << 16;
 void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides);
 
 // Command-line removals "section.key" (any depth; a whole table too): each
