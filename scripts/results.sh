@@ -14,13 +14,19 @@
 #               rounding spread (experiments/rounding_spread.py)
 #   testset     the IVP test set (experiments/testset.py)
 #   outputgrid  cost against the output grid (experiments/output_grid.py)
-#   extreme     extreme but valid scenes x every integrator (tests/check_extreme_runs.py)
+#   extreme     extreme but valid scenes x every integrator (tests/check_extreme_runs.py), and
+#               a long run's memory under an address-space limit (experiments/memory_bound.py)
 #   rosenbrock  rosenbrock4's error estimate against its true local error
 #   buildspread adaptive counts of the native build against the portable one
 #               (experiments/build_spread.py)
 #   paper       the paper's experiment re-run (experiments/paper_experiment.py)
 #   bench       the dynamics back-end benchmark (scripts/bench_dynamics.sh)
 #   report      results/README.md from all of the above (experiments/report.py)
+#   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
+#               (one million inputs per harness, in the sanitizer build, build/asan;
+#               results/fuzz/long_run.json). Hours on 2 cores, hence not in the default run;
+#               FUZZ_HARNESSES="urdf joint_csv" runs only those (their entries replaced,
+#               the others' kept).
 #
 # Every figure comes from the portable build (preset portable: the x86-64
 # baseline, no -march=native), so that results/ does not depend on this
@@ -80,6 +86,8 @@ stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
 stage_extreme() {
   # extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
   /usr/bin/python3 tests/check_extreme_runs.py "$PUMASIM" --jobs "$jobs" --out results/reliability > /dev/null
+  # a long run's memory under a 128 MiB address-space limit (README, "Reliability: bounds")
+  /usr/bin/python3 experiments/memory_bound.py --bin "$PUMASIM" --out results/reliability/memory_bound.json > /dev/null
 }
 stage_rosenbrock() {
   # rosenbrock4's error estimate against its true local error (README, "Is the instrument right?")
