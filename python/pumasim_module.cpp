@@ -4,7 +4,8 @@
 // computation and every check is a library call that the command line makes
 // too (models/robot/dynamics_query, experiments/simulation/run_request), and
 // bad input raises ValueError with the message the command line prints after
-// "pumasim: ".
+// "pumasim: "; the module itself converts the arguments ("arguments" below:
+// a wrong type is a TypeError naming the argument).
 #include <atomic>
 #include <charconv>
 #include <cmath>
@@ -38,8 +39,107 @@ namespace {
 
 // ---------------------------------------------------------------- arguments
 
-// A path given as str or os.PathLike.
-std::string path_arg(const py::handle& p) { return py::module_::import("os").attr("fspath")(p).cast<std::string>(); }
+// Every argument is taken as a Python object and converted here, so that a
+// value of the wrong type or out of range is a TypeError or ValueError naming
+// the argument (pybind11's own conversions say "incompatible function
+// arguments" or "Unable to cast Python instance", naming none), and texts are
+// bounded before anything echoes them (tests/test_python_hostile.py).
+
+// The longest name or path taken (PATH_MAX), and the longest override, in
+// characters: the longest argument a Linux command line can pass to --set
+// (MAX_ARG_STRLEN, 128 KiB).
+constexpr std::size_t kMaxText = 4096;
+constexpr std::size_t kMaxOverride = 131072;
+// How deep an override's lists and tables may nest (TOML itself needs two or three).
+constexpr int kMaxNesting = 32;
+
+std::string type_name(const py::handle& v) { return py::str(py::type::of(v).attr("__name__")); }
+
+[[noreturn]] void wrong_type(const std::string& what, const std::string& expected, const py::handle& v) {
+  throw py::type_error(what + ": expected " + expected + ", got a " + type_name(v));
+}
+
+// A str as UTF-8 (a lone surrogate is refused, naming the argument).
+std::string utf8(const py::handle& v, const std::string& what) {
+  Py_ssize_t size = 0;
+  const char* data = PyUnicode_AsUTF8AndSize(v.ptr(), &size);
+  if (!data) {
+    PyErr_Clear();
+    throw std::invalid_argument(what + ": expected text that UTF-8 can encode (no lone surrogates)");
+  }
+  return std::string(data, static_cast<std::size_t>(size));
+}
+
+// A name (integrator, back-end, pose, ...): a str of at most kMaxText characters.
+std::string text_arg(const py::handle& v, const std::string& what) {
+  if (!py::isinstance<py::str>(v)) wrong_type(what, "a str", v);
+  std::string s = utf8(v, what);
+  if (s.size() > kMaxText) {
+    throw std::invalid_argument(what + ": expected at most " + std::to_string(kMaxText) + " characters, got " +
+                                std::to_string(s.size()));
+  }
+  return s;
+}
+
+std::optional<std::string> optional_text(const py::handle& v, const std::string& what) {
+  if (v.is_none()) return std::nullopt;
+  return text_arg(v, what);
+}
+
+// A path given as str, bytes or os.PathLike, as the file system's bytes
+// (os.fsencode): not empty, without a NUL (which would end it early: the
+// file opened would be another) and at most kMaxText bytes.
+std::string path_arg(const py::handle& p, const std::string& what) {
+  if (!(py::isinstance<py::str>(p) || py::isinstance<py::bytes>(p) || py::hasattr(p, "__fspath__"))) {
+    wrong_type(what, "a path (str, bytes or os.PathLike)", p);
+  }
+  std::string path;
+  try {
+    path = py::module_::import("os").attr("fsencode")(p).cast<py::bytes>();
+  } catch (py::error_already_set& e) {
+    throw py::type_error(what + ": expected a path (str, bytes or os.PathLike): " + std::string(py::str(e.value())));
+  }
+  if (path.empty()) throw std::invalid_argument(what + ": expected a path, got an empty one");
+  if (path.find('\0') != std::string::npos) throw std::invalid_argument(what + ": a path with a NUL character");
+  if (path.size() > kMaxText) {
+    throw std::invalid_argument(what + ": expected a path of at most " + std::to_string(kMaxText) + " bytes, got " +
+                                std::to_string(path.size()));
+  }
+  return path;
+}
+
+bool is_bool(const py::handle& v) {
+  return py::isinstance<py::bool_>(v) || py::isinstance(v, py::module_::import("numpy").attr("bool_"));
+}
+
+// A flag: True or False (also numpy's), not any value with a truth (None, nan, "no").
+bool flag_arg(const py::handle& v, const std::string& what) {
+  if (!is_bool(v)) wrong_type(what, "True or False", v);
+  return v.cast<bool>();
+}
+
+// A number: an int, a float, or any scalar that converts to a float (numpy's);
+// not a bool, not a str. Its range is the caller's to check.
+double number_arg(const py::handle& v, const std::string& what) {
+  if (is_bool(v) || py::isinstance<py::str>(v) || py::isinstance<py::bytes>(v) ||
+      !(PyIndex_Check(v.ptr()) || PyFloat_Check(v.ptr()) || py::hasattr(v, "__float__"))) {
+    wrong_type(what, "a number", v);
+  }
+  const double x = PyFloat_AsDouble(v.ptr());  // int, float, __float__, __index__
+  if (x == -1.0 && PyErr_Occurred()) {
+    const bool overflow = PyErr_ExceptionMatches(PyExc_OverflowError) != 0;
+    py::error_already_set e;
+    if (overflow) throw std::invalid_argument(what + ": expected a number, got an integer beyond a float's range");
+    throw py::type_error(what + ": expected a number, got a " + type_name(v) + " (" + std::string(py::str(e.value())) +
+                         ")");
+  }
+  return x;
+}
+
+std::optional<double> optional_number(const py::handle& v, const std::string& what) {
+  if (v.is_none()) return std::nullopt;
+  return number_arg(v, what);
+}
 
 // A 1-D array of numbers (list, tuple, numpy array), as float64.
 Eigen::VectorXd vector_arg(const py::handle& v, const std::string& what) {
@@ -57,84 +157,175 @@ Eigen::VectorXd vector_arg(const py::handle& v, const std::string& what) {
   return a.cast<Eigen::VectorXd>();
 }
 
+// A TOML string: "..." with the escapes TOML knows.
+std::string toml_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\', out += c;
+    } else if (u < 0x20 || u == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", u);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
 // A Python value as a TOML value, for a scene override ("section.key=value",
 // as the command line's --set): bool, int, float (inf and nan as TOML
-// spells them), str, a dict (inline table) or a sequence (array) of these.
-std::string toml_literal(const py::handle& v, const std::string& key) {
-  const py::module_ np = py::module_::import("numpy");
-  if (py::isinstance<py::bool_>(v) || py::isinstance(v, np.attr("bool_"))) return v.cast<bool>() ? "true" : "false";
-  if (py::isinstance<py::str>(v)) {
-    std::string out = "\"";
-    for (const char c : v.cast<std::string>()) {
-      const auto u = static_cast<unsigned char>(c);
-      if (c == '"' || c == '\\') {
-        out += '\\', out += c;
-      } else if (u < 0x20 || u == 0x7f) {
-        char buf[8];
-        std::snprintf(buf, sizeof buf, "\\u%04x", u);
-        out += buf;
-      } else {
-        out += c;
+// spells them), str, a dict (inline table) or a sequence (array: a list, a
+// tuple, a numpy array) of these. Refused, naming the key: another type, an
+// integer beyond TOML's 64 bits, nesting deeper than kMaxNesting (a list
+// that holds itself), a text longer than kMaxOverride (checked as it grows).
+class TomlLiteral {
+ public:
+  explicit TomlLiteral(const std::string& key) : key_(key) {}
+  std::string operator()(const py::handle& v) {
+    value(v, 0);
+    return std::move(out_);
+  }
+
+ private:
+  void append(const std::string& s) {
+    out_ += s;
+    if (out_.size() > kMaxOverride) {
+      throw std::invalid_argument("--set " + key_ + ": expected a value of at most " + std::to_string(kMaxOverride) +
+                                  " characters of TOML (the longest command-line argument), got more");
+    }
+  }
+
+  void value(const py::handle& v, int depth) {
+    if (depth > kMaxNesting) {
+      throw std::invalid_argument("--set " + key_ + ": expected lists and tables nested at most " +
+                                  std::to_string(kMaxNesting) + " deep, got deeper (a list that holds itself?)");
+    }
+    const py::module_ np = py::module_::import("numpy");
+    if (is_bool(v)) return append(v.cast<bool>() ? "true" : "false");
+    if (py::isinstance<py::str>(v)) return append(toml_string(utf8(v, "--set " + key_)));
+    if (py::isinstance(v, np.attr("ndarray"))) return value(v.attr("tolist")(), depth);
+    if (PyIndex_Check(v.ptr()) && !PyFloat_Check(v.ptr())) {  // int, numpy's integers
+      PyObject* i = PyNumber_Index(v.ptr());
+      int overflow = 0;
+      const long long n = i ? PyLong_AsLongLongAndOverflow(i, &overflow) : 0;
+      Py_XDECREF(i);
+      if (PyErr_Occurred()) {
+        py::error_already_set e;
+        throw py::type_error("--set " + key_ + ": expected an integer, got a " + type_name(v) + " (" +
+                             std::string(py::str(e.value())) + ")");
       }
+      if (overflow != 0) {
+        throw std::invalid_argument("--set " + key_ + ": expected an integer within +-2^63 (a TOML integer), "
+                                    "got a larger one");
+      }
+      return append(std::to_string(n));
     }
-    return out + "\"";
-  }
-  if (py::hasattr(v, "__index__")) return std::string(py::str(py::int_(py::reinterpret_borrow<py::object>(v))));
-  if (py::isinstance<py::float_>(v) || py::hasattr(v, "__float__")) {
-    const double x = v.cast<double>();
-    if (std::isnan(x)) return "nan";
-    if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-    char buf[32];
-    std::string s(buf, std::to_chars(buf, buf + sizeof buf, x).ptr);  // the shortest text that reads back as x
-    if (s.find_first_of(".e") == std::string::npos) s += ".0";       // a float, not an integer
-    return s;
-  }
-  if (py::isinstance<py::dict>(v)) {
-    std::string out = "{";
-    for (const auto& kv : v.cast<py::dict>()) {
-      out += (out.size() > 1 ? ", " : "") + std::string(py::str(kv.first)) + " = " + toml_literal(kv.second, key);
+    if (PyFloat_Check(v.ptr()) || py::hasattr(v, "__float__")) {
+      const double x = number_arg(v, "--set " + key_);
+      if (std::isnan(x)) return append("nan");
+      if (std::isinf(x)) return append(x > 0 ? "inf" : "-inf");
+      char buf[32];
+      std::string s(buf, std::to_chars(buf, buf + sizeof buf, x).ptr);  // the shortest text that reads back as x
+      if (s.find_first_of(".e") == std::string::npos) s += ".0";       // a float, not an integer
+      return append(s);
     }
-    return out + "}";
+    if (py::isinstance<py::dict>(v)) {
+      append("{");
+      bool first = true;
+      for (const auto& kv : v.cast<py::dict>()) {
+        if (!py::isinstance<py::str>(kv.first)) wrong_type("--set " + key_, "str keys in a table", kv.first);
+        const std::string k = utf8(kv.first, "--set " + key_);
+        const bool bare = !k.empty() && k.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                                            "0123456789_-") == std::string::npos;
+        append(std::string(first ? "" : ", ") + (bare ? k : toml_string(k)) + " = ");
+        value(kv.second, depth + 1);
+        first = false;
+      }
+      return append("}");
+    }
+    if (py::isinstance<py::iterable>(v) && !py::isinstance<py::bytes>(v) && !PyByteArray_Check(v.ptr())) {
+      append("[");
+      bool first = true;
+      for (const py::handle item : v) {
+        if (!first) append(", ");
+        value(item, depth + 1);
+        first = false;
+      }
+      return append("]");
+    }
+    wrong_type("--set " + key_, "a bool, a number, a string, a dict or a list of these", v);
   }
-  if (py::isinstance<py::iterable>(v) && !py::isinstance<py::bytes>(v)) {
-    std::string out = "[";
-    for (const py::handle item : v) out += (out.size() > 1 ? ", " : "") + toml_literal(item, key);
-    return out + "]";
-  }
-  throw std::invalid_argument("--set " + key + ": expected a bool, a number, a string, a dict or a list of these, "
-                              "got a " + std::string(py::str(py::type::of(v).attr("__name__"))));
-}
+
+  const std::string& key_;
+  std::string out_;
+};
 
 // Scene overrides: a dict {"section.key": value} or a list of the command
 // line's "section.key=value" strings (TOML values).
 std::vector<std::string> override_args(const py::handle& overrides) {
+  const std::string expected = "a dict {\"section.key\": value} or a list of \"section.key=value\" strings";
   std::vector<std::string> sets;
   if (overrides.is_none()) return sets;
   if (py::isinstance<py::dict>(overrides)) {
     for (const auto& kv : overrides.cast<py::dict>()) {
-      const std::string key = py::str(kv.first);
-      sets.push_back(key + "=" + toml_literal(kv.second, key));
+      if (!py::isinstance<py::str>(kv.first)) {
+        wrong_type("overrides", "\"section.key\" strings as the dict's keys", kv.first);
+      }
+      const std::string key = text_arg(kv.first, "overrides");
+      sets.push_back(key + "=" + TomlLiteral(key)(kv.second));
     }
     return sets;
   }
-  if (py::isinstance<py::str>(overrides)) {
-    throw std::invalid_argument("overrides: expected a dict {\"section.key\": value} or a list of "
-                                "\"section.key=value\" strings, got a str");
+  if (py::isinstance<py::str>(overrides) || py::isinstance<py::bytes>(overrides) ||
+      !py::isinstance<py::iterable>(overrides)) {
+    wrong_type("overrides", expected, overrides);
   }
-  for (const py::handle item : overrides) sets.push_back(item.cast<std::string>());
+  for (const py::handle item : overrides) {
+    if (!py::isinstance<py::str>(item)) {
+      throw py::type_error("overrides: expected " + expected + ", got a " + type_name(overrides) + " holding a " +
+                           type_name(item));
+    }
+    sets.push_back(utf8(item, "overrides"));
+    if (sets.back().size() > kMaxOverride) {
+      throw std::invalid_argument("overrides: expected \"section.key=value\" strings of at most " +
+                                  std::to_string(kMaxOverride) + " characters (the longest command-line argument), "
+                                  "got one of " + std::to_string(sets.back().size()));
+    }
+  }
   return sets;
+}
+
+// Keys to unset: a list of "section.key" strings (the command line's --unset).
+std::vector<std::string> unset_args(const py::handle& unset) {
+  std::vector<std::string> keys;
+  if (unset.is_none()) return keys;
+  if (py::isinstance<py::str>(unset) || py::isinstance<py::bytes>(unset) || !py::isinstance<py::iterable>(unset)) {
+    wrong_type("unset", "a list of \"section.key\" strings", unset);
+  }
+  for (const py::handle item : unset) {
+    if (!py::isinstance<py::str>(item)) {
+      throw py::type_error("unset: expected a list of \"section.key\" strings, got a " + type_name(unset) +
+                           " holding a " + type_name(item));
+    }
+    keys.push_back(text_arg(item, "unset"));
+  }
+  return keys;
 }
 
 // ---------------------------------------------------------------- dynamics
 
 py::array_t<double> to_numpy(const Eigen::VectorXd& v) { return py::cast(v); }
 
-py::dict dynamics(const py::object& robot, const std::string& backend, const py::object& q_in, const py::object& qd_in,
-                  const py::object& qdd_in, const py::object& tau_in, bool rotor_inertia) {
-  const RobotDynamics rd = robot_dynamics(path_arg(robot), backend, rotor_inertia);
+py::dict dynamics(const py::object& robot, const py::object& backend, const py::object& q_in, const py::object& qd_in,
+                  const py::object& qdd_in, const py::object& tau_in, const py::object& rotor_inertia) {
+  const RobotDynamics rd = robot_dynamics(path_arg(robot, "robot"), text_arg(backend, "backend"),
+                                          flag_arg(rotor_inertia, "rotor_inertia"));
   const int n = rd.model.dof();
   const Eigen::VectorXd q =
-      py::isinstance<py::str>(q_in) ? pose_angles(rd.model, q_in.cast<std::string>(), "q") : vector_arg(q_in, "q");
+      py::isinstance<py::str>(q_in) ? pose_angles(rd.model, text_arg(q_in, "q"), "q") : vector_arg(q_in, "q");
   const Eigen::VectorXd qd = qd_in.is_none() ? Eigen::VectorXd::Zero(n) : vector_arg(qd_in, "qd");
   std::optional<Eigen::VectorXd> qdd, tau;
   if (!qdd_in.is_none()) qdd = vector_arg(qdd_in, "qdd");
@@ -185,22 +376,35 @@ class PyScene {
     return x;
   }
 
-  Eigen::VectorXd rhs(double t, const py::handle& x_in) {
+  // f(t, x), and its Jacobian: t and x finite, and so the result, or a
+  // ValueError naming x (a state far beyond the plant's range overflows).
+  Eigen::VectorXd rhs(const py::handle& t_in, const py::handle& x_in) {
+    const double t = time_arg(t_in);
     const Eigen::VectorXd x = state_arg(x_in);
     warn_discontinuous();
     Eigen::VectorXd f(x.size());
     plant_->rhs(t, x.data(), f.data());
+    for (int i = 0; i < f.size(); ++i) {
+      if (!std::isfinite(f[i])) not_finite("f(t, x)", "d(" + name(i) + ")/dt", f[i], x);
+    }
     return f;
   }
 
-  Eigen::MatrixXd jacobian(double t, const py::handle& x_in, bool exact) {
+  Eigen::MatrixXd jacobian(const py::handle& t_in, const py::handle& x_in, const py::handle& exact) {
+    const double t = time_arg(t_in);
+    const bool exact_jacobian = flag_arg(exact, "exact");
     const Eigen::VectorXd x = state_arg(x_in);
     warn_discontinuous();
     Eigen::MatrixXd J;
-    if (exact) {
+    if (exact_jacobian) {
       plant_->jacobian_exact(t, x.data(), J);
     } else {
       system_->OdeSystem::jacobian(t, x.data(), J);  // the integrators' forward differences
+    }
+    for (int j = 0; j < J.cols(); ++j) {
+      for (int i = 0; i < J.rows(); ++i) {
+        if (!std::isfinite(J(i, j))) not_finite("the Jacobian", "d(" + name(i) + "')/d(" + name(j) + ")", J(i, j), x);
+      }
     }
     return J;
   }
@@ -208,17 +412,22 @@ class PyScene {
   // The times in (0, t_end] where the driver stops because f changes.
   // t_end is checked as pumasim run checks --t-end, and the count is bounded
   // by the default step budget (each event is a stop) before it is listed.
-  std::vector<double> time_events(std::optional<double> t_end) const {
+  std::vector<double> time_events(const py::handle& t_end_in) const {
+    const std::optional<double> t_end = optional_number(t_end_in, "t_end");
     if (t_end && !(std::isfinite(*t_end) && *t_end > 0)) {
-      throw std::invalid_argument("t_end: expected a number > 0, got " + std::to_string(*t_end));
+      char got[32];
+      std::snprintf(got, sizeof got, "%.9g", *t_end);
+      throw std::invalid_argument(std::string("t_end: expected a number > 0, got ") + got);
     }
     const double end = t_end.value_or(scene_.duration);
     std::vector<double> times;
     for (double t = plant_->next_time_event(0.0); t <= end; t = plant_->next_time_event(t)) {
       if (static_cast<long>(times.size()) >= kDefaultStepBudget) {
-        throw std::invalid_argument("t_end: expected at most " + std::to_string(kDefaultStepBudget) +
-                                    " time events before it (the default step budget), got more by t = " +
-                                    std::to_string(t) + " s");
+        char by[32];
+        std::snprintf(by, sizeof by, "%.9g", t);
+        throw std::invalid_argument(std::string(t_end ? "t_end" : "the scene's duration") + ": expected at most " +
+                                    std::to_string(kDefaultStepBudget) + " time events before it (the default step "
+                                    "budget), got more by t = " + by + " s");
       }
       times.push_back(t);
     }
@@ -239,6 +448,33 @@ class PyScene {
     }
   }
 
+  std::string name(int i) const { return plant_->layout().names[static_cast<std::size_t>(i)]; }
+
+  // A scene starts at t = 0: before it, a reference is not defined (its
+  // extrapolated path leaves the workspace).
+  static double time_arg(const py::handle& t_in) {
+    const double t = number_arg(t_in, "t");
+    if (!(std::isfinite(t) && t >= 0)) {
+      char got[32];
+      std::snprintf(got, sizeof got, "%.9g", t);
+      throw std::invalid_argument(std::string("t: expected a finite time >= 0 (a scene starts at t = 0), got ") + got);
+    }
+    return t;
+  }
+
+  // `what` at x is not finite (its entry `entry` is `value`): a ValueError
+  // naming x's largest entry.
+  [[noreturn]] void not_finite(const char* what, const std::string& entry, double value,
+                                const Eigen::VectorXd& x) const {
+    Eigen::Index k = 0;
+    x.cwiseAbs().maxCoeff(&k);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " = %g; its largest entry is %s = %g", value, name(static_cast<int>(k)).c_str(),
+                  x[k]);
+    throw std::invalid_argument(std::string("x: ") + what + " is not finite at this state (" + entry + buf +
+                                "): the state is beyond what the plant's arithmetic holds");
+  }
+
   Eigen::VectorXd state_arg(const py::handle& x_in) const {
     if (!discrete_.empty()) {
       throw std::invalid_argument(scene_.file + ": rhs(t, x) and jacobian(t, x) are the continuous right-hand side "
@@ -249,6 +485,12 @@ class PyScene {
     if (x.size() != plant_->size()) {
       throw std::invalid_argument("x: expected " + std::to_string(plant_->size()) + " values (the scene's state), got " +
                                   std::to_string(x.size()));
+    }
+    for (int i = 0; i < x.size(); ++i) {
+      if (!std::isfinite(x[i])) {
+        throw std::invalid_argument(std::string("x: expected finite numbers, got ") +
+                                    (std::isnan(x[i]) ? "nan" : x[i] > 0 ? "inf" : "-inf") + " for " + name(i));
+      }
     }
     return x;
   }
@@ -375,15 +617,19 @@ struct PyRun {
 };
 
 PyRun run(const py::object& scene_in, const RunRequest& request, const py::object& out, bool force) {
-  Scene sc = py::isinstance<PyScene>(scene_in) ? scene_in.cast<const PyScene&>().scene()
-                                               : load_checked_scene(path_arg(scene_in), {});
+  std::optional<std::filesystem::path> dir;
+  if (!out.is_none()) dir = path_arg(out, "out");
+  const bool is_scene = py::isinstance<PyScene>(scene_in);
+  if (!is_scene && !(py::isinstance<py::str>(scene_in) || py::isinstance<py::bytes>(scene_in) ||
+                     py::hasattr(scene_in, "__fspath__"))) {
+    wrong_type("scene", "a pumasim.Scene or a scene file's path", scene_in);
+  }
+  Scene sc = is_scene ? scene_in.cast<const PyScene&>().scene() : load_checked_scene(path_arg(scene_in, "scene"), {});
   const RunControls rc = run_controls(sc, request);
   // What `pumasim run` says on stderr before it starts, as Python warnings.
   for (const std::string& w : run_start_warnings(sc, rc)) {
     if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
   }
-  std::optional<std::filesystem::path> dir;
-  if (!out.is_none()) dir = path_arg(out);
   CompletedRun done;
   RunInterrupts interrupts;
   ProgressHook hook;
@@ -462,10 +708,10 @@ void bind_scene(py::module_& m) {
                       "events.")
       .def_static(
           "load",
-          [](const py::object& path, const py::object& overrides, const std::vector<std::string>& unset) {
-            return std::make_unique<PyScene>(path_arg(path), override_args(overrides), unset);
+          [](const py::object& path, const py::object& overrides, const py::object& unset) {
+            return std::make_unique<PyScene>(path_arg(path, "path"), override_args(overrides), unset_args(unset));
           },
-          py::arg("path"), py::arg("overrides") = py::none(), py::arg("unset") = std::vector<std::string>{},
+          py::arg("path"), py::arg("overrides") = py::none(), py::arg("unset") = py::none(),
           "Loads a scene file. overrides: {\"section.key\": value} (bool, number, str, list), or a list of\n"
           "\"section.key=value\" strings in TOML syntax, as the command line's --set; unset: [\"section.key\"],\n"
           "keys removed from the file first, as --unset.")
@@ -525,24 +771,23 @@ void bind_run(py::module_& m) {
 
   m.def(
       "run",
-      [](const py::object& scene, const std::optional<std::string>& integrator, std::optional<double> rtol,
-         std::optional<double> atol, std::optional<double> dt, std::optional<double> t_end, const py::object& out,
-         bool force, const std::optional<std::string>& backend, const std::optional<std::string>& jacobian,
-         std::optional<double> max_steps,
-         std::optional<double> max_wall, bool late_events, bool stop_at_outputs) {
-        RunRequest r;
-        r.integrator = integrator;
-        r.backend = backend;
-        r.rtol = rtol;
-        r.atol = atol;
-        r.dt = dt;
-        r.t_end = t_end;
-        r.max_steps = max_steps;
-        r.max_wall = max_wall;
-        r.jacobian = jacobian;
-        r.late_events = late_events;
-        r.stop_at_outputs = stop_at_outputs;
-        return run(scene, r, out, force);
+      [](const py::object& scene, const py::object& integrator, const py::object& rtol, const py::object& atol,
+         const py::object& dt, const py::object& t_end, const py::object& out, const py::object& force,
+         const py::object& backend, const py::object& jacobian, const py::object& max_steps,
+         const py::object& max_wall, const py::object& late_events, const py::object& stop_at_outputs) {
+        RunRequest r;  // each option's range is checked with the command line's (run_controls)
+        r.integrator = optional_text(integrator, "integrator");
+        r.backend = optional_text(backend, "backend");
+        r.rtol = optional_number(rtol, "rtol");
+        r.atol = optional_number(atol, "atol");
+        r.dt = optional_number(dt, "dt");
+        r.t_end = optional_number(t_end, "t_end");
+        r.max_steps = optional_number(max_steps, "max_steps");
+        r.max_wall = optional_number(max_wall, "max_wall");
+        r.jacobian = optional_text(jacobian, "jacobian");
+        r.late_events = flag_arg(late_events, "late_events");
+        r.stop_at_outputs = flag_arg(stop_at_outputs, "stop_at_outputs");
+        return run(scene, r, out, flag_arg(force, "force"));
       },
       py::arg("scene"), py::kw_only(), py::arg("integrator") = py::none(), py::arg("rtol") = py::none(),
       py::arg("atol") = py::none(), py::arg("dt") = py::none(), py::arg("t_end") = py::none(),
@@ -565,7 +810,7 @@ PYBIND11_MODULE(pumasim, m) {
       "pumasim: the PUMA 560 as one stiff state-space ODE (README.md, \"Use it as a library\").\n\n"
       "backends(), integrators(): the registries' names; dynamics(...): H, h, g, and tau or qdd;\n"
       "Scene.load(path, overrides): a scene's plant as f(t, x) and its Jacobian; run(scene, ...): `pumasim run`.\n"
-      "Bad input raises ValueError with the command line's message.";
+      "Bad input raises ValueError with the command line's message, a wrong type TypeError naming the argument.";
   m.attr("__version__") = PUMASIM_VERSION;
 
   // The library's input errors: ValueError, as std::invalid_argument already is.

@@ -19,6 +19,7 @@ PACKAGES=(
   strace                               # tests/test_input_files.py: every file a run opens is hashed
   pybind11-dev python3-pybind11 python3-dev  # the Python module `import pumasim` (python/)
   python3-numpy python3-scipy          # its arrays, and its tests against scipy's solve_ivp
+  python3-hypothesis                   # its property-based test with hostile arguments (tests/test_python_hostile.py)
 )
 
 missing=()

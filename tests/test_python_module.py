@@ -295,6 +295,11 @@ def test_bad_dynamics_input_is_a_value_error():
     with pytest.raises(ValueError) as e:
         pumasim.dynamics(robot="no_such_robot", q="qz")
     assert str(e.value) == cli_error("dynamics", "--robot", "no_such_robot", "--backend", "crba", "--q=qz")
+    # a result that overflows (finite arguments of absurd size): refused by both, not printed as null
+    with pytest.raises(ValueError, match=r"^bias h\(q, qd\) is not finite") as e:
+        pumasim.dynamics(q="qz", qd=[1e200] * 6)
+    assert str(e.value) == cli_error("dynamics", "--robot", "puma560", "--backend", "crba", "--q=qz",
+                                     "--qd=" + ",".join(["1e200"] * 6))
 
 
 def test_bad_state_and_run_options_are_value_errors(tmp_path):

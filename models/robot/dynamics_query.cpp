@@ -21,6 +21,21 @@ void check_size(const Eigen::VectorXd& v, int n, const char* what) {
   }
 }
 
+// A result that overflowed (finite arguments of absurd size: qd = 1e200 makes
+// h = inf) is refused, naming the arguments it came from: JSON cannot hold
+// it (`pumasim dynamics` printed null), and a caller would take it as a value.
+void check_finite(const Eigen::MatrixXd& v, const char* what) {
+  for (Eigen::Index j = 0; j < v.cols(); ++j) {
+    for (Eigen::Index i = 0; i < v.rows(); ++i) {
+      if (!std::isfinite(v(i, j))) {
+        const char* value = std::isnan(v(i, j)) ? "nan" : v(i, j) > 0 ? "inf" : "-inf";
+        throw std::invalid_argument(std::string(what) + " is not finite (" + value + " for joint " +
+                                    std::to_string(i + 1) + "): the arguments are beyond what a double holds there");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 RobotDynamics robot_dynamics(const std::string& robot, const std::string& backend, bool rotor_inertia) {
@@ -63,6 +78,11 @@ DynamicsValues evaluate_dynamics(DynamicsBackend& backend, const Eigen::VectorXd
     v.qdd.emplace(n);
     backend.forward_dynamics(q, qd, *tau, *v.qdd);
   }
+  check_finite(v.mass_matrix, "mass_matrix H(q)");
+  check_finite(v.bias, "bias h(q, qd)");
+  check_finite(v.gravity, "gravity g(q)");
+  if (v.tau) check_finite(*v.tau, "tau = ID(q, qd, qdd)");
+  if (v.qdd) check_finite(*v.qdd, "qdd = FD(q, qd, tau)");
   return v;
 }
 

@@ -40,7 +40,9 @@ struct DynamicsValues {
 };
 
 // Every vector has one entry per joint of the back-end's robot, or
-// std::invalid_argument ("qd: expected 6 values (one per joint), got 3").
+// std::invalid_argument ("qd: expected 6 values (one per joint), got 3");
+// so is a result that is not finite (finite arguments too large: "bias
+// h(q, qd) is not finite (inf for joint 1): ...").
 DynamicsValues evaluate_dynamics(DynamicsBackend& backend, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                  const std::optional<Eigen::VectorXd>& qdd, const std::optional<Eigen::VectorXd>& tau);
 
