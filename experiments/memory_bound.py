@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """The memory a `pumasim run` takes does not grow with its output (README,
-"Reliability: bounds"): the six-joint hybrid scene over 2 s at a 1e-5 s output
-interval (200001 rows) run under an address-space limit (RLIMIT_AS, what
-`ulimit -v` sets) of 128 MiB, with its peak resident memory and the size of
+"Reliability: bounds"): the six-joint hybrid scene over 1 s at a 1e-5 s output
+interval (100001 rows) run under an address-space limit (RLIMIT_AS, what
+`ulimit -v` sets) of 64 MiB, with its peak resident memory and the size of
 the trajectory it wrote. The test tests/check_memory_bound.sh asserts the same
 run under the same limit; this records the figures.
 
@@ -19,7 +19,7 @@ import tempfile
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 SCENE = "experiments/scenes/paper_slow_6dof_hybrid.toml"
-LIMIT_MIB = 128
+LIMIT_MIB = 64
 
 
 def main():
@@ -30,7 +30,7 @@ def main():
     work = tempfile.mkdtemp(prefix="pumasim_memory_")
     try:
         out = os.path.join(work, "run")
-        args = [a.bin, "run", os.path.join(ROOT, SCENE), "--t-end", "2", "--set", "scene.output_interval=1e-5",
+        args = [a.bin, "run", os.path.join(ROOT, SCENE), "--t-end", "1", "--set", "scene.output_interval=1e-5",
                 "--out", out, "--quiet"]
 
         def limit():
@@ -47,7 +47,7 @@ def main():
         summary = {
             "command": "experiments/memory_bound.py",
             "scene": SCENE,
-            "arguments": "--t-end 2 --set scene.output_interval=1e-5",
+            "arguments": "--t-end 1 --set scene.output_interval=1e-5",
             "address_space_limit_mib": LIMIT_MIB,
             "rows": rows,
             "columns": header.count(",") + 1,

@@ -86,7 +86,7 @@ stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
 stage_extreme() {
   # extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
   /usr/bin/python3 tests/check_extreme_runs.py "$PUMASIM" --jobs "$jobs" --out results/reliability > /dev/null
-  # a long run's memory under a 128 MiB address-space limit (README, "Reliability: bounds")
+  # a long run's memory under a 64 MiB address-space limit (README, "Reliability: bounds")
   /usr/bin/python3 experiments/memory_bound.py --bin "$PUMASIM" --out results/reliability/memory_bound.json > /dev/null
 }
 stage_rosenbrock() {
