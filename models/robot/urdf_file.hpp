@@ -29,13 +29,62 @@
 // rotor inertia and gear ratio (default: none and 1, a direct drive) and an
 // inconsistent_inertia excuse; gravity in the root link's frame (default
 // [0, 0, -9.81], z up as in ROS); the flange link; named poses.
+//
+// Before urdfdom (and TinyXML 2.6.2, the XML parser it is built with on
+// Debian 12) sees the text, one linear pass over it refuses, naming the file
+// and the line, what those parsers were found to mishandle (issue 32): a file
+// above the limits below (50,000 nested elements crashed TinyXML's recursive
+// parser, 30,000 took 23 s; one element with 100,000 attributes took 141 s, its
+// duplicate check being quadratic; a chain of 300,000 fixed joints crashed
+// urdfdom), a NUL byte (TinyXML would stop reading there), a control character,
+// a byte sequence that is not UTF-8 (TinyXML steps over a multi-byte
+// character by the length its first byte gives: past the end of the text
+// when the character is truncated there), a byte order mark past the start
+// (TinyXML's whitespace), and markup it reads differently from XML or that
+// the pass cannot count exactly: an unclosed comment, CDATA section,
+// processing instruction, tag or attribute value (TinyXML steps over the
+// missing end tag's length past the end of the text), a '>' inside a
+// processing instruction's quoted value, a <!DOCTYPE with an internal subset
+// or another <!, an unquoted attribute value, a '<' not starting a tag,
+// mismatched tags, a '&' that is not one of XML's five entities or a
+// character reference (TinyXML searches the rest of the file for each "&#"'s
+// ';': quadratic), and a loop of links through the joints (urdfdom links them
+// by shared pointers and leaks the loop when it refuses the file).
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include "models/dynamics/robot_model.hpp"
 
 namespace pumasim {
+
+// The pre-scan's limits. Each is far above what a robot description has:
+// Universal Robots' ur3 ... ur20.urdf and a Franka Panda robot.urdf (their
+// ROS description packages) are 14-31 KB, 200-608 elements, 5 levels deep
+// (robot > link > visual > geometry > mesh), with at most 6 attributes on an
+// element (<inertia ixx ... izz>) and 18-40 <joint> elements; published
+// descriptions run to about 100 KB.
+//
+// 4 MiB: 40 times that, a quarter of the generic input cap (kMaxInputBytes,
+// 16 MiB). The costliest of the 4 MiB files tried within the other limits,
+// 60,000 elements of 13 short attributes each, takes urdfdom 0.3 s and
+// 120 MB (Debian 12's urdfdom 3.0.1 and TinyXML 2.6.2, without sanitizers).
+inline constexpr std::size_t kMaxUrdfBytes = std::size_t{4} << 20;
+// 64 levels, the root element being level 1: TinyXML parses each level with
+// a recursive call, and a level costs time that grows with the depth.
+inline constexpr int kMaxUrdfDepth = 64;
+// 64 attributes on one element: TinyXML checks each new attribute against
+// the element's others, a cost quadratic in their number.
+inline constexpr int kMaxUrdfAttributes = 64;
+// 65,536 elements in all (100 times the Panda file's): bounds the
+// parsed document's memory and urdfdom's work whatever the file's size.
+inline constexpr std::size_t kMaxUrdfElements = std::size_t{1} << 16;
+// 1,024 <joint> elements, wherever they are (a <transmission> names its joint
+// in one too): four per moving joint at the most pumasim simulates (256,
+// checked after parsing), room for fixed sensor and tool frames; a chain of
+// fixed joints is at most that long for urdfdom's tree of links.
+inline constexpr std::size_t kMaxUrdfJointElements = 1024;
 
 // True for a path ending in ".urdf".
 bool is_urdf_path(const std::string& path);
