@@ -2,12 +2,14 @@
 # Fuzzes the parsers of user input with libFuzzer (tests/fuzz/, README.md "Sanitizers and fuzzing"):
 # builds the preset asan (clang, AddressSanitizer + UndefinedBehaviorSanitizer),
 # writes the seed corpora from every shipped file (scripts/fuzz_seeds.py), then runs
-# each harness -- robot, scene, set -- for a time or a number of inputs, up to one
-# harness per core at a time. A crash, a sanitizer report, an exception other than
-# ConfigError, a hang (an input over 10 s) or an input over 2 GB fails the run;
+# each harness -- robot, scene, set, urdf, joint_csv, open_loop_csv -- for a time or
+# a number of inputs, up to one harness per core at a time. A crash, a sanitizer
+# report, an exception other than ConfigError, a hang (an input over 10 s) or an
+# input over 2 GB fails the run;
 # libFuzzer writes the input to build/asan/fuzz/artifacts/<harness>/.
 #
-#   scripts/fuzz.sh --smoke                 CI: 30 s per harness
+#   scripts/fuzz.sh --smoke                 CI: 20 s per harness (six harnesses, about a
+#                                           minute on 2 cores, as three at 30 s took)
 #   scripts/fuzz.sh --time 3600             a long run, an hour per harness
 #   scripts/fuzz.sh --runs 1000000 robot    one million inputs, the robot harness only
 #   --record                                also write the summary to results/fuzz/long_run.json
@@ -24,17 +26,18 @@ record=0
 command="scripts/fuzz.sh $*"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --smoke) limit=(-max_total_time=30) ;;
+    --smoke) limit=(-max_total_time=20) ;;
     --time) limit=(-max_total_time="$2"); shift ;;
     --runs) limit=(-runs="$2"); shift ;;
     --record) record=1 ;;
-    robot|scene|set) harnesses+=("$1") ;;
-    *) echo "fuzz.sh: unknown argument '$1'; expected --smoke, --time SECONDS, --runs N, robot, scene, set" >&2
+    robot|scene|set|urdf|joint_csv|open_loop_csv) harnesses+=("$1") ;;
+    *) echo "fuzz.sh: unknown argument '$1'; expected --smoke, --time SECONDS, --runs N," \
+            "robot, scene, set, urdf, joint_csv, open_loop_csv" >&2
        exit 2 ;;
   esac
   shift
 done
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(robot scene set)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(robot scene set urdf joint_csv open_loop_csv)
 
 cmake --preset asan >/dev/null
 cmake --build --preset asan -j "$(nproc)" --target "${harnesses[@]/#/fuzz_}"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's test command: install what is missing, build, run every test;
-# then the sanitizer build (preset asan) and its tests, and a 30-second fuzz
+# then the sanitizer build (preset asan) and its tests, and a 20-second fuzz
 # run of each parser (scripts/fuzz.sh --smoke). Each phase's wall time goes to stderr.
 set -euo pipefail
 cd "$(dirname "$0")/.."
