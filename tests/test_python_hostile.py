@@ -351,6 +351,10 @@ FOUND = [  # (call, the exception, a fragment of its message); each failed as de
     # TypeError "expected str, bytes or os.PathLike object, not int"
     (lambda: pumasim.run(PASSIVE, out=5), TypeError, "out: expected a path"),
     (lambda: pumasim.run(5), TypeError, "scene: expected a pumasim.Scene or a scene file's path"),
+    # "controller.servo_period: 0.001 s over 21 s is 21000 stops, more than the step budget": not
+    # saying that the 21 s came from t_end
+    (lambda: pumasim.run(pumasim.Scene.load(SAMPLED, {"controller.mode": "sampled", "controller.servo_period": 1e-3}),
+                         t_end=21, max_steps=20_000), ValueError, "over 21 s (the run's end time (t_end))"),
 ]
 
 

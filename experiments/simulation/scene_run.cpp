@@ -12,22 +12,24 @@
 namespace pumasim {
 namespace {
 
-// A period whose stops alone exceed the step budget is refused.
-void check_stops(const char* key, double period, double duration, long max_steps) {
+// A period whose stops alone exceed the step budget is refused, naming where
+// the duration came from (the scene, --t-end, the reference).
+void check_stops(const char* key, double period, const Scene& sc, long max_steps) {
+  const double duration = sc.duration;
   if (!(period > 0)) return;
   // A period that the run's last time does not move (t + period == t) would
   // stop the event loop in place: refused whatever the budget (0: none).
   if (!(duration + period > duration)) {
     std::ostringstream m;
     m << key << ": expected a period that advances the time near the run's end, " << duration
-      << " s (at least " << duration * 4e-16 << " s), got " << period << " s";
+      << " s (" << sc.duration_source << "; at least " << duration * 4e-16 << " s), got " << period << " s";
     throw std::invalid_argument(m.str());
   }
   if (max_steps <= 0) return;
   const double stops = duration / period;
   if (stops > static_cast<double>(max_steps)) {
     std::ostringstream m;
-    m << key << ": " << period << " s over " << duration << " s is " << stops
+    m << key << ": " << period << " s over " << duration << " s (" << sc.duration_source << ") is " << stops
       << " stops, more than the step budget of " << max_steps
       << " steps (--max-steps N raises it; a longer period or a shorter duration)";
     throw std::invalid_argument(m.str());
@@ -47,9 +49,9 @@ void check_run_size(const Scene& sc, long max_steps) {
     throw std::invalid_argument(m.str());
   }
   if (sc.plant.controller == ControllerMode::kSampled) {
-    check_stops("controller.servo_period", sc.plant.servo_period, sc.duration, max_steps);
+    check_stops("controller.servo_period", sc.plant.servo_period, sc, max_steps);
   }
-  check_stops("controller.setpoint_interval", sc.plant.setpoint_interval, sc.duration, max_steps);
+  check_stops("controller.setpoint_interval", sc.plant.setpoint_interval, sc, max_steps);
 }
 
 void check_output_size(const Scene& sc, const Plant& plant) {
