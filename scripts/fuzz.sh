@@ -13,7 +13,9 @@
 #   scripts/fuzz.sh --time 3600             a long run, an hour per harness
 #   scripts/fuzz.sh --runs 1000000 robot    one million inputs, the robot harness only
 #   --record                                also write the summary to results/fuzz/long_run.json
-#                                           (the run the README quotes)
+#                                           (the run the README quotes): the harnesses run
+#                                           replace their entries, the others' stay, each
+#                                           entry with its own command, date and revision
 #
 # The corpus each run grows is kept in build/asan/fuzz/corpus/<harness>/ (a later
 # run starts from it); each harness's log is build/asan/fuzz/<harness>.log.
@@ -24,6 +26,10 @@ limit=(-max_total_time=600)
 harnesses=()
 record=0
 command="scripts/fuzz.sh $*"
+# The revision the harnesses are built from (taken now: commits may land while they run),
+# marked when the work tree differs from it.
+revision=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ]; then revision+=" with uncommitted changes"; fi
 while [ $# -gt 0 ]; do
   case "$1" in
     --smoke) limit=(-max_total_time=20) ;;
@@ -80,12 +86,34 @@ joined=""
 sep=$',\n    '
 for e in "${entries[@]}"; do joined+="${joined:+$sep}$e"; done
 summary=$(printf '{\n  "command": "%s",\n  "date": "%s",\n  "revision": "%s",\n  "compiler": "%s",\n  "limit": "%s",\n  "harnesses": {\n    %s\n  }\n}' \
-  "$command" "$(date -u +%Y-%m-%dT%H:%M:%SZ)" "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" \
+  "$command" "$(date -u +%Y-%m-%dT%H:%M:%SZ)" "$revision" \
   "$(clang++ --version | head -1)" "${limit[*]}" "$joined")
 echo "$summary" >"$out/summary.json"
 if [ "$record" -eq 1 ]; then
   mkdir -p results/fuzz
-  echo "$summary" >results/fuzz/long_run.json
-  echo "fuzz: summary written to results/fuzz/long_run.json"
+  # Merged: this run's harnesses replace their entries, the others' stay; each
+  # entry carries the command, date, revision, compiler and limit of its run.
+  /usr/bin/python3 - "$out/summary.json" results/fuzz/long_run.json <<'EOF'
+import json, os, sys
+run_file, record_file = sys.argv[1:]
+with open(run_file) as f:
+    run = json.load(f)
+old = {}
+if os.path.exists(record_file):
+    with open(record_file) as f:
+        old = json.load(f)
+keys = ("command", "date", "revision", "compiler", "limit")
+entries = {}
+for source in (old, run):  # an older file's entries take its top-level fields
+    for name, entry in source.get("harnesses", {}).items():
+        entries[name] = {**entry, **{k: source[k] for k in keys if k in source and k not in entry}}
+lines = ",\n".join(f"    {json.dumps(name)}: {json.dumps(entry)}" for name, entry in entries.items())
+tmp = record_file + ".tmp"
+with open(tmp, "w") as f:
+    f.write('{\n  "note": "one entry per harness, each from its own run of scripts/fuzz.sh --record",\n'
+            '  "harnesses": {\n' + lines + "\n  }\n}\n")
+os.replace(tmp, record_file)
+EOF
+  echo "fuzz: summary of ${harnesses[*]} written to results/fuzz/long_run.json"
 fi
 exit $failed

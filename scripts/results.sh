@@ -2,7 +2,7 @@
 # Regenerates the committed results under results/ (the only script that
 # writes there; the README's main command, scripts/run.sh, writes runs/).
 #
-#   scripts/results.sh [--jobs N] [STAGE ...]     (default: every stage, in this order)
+#   scripts/results.sh [--jobs N] [STAGE ...]     (default: every stage but fuzz, in this order)
 #
 # Stages:
 #   sweeps      every sweep in experiments/sweeps/ (work-precision on the paper's
@@ -24,11 +24,11 @@
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
-#               results/fuzz/long_run.json). Hours on 2 cores, hence not in the default run;
-#               FUZZ_HARNESSES="urdf joint_csv" runs only those (their entries replaced,
-#               the others' kept).
+#               results/fuzz/long_run.json). About half an hour for the six harnesses on
+#               2 cores, hence not in the default run; FUZZ_HARNESSES="urdf joint_csv"
+#               runs only those (their entries replaced, the others' kept).
 #
-# Every figure comes from the portable build (preset portable: the x86-64
+# Every figure but the fuzz stage's comes from the portable build (preset portable: the x86-64
 # baseline, no -march=native), so that results/ does not depend on this
 # machine's instruction set; each run's meta.json and the benchmark's table
 # record the flags and the CPU. (The native release build is built too: the
@@ -41,13 +41,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper bench report)
+named_only=(fuzz)
 stages=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --jobs) jobs=$2; shift 2 ;;
     *)
-      if [[ " ${all[*]} " != *" $1 "* ]]; then
-        echo "results.sh: unknown stage '$1' (expected --jobs N or one of: ${all[*]})" >&2
+      if [[ " ${all[*]} ${named_only[*]} " != *" $1 "* ]]; then
+        echo "results.sh: unknown stage '$1' (expected --jobs N or one of: ${all[*]} ${named_only[*]})" >&2
         exit 2
       fi
       stages+=("$1"); shift ;;
@@ -55,6 +56,11 @@ while [ $# -gt 0 ]; do
 done
 full=0
 if [ ${#stages[@]} -eq 0 ]; then stages=("${all[@]}"); full=1; fi
+if [ "${stages[*]}" = fuzz ]; then
+  # The fuzz stage alone needs neither release build: scripts/fuzz.sh builds build/asan.
+  # shellcheck disable=SC2086
+  exec scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}
+fi
 scripts/build.sh > /dev/null   # the dependencies, and the native build (buildspread)
 cmake --preset portable > /dev/null
 cmake --build --preset portable -j "$(nproc)" > /dev/null
@@ -101,6 +107,8 @@ stage_buildspread() {
 }
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
 stage_bench() { scripts/bench_dynamics.sh --out results; }
+# shellcheck disable=SC2086
+stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
 stage_report() {
   if [ $full -eq 1 ]; then
     /usr/bin/python3 experiments/report.py --minutes $(( ($(date +%s) - start + 30) / 60 ))
