@@ -290,6 +290,10 @@ TEST(JointCsv, BadFilesAreRefusedNamingFileLineAndColumn) {
       {"huge_value", head + "1.0,1e308,0.2,0.3\n", ":3: ", "slope or curvature overflows"},
       {"tiny_step", head + "1e-300,0.2,0.2,0.3\n", ":3: ", "at least 1e-06 s after the previous row's"},
       {"denormal_step", head + "5e-324,0.2,0.2,0.3\n", ":3: ", "at least 1e-06 s after"},
+      // Found by fuzz_joint_csv: splines not finite through rows the checks above passed.
+      {"jump_of_1e307", head + "1.2e27,1e307,0.2,0.3\n", ":3: ", "slope or curvature overflows"},
+      {"jump_in_a_microsecond", head + "1e-6,1e290,0.2,0.3\n1,0,0,0\n", ":3: ", "slope or curvature overflows"},
+      {"step_of_1e110_s", head + "1e110,1,0.2,0.3\n2e110,0,0,0\n", ":3: ", "at most 1e+75 s after"},
   };
   for (const Case& c : cases) {
     const std::string path = write_temp("pumasim_csv_" + c.name + ".csv", c.body);

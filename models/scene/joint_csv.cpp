@@ -51,11 +51,12 @@ std::vector<double> parse_row(const std::vector<std::string>& fields, const std:
 }
 
 // Why the curve through rows a then b (t, then the values) cannot be finite,
-// or "": a time step below kMinRowStep, or a value jump whose slope or
-// curvature scale (dq/dt, dq/dt^2) overflows within a factor of 1e3: the
-// spline's coefficients are sums of a few such terms from neighbouring
-// segments with small integer weights (a quintic's reach 10 dq/dt^2), so a
-// point of 1e308 rad, finite itself, gave an infinite curve.
+// or "": a time step below kMinRowStep or above kMaxRowStep, or a value jump
+// dq whose scales dq/dt^e, e = 0 ... 4, overflow within a factor of 1e3: the
+// splines' coefficients and knot equations are sums of a few such terms from
+// neighbouring segments with integer weights (the quintic's knot equations
+// reach 360 dq/dt^4), so a point of 1e308 rad, finite itself, gave an
+// infinite curve, and so did a jump of 1e290 rad in 1e-6 s (fuzz_joint_csv).
 std::string step_problem(const std::vector<double>& a, const std::vector<double>& b, std::string_view column) {
   const double dt = b[0] - a[0];
   if (!(dt >= kMinRowStep)) {
@@ -64,9 +65,18 @@ std::string step_problem(const std::vector<double>& a, const std::vector<double>
                   kMinRowStep, a[0], b[0]);
     return buf;
   }
+  if (!(dt <= kMaxRowStep)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "expected a time at most %g s after the previous row's %.17g s, got %.17g s "
+                  "(the curve's terms in the step's fourth power overflow)", kMaxRowStep, a[0], b[0]);
+    return buf;
+  }
   for (std::size_t c = 1; c < a.size() && c < b.size(); ++c) {
     const double dq = b[c] - a[c];
-    if (!std::isfinite(dq) || !std::isfinite(1e3 * (dq / dt)) || !std::isfinite(1e3 * (dq / dt / dt))) {
+    bool finite = std::isfinite(dq);
+    double scale = dq;  // dq / dt^e
+    for (int e = 0; finite && e <= 4; ++e, scale /= dt) finite = std::isfinite(1e3 * scale);
+    if (!finite) {
       char buf[200];
       std::snprintf(buf, sizeof buf, "expected values whose curve is finite, got %s%zu going from %.6g to %.6g in "
                     "%.6g s (its slope or curvature overflows)", std::string(column).c_str(), c, a[c], b[c], dt);

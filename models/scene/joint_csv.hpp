@@ -2,8 +2,9 @@
 // reference.joints): a header line naming the columns, then one row per
 // point "t, q1, ..., qn" (t [s], angles [rad] of the scene's n simulated
 // joints), comma-separated; blank lines are skipped. The first t is 0, the
-// times increase by at least kMinRowStep, every value is a finite number
-// whose curve stays finite (no jump whose slope or curvature overflows), and
+// times increase by at least kMinRowStep and at most kMaxRowStep, every
+// value is a finite number whose curve stays finite (no jump whose slope or
+// curvature overflows), and
 // there are at least two rows. Anything else is a ConfigError naming the file, the line
 // and, for a value, the column (1-based, with its header name). The same
 // format holds an open-loop input's rows "t, u1, ..., un" (controller.file;
@@ -20,6 +21,11 @@ namespace pumasim {
 // period; closer rows (1e-300 s apart) made the curve's coefficients overflow
 // or an integrator's stop time fall below its resolution.
 inline constexpr double kMinRowStep = 1e-6;
+// The longest time between two rows [s]: 1e75 s, far past any reference; the
+// quintic spline's knot equations hold terms in the step's fourth power and
+// its inverse, and the fourth power overflows past about 1.2e77 s (rows
+// 1e110 s apart made the spline not finite; fuzz_joint_csv).
+inline constexpr double kMaxRowStep = 1e75;
 
 // Each row: t, then n angles.
 std::vector<std::vector<double>> read_joint_csv(const std::string& path, int n, std::string_view column = "q");
