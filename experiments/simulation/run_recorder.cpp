@@ -63,6 +63,7 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
       sums_(std::make_unique<Sums>()) {
   const std::size_t width = static_cast<std::size_t>(m_ + 1);
   saved_.reserve(keep_rows ? (expected_rows + 1) * width : kChunkValues + width);
+  if (keep_rows && cfg_.reference) path_error_.reserve(expected_rows + 1), path_deviation_.reserve(expected_rows + 1);
   if (drive_) signals_.reserve((kChunkValues / static_cast<std::size_t>(m_ + 1) + 1) * 3 * static_cast<std::size_t>(n_));
   csv_->on = text_ != nullptr;
   if (text_) *text_ << header(plant_);
@@ -118,9 +119,6 @@ void RunRecorder::format_pending() {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t width = static_cast<std::size_t>(m_ + 1);
   const std::size_t rows = saved_.size() / width;
-  if (cfg_.reference && keep_rows_) {
-    path_error_.reserve(rows), path_deviation_.reserve(rows);
-  }
   csv_->text.clear();
   for (std::size_t row = formatted_; row < rows; ++row) {
     ++fig_.rows;
