@@ -19,30 +19,23 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
+#include "tests/cli_capture.hpp"
 #include "experiments/simulation/driver.hpp"
 #include "experiments/simulation/run_documents.hpp"
 
 namespace pumasim {
 namespace {
 
+using testing::cli;
+using testing::CliResult;
+
 namespace fs = std::filesystem;
-
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result cli(const std::vector<std::string>& args) {
-  std::ostringstream out, err;
-  const int status = run_cli(args, out, err);
-  return {status, out.str(), err.str()};
-}
 
 const std::string kScene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
 
 // Status 2, nothing on stdout, one line on stderr holding every fragment.
 void expect_bad(const std::vector<std::string>& args, const std::vector<std::string>& fragments) {
-  const Result r = cli(args);
+  const CliResult r = cli(args);
   EXPECT_EQ(r.status, kExitBadInput) << r.err;
   EXPECT_TRUE(r.out.empty()) << r.out;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
@@ -111,7 +104,7 @@ TEST(CliParsing, NegativeNumbersAreValuesWithOrWithoutEquals) {
                                             std::vector<std::string>{"--q=-0.1,0.2,-0.3,0,0,0"}}) {
     std::vector<std::string> args{"dynamics", "--robot", "puma560", "--backend", "crba", "--tau", "-1,-2,-3,0,0,0"};
     args.insert(args.end(), q.begin(), q.end());
-    const Result r = cli(args);
+    const CliResult r = cli(args);
     ASSERT_EQ(r.status, kExitOk) << r.err;
     EXPECT_NE(r.out.find("\"q\": [\n    -0.1,"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\"tau_in\": [\n    -1.0,"), std::string::npos) << r.out;
@@ -119,7 +112,7 @@ TEST(CliParsing, NegativeNumbersAreValuesWithOrWithoutEquals) {
 }
 
 TEST(CliParsing, EveryRepeatedSetApplies) {
-  const Result r = cli({"check", kScene, "--set", "motor.inductance=1e-5", "--set=scene.output_interval=0.02"});
+  const CliResult r = cli({"check", kScene, "--set", "motor.inductance=1e-5", "--set=scene.output_interval=0.02"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   EXPECT_NE(r.out.find("inductance = [ 1.0000000000000001e-05,"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("output_interval = 0.02"), std::string::npos) << r.out;
@@ -128,7 +121,7 @@ TEST(CliParsing, EveryRepeatedSetApplies) {
 TEST(CliParsing, TheHelpListsEveryCommandOnStdout) {
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"help"}, std::vector<std::string>{"--help"}, std::vector<std::string>{"-h"}}) {
-    const Result r = cli(args);
+    const CliResult r = cli(args);
     EXPECT_EQ(r.status, kExitOk) << r.err;
     EXPECT_TRUE(r.err.empty()) << r.err;
     for (const char* c : {"dynamics", "check", "run", "stiffness", "conditioning", "integrators", "backends", "help"}) {
@@ -140,7 +133,7 @@ TEST(CliParsing, TheHelpListsEveryCommandOnStdout) {
 TEST(CliParsing, ACommandsHelpListsItsOptions) {
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"help", "run"}, std::vector<std::string>{"run", "--help"}}) {
-    const Result r = cli(args);
+    const CliResult r = cli(args);
     EXPECT_EQ(r.status, kExitOk) << r.err;
     for (const char* o : {"--integrator", "--backend", "--rtol", "--atol", "--dt", "--t-end", "--out", "--force",
                           "--jacobian", "--max-steps", "--max-wall", "--late-events", "--stop-at-outputs",
@@ -154,13 +147,13 @@ TEST(CliParsing, ACommandsHelpListsItsOptions) {
 // --unset removes keys of the scene file before --set and the checks: the
 // scene switches its friction law from the command line.
 TEST(CliParsing, UnsetRemovesKeysSoThatASceneSwitchesItsFrictionLaw) {
-  const Result r = cli({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.static_torque",
+  const CliResult r = cli({"check", kScene, "--set", "friction.model=\"viscous\"", "--unset", "friction.static_torque",
                         "--unset", "friction.kinetic_torque", "--unset=friction.zero_speed"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   EXPECT_NE(r.out.find("[friction]\nmodel = 'viscous'\nviscous = [ 0.00148,"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("static_torque"), std::string::npos) << r.out;
   // A table as a whole; then --set puts back what it names.
-  const Result t = cli({"check", kScene, "--unset", "friction", "--set", "friction.model=\"none\""});
+  const CliResult t = cli({"check", kScene, "--unset", "friction", "--set", "friction.model=\"none\""});
   ASSERT_EQ(t.status, kExitOk) << t.err;
   EXPECT_NE(t.out.find("[friction]\nmodel = 'none'\n\n"), std::string::npos) << t.out;
 }
@@ -211,7 +204,7 @@ TEST(CliParsing, UnsetOfAKeyTheSceneDoesNotHaveIsNamed) {
 }
 
 TEST(CliParsing, VersionPrintsTheBuild) {
-  const Result r = cli({"--version"});
+  const CliResult r = cli({"--version"});
   EXPECT_EQ(r.status, kExitOk) << r.err;
   EXPECT_EQ(r.out, version_text() + "\n");
   EXPECT_EQ(r.out.rfind("pumasim ", 0), 0u) << r.out;
@@ -222,12 +215,12 @@ TEST(CliParsing, VersionPrintsTheBuild) {
 // terminal: tests/test_cli_process.py checks it on one).
 TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
   const fs::path d = scratch("stdout");
-  const Result r = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string()});
+  const CliResult r = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string()});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   const auto doc = nlohmann::json::parse(r.out);  // throws on anything but one JSON document
   EXPECT_EQ(doc["scene"], "paper_slow");
   EXPECT_EQ(r.err, "results: " + (d / "run").string() + "/\n");
-  const Result q = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string(), "--force", "--quiet"});
+  const CliResult q = cli({"run", kScene, "--t-end", "0.05", "--out", (d / "run").string(), "--force", "--quiet"});
   ASSERT_EQ(q.status, kExitOk) << q.err;
   EXPECT_EQ(nlohmann::json::parse(q.out)["ok"], true);
   EXPECT_TRUE(q.err.empty()) << q.err;
@@ -240,7 +233,7 @@ TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
 // the budget is diagnosed as chattering instead, tests/test_named_failures.cpp.)
 TEST(CliOutput, AStepBudgetFailureNamesMaxStepsAndTheFastestState) {
   const fs::path d = scratch("budget");
-  const Result r = cli({"run", std::string(PUMASIM_SCENES_DIR) + "/paper_slow_viscous.toml", "--integrator",
+  const CliResult r = cli({"run", std::string(PUMASIM_SCENES_DIR) + "/paper_slow_viscous.toml", "--integrator",
                         "cvode-bdf", "--rtol", "1e-6", "--atol", "1e-9", "--max-steps", "300", "--out",
                         (d / "run").string(), "--quiet"});
   EXPECT_EQ(r.status, kExitInternal) << r.err;
@@ -342,7 +335,7 @@ TEST(CliOutput, TheResolvedSceneOfARunFolderReRunsFromAnyFolder) {
     fs::remove_all(d / "third" / "second");
     {
       InFolder here(d / "elsewhere");
-      const Result r = cli({"run", "../scenes/mine.toml", "--t-end", "0.3", "--out", "first", "--quiet"});
+      const CliResult r = cli({"run", "../scenes/mine.toml", "--t-end", "0.3", "--out", "first", "--quiet"});
       ASSERT_EQ(r.status, kExitOk) << robot << ": " << r.err;
     }
     std::ifstream rs(d / "elsewhere" / "first" / "scene.resolved.toml");
@@ -351,7 +344,7 @@ TEST(CliOutput, TheResolvedSceneOfARunFolderReRunsFromAnyFolder) {
         << robot << ":\n" << resolved;
     {
       InFolder here(d / "third");
-      const Result r = cli({"run", "../elsewhere/first/scene.resolved.toml", "--out", "second", "--quiet"});
+      const CliResult r = cli({"run", "../elsewhere/first/scene.resolved.toml", "--out", "second", "--quiet"});
       ASSERT_EQ(r.status, kExitOk) << robot << ": " << r.err;
     }
     const auto a = lines_of(d / "elsewhere" / "first" / "trajectory.csv");
@@ -359,14 +352,14 @@ TEST(CliOutput, TheResolvedSceneOfARunFolderReRunsFromAnyFolder) {
     EXPECT_EQ(a.size(), 32u) << robot;  // the header, t = 0, 0.01, ..., 0.3
     EXPECT_EQ(a, b) << robot;
   }
-  const Result c = cli({"check", kScene});
+  const CliResult c = cli({"check", kScene});
   EXPECT_NE(c.out.find("robot = 'puma560'"), std::string::npos) << c.out;
   fs::remove_all(d);
 }
 
 TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {
   const fs::path d = scratch("stiffness");
-  const Result r = cli({"stiffness", kScene, "--t-end", "0.01", "--samples", "2", "--csv", (d / "s.csv").string(),
+  const CliResult r = cli({"stiffness", kScene, "--t-end", "0.01", "--samples", "2", "--csv", (d / "s.csv").string(),
                         "--steps-csv", (d / "steps.csv").string()});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   const auto s = lines_of(d / "s.csv");
@@ -391,7 +384,7 @@ TEST(CliOutput, StiffnessWritesCsvFilesWithNamedColumns) {
 
 TEST(CliOutput, ConditioningWritesACsvFileWithNamedColumns) {
   const fs::path d = scratch("conditioning");
-  const Result r = cli({"conditioning", kScene, "--samples", "4", "--csv", (d / "c.csv").string()});
+  const CliResult r = cli({"conditioning", kScene, "--samples", "4", "--csv", (d / "c.csv").string()});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   const auto c = lines_of(d / "c.csv");
   ASSERT_EQ(c.size(), 6u) << "header, then 5 samples";

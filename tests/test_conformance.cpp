@@ -27,11 +27,14 @@
 #include "experiments/simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
+#include "tests/integrator_helpers.hpp"
 #include "integrators/testset/problems.hpp"
 #include "models/scene/scene.hpp"
 
 namespace pumasim {
 namespace {
+
+using testing::integrator_names;
 
 // The test set's Prothero-Robinson problem (integrators/testset/problems.hpp):
 // y0' = lambda (y0 - sin t) + cos t, y1' = y0 - y1, y(0) = 0, with its closed
@@ -346,12 +349,6 @@ TEST_P(PlantConformanceP, ErrorIsProportionalToTheToleranceOnTheSmoothPlant) {
   EXPECT_LE(slope, 1.5) << i.name << " errors " << e_lo << " at rtol 1e-4, " << e_hi << " at 1e-8";
 }
 
-std::vector<std::string> all_names() {
-  std::vector<std::string> v;
-  for (const auto& i : integrators()) v.emplace_back(i.name);
-  return v;
-}
-
 std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
   std::string s = info.param;
   for (char& c : s)
@@ -359,8 +356,8 @@ std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
   return s;
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(all_names()), test_name);
-INSTANTIATE_TEST_SUITE_P(Registry, PlantConformanceP, ::testing::ValuesIn(all_names()), test_name);
+INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(integrator_names()), test_name);
+INSTANTIATE_TEST_SUITE_P(Registry, PlantConformanceP, ::testing::ValuesIn(integrator_names()), test_name);
 
 }  // namespace
 }  // namespace pumasim

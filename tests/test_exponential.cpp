@@ -9,17 +9,14 @@
 #include <gtest/gtest.h>
 
 #include "integrators/registry.hpp"
+#include "tests/integrator_helpers.hpp"
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
 
 namespace pumasim {
 namespace {
 
-IntegratorOptions fixed(double dt) {
-  IntegratorOptions o;
-  o.dt = dt;
-  return o;
-}
+using testing::fixed_step;
 
 // y' = lambda y + c, linear part lambda declared: y(t) = -c/lambda + (y0 + c/lambda) e^{lambda t}.
 class ForcedDecay final : public OdeSystem {
@@ -74,8 +71,8 @@ TEST(Exponential, WithoutALinearPartEqualsItsExplicitParent) {
   for (const std::string& name : kExponential) {
     Pendulum a, b;
     const double y0[2] = {1.0, 0.0};
-    auto e = make_integrator(name, fixed(0.01));
-    auto p = make_integrator(parent(name), fixed(0.01));
+    auto e = make_integrator(name, fixed_step(0.01));
+    auto p = make_integrator(parent(name), fixed_step(0.01));
     e->reset(a, 0.0, y0);
     p->reset(b, 0.0, y0);
     ASSERT_EQ(e->advance_to(3.0).status, Outcome::kReached) << name;
@@ -97,7 +94,7 @@ TEST(Exponential, ExactOnALinearDecayWithConstantForcing) {
     for (const double lambda : {-1e5, -0.1}) {
       ForcedDecay sys(lambda, 3.0);
       const double y0 = 2.0;
-      auto integ = make_integrator(name, fixed(0.01));
+      auto integ = make_integrator(name, fixed_step(0.01));
       integ->reset(sys, 0.0, &y0);
       for (const double t_stop : {0.01, 0.02, 0.03, 0.0475, 0.06, 0.1}) {
         ASSERT_EQ(integ->advance_to(t_stop).status, Outcome::kReached) << name;
@@ -127,7 +124,7 @@ TEST(Exponential, ConvergesWhereTheParentIsUnstable) {
   const auto error = [](const std::string& name, double dt) {
     StiffRotation sys(-1e4);
     const double y0[2] = {0.0, 1.0};
-    auto integ = make_integrator(name, fixed(dt));
+    auto integ = make_integrator(name, fixed_step(dt));
     integ->reset(sys, 0.0, y0);
     const Outcome o = integ->advance_to(2.0);
     if (o.status != Outcome::kReached) return std::numeric_limits<double>::infinity();
@@ -152,7 +149,7 @@ TEST(KeepHistory, ACarriedHistoryIgnoresAResetAtTheTimeReached) {
     for (const bool keep : {true, false}) {
       Pendulum a, b;
       const double y0[2] = {1.0, 0.0};
-      IntegratorOptions o = fixed(0.01);
+      IntegratorOptions o = fixed_step(0.01);
       o.keep_history = keep;
       auto cut = make_integrator(name, o), whole = make_integrator(name, o);
       cut->reset(a, 0.0, y0);

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
+#include "tests/cli_capture.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
@@ -19,19 +20,11 @@
 namespace pumasim {
 namespace {
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result cli(std::vector<std::string> args) {
-  std::ostringstream out, err;
-  const int status = run_cli(args, out, err);
-  return {status, out.str(), err.str()};
-}
+using testing::cli;
+using testing::CliResult;
 
 void expect_bad(const std::vector<std::string>& args, const std::string& fragment) {
-  const Result r = cli(args);
+  const CliResult r = cli(args);
   EXPECT_EQ(r.status, kExitBadInput) << r.err;
   EXPECT_TRUE(r.out.empty()) << "nothing half-written: " << r.out;
   EXPECT_NE(r.err.find(fragment), std::string::npos) << "message: " << r.err;
@@ -39,7 +32,7 @@ void expect_bad(const std::vector<std::string>& args, const std::string& fragmen
 }
 
 TEST(Cli, DynamicsPrintsEveryKeyAndAcceptsNegativeNumbers) {
-  const Result r = cli({"dynamics", "--robot", "puma560", "--backend", "crba",
+  const CliResult r = cli({"dynamics", "--robot", "puma560", "--backend", "crba",
                         "--q=-0.5,0.3,-1e-1,0,0.2,-3", "--qd=-1,0,0,0,0,0",
                         "--qdd=0.1,0.2,0.3,0.4,0.5,0.6", "--tau=-1,-2,-3,-4,-5,-6"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
@@ -51,7 +44,7 @@ TEST(Cli, DynamicsPrintsEveryKeyAndAcceptsNegativeNumbers) {
 }
 
 TEST(Cli, WithoutQddAndTauThereIsNoTauNorQdd) {
-  const Result r = cli({"dynamics", "--robot=puma560", "--backend=aba", "--q=qn", "--no-rotor-inertia"});
+  const CliResult r = cli({"dynamics", "--robot=puma560", "--backend=aba", "--q=qn", "--no-rotor-inertia"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   EXPECT_EQ(r.out.find("\"tau\""), std::string::npos);
   EXPECT_EQ(r.out.find("\"qdd\""), std::string::npos);
@@ -104,7 +97,7 @@ class RobotFile : public ::testing::Test {
       EXPECT_NE(msg.find(path + ":"), std::string::npos) << msg;
       for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << f << " in: " << msg;
     }
-    const Result r = cli({"dynamics", "--robot", path, "--backend", "crba", "--q=0"});
+    const CliResult r = cli({"dynamics", "--robot", path, "--backend", "crba", "--q=0"});
     EXPECT_EQ(r.status, kExitBadInput);
     EXPECT_TRUE(r.out.empty());
   }
@@ -282,7 +275,7 @@ TEST(SceneNumbers, ASceneWithoutRotorInertiaOnAMasslessLinkIsRefused) {
   sc.replace(at, robot_line.size(), "robot = \"" + (dir / "arm.toml").string() + "\"\nrotor_inertia = false");
   std::ofstream(dir / "scene.toml") << sc;
   EXPECT_NO_THROW(load_scene((dir / "scene.toml").string(), {"scene.rotor_inertia=true"}));
-  const Result r = cli({"check", (dir / "scene.toml").string()});
+  const CliResult r = cli({"check", (dir / "scene.toml").string()});
   EXPECT_EQ(r.status, kExitBadInput);
   const std::string line = std::to_string(std::count(sc.begin(), sc.begin() + static_cast<long>(at), '\n') + 2);
   EXPECT_NE(r.err.find("scene.toml:" + line + ": scene.rotor_inertia: expected a joint-space inertia H(q) that is "
@@ -297,7 +290,7 @@ TEST(SceneNumbers, ASceneWithoutRotorInertiaOnAMasslessLinkIsRefused) {
 // the orthonormality test before (every comparison with NaN is false).
 TEST(SceneNumbers, NonFiniteNumbersInRowsAreRefused) {
   const std::string six = std::string(PUMASIM_SCENES_DIR) + "/paper_slow_6dof.toml";
-  Result r = cli({"check", six, "--set", "reference.orientation=[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, nan]]"});
+  CliResult r = cli({"check", six, "--set", "reference.orientation=[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, nan]]"});
   EXPECT_EQ(r.status, kExitBadInput);
   EXPECT_NE(r.err.find("reference.orientation: expected an array of [a, b, c] rows of numbers, each finite"),
             std::string::npos)
@@ -348,7 +341,7 @@ TEST_F(RobotFile, ThetaOnARevoluteJointAndDOnAPrismaticJointAreRefused) {
 // The command line runs on a robot with a prismatic joint (tests/robots/rp_polar.toml).
 TEST(Cli, DynamicsOnARobotWithAPrismaticJoint) {
   const std::string robot = std::string(PUMASIM_TEST_ROBOTS_DIR) + "/rp_polar.toml";
-  const Result r = cli({"dynamics", "--robot", robot, "--backend", "aba", "--q=0.3,0.2", "--qd=1,0.5",
+  const CliResult r = cli({"dynamics", "--robot", robot, "--backend", "aba", "--q=0.3,0.2", "--qd=1,0.5",
                         "--tau=0,0"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   EXPECT_NE(r.out.find("\"n\": 2"), std::string::npos) << r.out;
@@ -374,7 +367,7 @@ TEST(Cli, ShippedRobotsResolveByNameWithTheirSourcesInertia) {
   for (const Case& c : {Case{"stanford", "--q=qmid", 2, 7.252},
                         Case{"stanford", "--q=0.3,-1.2,1.1,0.4,-0.7,2", 2, 7.252},
                         Case{"planar2", "--q=0.4,-2.1", 1, 122.5}, Case{"planar2", "--q=-1,0.3", 1, 122.5}}) {
-    const Result r = cli({"dynamics", "--robot", c.robot, "--backend", "crba", c.q});
+    const CliResult r = cli({"dynamics", "--robot", c.robot, "--backend", "crba", c.q});
     ASSERT_EQ(r.status, kExitOk) << r.err;
     const auto doc = nlohmann::json::parse(r.out);
     EXPECT_NEAR(doc["mass_matrix"][c.j][c.j].get<double>(), c.m, 1e-12 * c.m) << c.robot << " " << c.q;
@@ -401,7 +394,7 @@ TEST(SceneNumbers, IntegersBeyondTwoToThe53AreRefused) {
       EXPECT_NE(msg.find(key), std::string::npos) << msg;
       EXPECT_NE(msg.find("expected"), std::string::npos) << msg;
     }
-    const Result r = cli({"check", scene, "--set", set});
+    const CliResult r = cli({"check", scene, "--set", set});
     EXPECT_EQ(r.status, kExitBadInput) << set;
   }
   // 2^53 itself is a double: accepted where the range allows (here, a step;
@@ -416,7 +409,7 @@ TEST(SceneNumbers, IntegersBeyondTwoToThe53AreRefused) {
 // an internal filesystem error (all found by the reliability issue).
 TEST(SceneNumbers, CheckRefusesWhatRunWouldRefuse) {
   const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
-  Result r = cli({"check", scene, "--set", "integrator.name=\"RK4\""});
+  CliResult r = cli({"check", scene, "--set", "integrator.name=\"RK4\""});
   EXPECT_EQ(r.status, kExitBadInput);
   EXPECT_NE(r.err.find("integrator.name: expected one of: ab2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("got \"RK4\""), std::string::npos) << r.err;
@@ -463,7 +456,7 @@ TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
   sc.replace(at, std::string("robot = \"puma560\"").size(), "robot = \"" + (dir / "seven.toml").string() + "\"");
   std::ofstream(dir / "scene.toml") << sc;
   for (const std::string joints : {"3", "7"}) {
-    const Result r = cli({"check", (dir / "scene.toml").string(), "--set", "scene.joints=" + joints,
+    const CliResult r = cli({"check", (dir / "scene.toml").string(), "--set", "scene.joints=" + joints,
                           "--set", "scene.held=[]"});
     EXPECT_EQ(r.status, kExitBadInput) << joints;
     EXPECT_NE(r.err.find("robot: expected a robot with at most 6 joints"), std::string::npos) << r.err;

@@ -18,6 +18,7 @@
 #include "experiments/simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
+#include "tests/integrator_helpers.hpp"
 #include "integrators/stability.hpp"
 #include "integrators/time_rule.hpp"
 #include "models/scene/scene.hpp"
@@ -28,6 +29,9 @@
 
 namespace pumasim {
 namespace {
+
+using testing::fixed_step;
+using testing::integrator_names;
 
 // y' = lambda y, y(0) = 1: y(t) = exp(lambda t). Optional root g = y - level.
 class Linear final : public OdeSystem {
@@ -63,12 +67,6 @@ class BlowUp final : public OdeSystem {
   std::string state_name(int) const override { return "speed"; }
 };
 
-IntegratorOptions fixed(double dt) {
-  IntegratorOptions o;
-  o.dt = dt;
-  return o;
-}
-
 IntegratorOptions tol(double rtol, double atol) {
   IntegratorOptions o;
   o.rtol = rtol;
@@ -88,7 +86,7 @@ double solve(const char* name, OdeSystem& sys, const IntegratorOptions& o, doubl
 class EveryIntegrator : public ::testing::TestWithParam<std::string> {
  protected:
   const char* name() const { return GetParam().c_str(); }
-  IntegratorCapabilities caps() const { return make_integrator(name(), fixed(1e-3))->capabilities(); }
+  IntegratorCapabilities caps() const { return make_integrator(name(), fixed_step(1e-3))->capabilities(); }
 };
 
 // Fixed step: the error at T = 1 falls as dt^p; observed p within 0.25 of the
@@ -97,8 +95,8 @@ TEST_P(EveryIntegrator, ConvergesAtItsOrder) {
   Linear sys(-1.0);
   const double exact = std::exp(-1.0);
   if (!caps().adaptive) {
-    const double e1 = std::abs(solve(name(), sys, fixed(0.02), 1.0) - exact);
-    const double e2 = std::abs(solve(name(), sys, fixed(0.01), 1.0) - exact);
+    const double e1 = std::abs(solve(name(), sys, fixed_step(0.02), 1.0) - exact);
+    const double e2 = std::abs(solve(name(), sys, fixed_step(0.01), 1.0) - exact);
     EXPECT_NEAR(std::log2(e1 / e2), caps().order, 0.25) << name() << " errors " << e1 << " " << e2;
   } else {
     double last = 1;
@@ -133,7 +131,7 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
   if (caps().implicit) {
     // A fixed-step implicit method (moreau-jean) at 100 steps of 0.01 s: h lambda = -1e4.
     Linear stiff(-1e6);
-    auto integ = make_integrator(name(), caps().adaptive ? tol(1e-6, 1e-10) : fixed(0.01));
+    auto integ = make_integrator(name(), caps().adaptive ? tol(1e-6, 1e-10) : fixed_step(0.01));
     const double x0 = 1.0;
     integ->reset(stiff, 0.0, &x0);
     ASSERT_EQ(integ->advance_to(1.0).status, Outcome::kReached) << n;
@@ -145,9 +143,9 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
   ASSERT_GT(bound, 0) << n << ": an explicit fixed-step entry without its stability interval";
   Linear sys(-100.0);
   const double inside = 0.9 * bound / 100, outside = 1.1 * bound / 100;
-  EXPECT_LT(std::abs(solve(name(), sys, fixed(inside), 400 * inside)), 1.0) << n;
+  EXPECT_LT(std::abs(solve(name(), sys, fixed_step(inside), 400 * inside)), 1.0) << n;
   Outcome out;
-  const double grown = solve(name(), sys, fixed(outside), 400 * outside, &out);
+  const double grown = solve(name(), sys, fixed_step(outside), 400 * outside, &out);
   EXPECT_TRUE(out.status == Outcome::kFailed || std::abs(grown) > 1.0) << n;
 }
 
@@ -158,7 +156,7 @@ TEST_P(EveryIntegrator, StabilityOnTheLinearTestEquation) {
 TEST_P(EveryIntegrator, SolvesTheStiffRobertsonProblem) {
   Robertson sys;
   if (!caps().implicit && !caps().adaptive) {
-    auto integ = make_integrator(name(), fixed(1e-3));
+    auto integ = make_integrator(name(), fixed_step(1e-3));
     const double y0[3] = {1.0, 0.0, 0.0};
     integ->reset(sys, 0.0, y0);
     const Outcome o = integ->advance_to(40.0);
@@ -174,7 +172,7 @@ TEST_P(EveryIntegrator, SolvesTheStiffRobertsonProblem) {
     // in y1 at t = 40 falls as dt falls 4x.
     double err[2];
     for (int i = 0; i < 2; ++i) {
-      auto integ = make_integrator(name(), fixed(i == 0 ? 4e-3 : 1e-3));
+      auto integ = make_integrator(name(), fixed_step(i == 0 ? 4e-3 : 1e-3));
       const double y0[3] = {1.0, 0.0, 0.0};
       integ->reset(sys, 0.0, y0);
       ASSERT_EQ(integ->advance_to(40.0).status, Outcome::kReached) << name();
@@ -201,7 +199,7 @@ TEST_P(EveryIntegrator, SolvesTheStiffRobertsonProblem) {
 
 TEST_P(EveryIntegrator, CountsItsStatistics) {
   Linear sys(-1.0);
-  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-6, 1e-9) : fixed(0.01));
+  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-6, 1e-9) : fixed_step(0.01));
   const double x0 = 1.0;
   integ->reset(sys, 0.0, &x0);
   integ->advance_to(1.0);
@@ -225,7 +223,7 @@ TEST_P(EveryIntegrator, CountsItsStatistics) {
 // reported at the end of the step that crosses it by the fixed-step ones.
 TEST_P(EveryIntegrator, StopsAtRoots) {
   Linear sys(-1.0, 0.5);
-  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-8, 1e-12) : fixed(0.001));
+  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-8, 1e-12) : fixed_step(0.001));
   const double x0 = 1.0;
   integ->reset(sys, 0.0, &x0);
   const Outcome o = integ->advance_to(2.0);
@@ -251,7 +249,7 @@ TEST_P(EveryIntegrator, ReportsDivergenceWithTimeAndComponent) {
   if (caps().implicit && !caps().adaptive) GTEST_SKIP() << name() << ": see above";
   BlowUp sys;
   Outcome out;
-  IntegratorOptions o = caps().adaptive ? tol(1e-6, 1e-9) : fixed(1e-3);
+  IntegratorOptions o = caps().adaptive ? tol(1e-6, 1e-9) : fixed_step(1e-3);
   o.max_steps = 100000;
   solve(name(), sys, o, 2.0, &out);
   ASSERT_EQ(out.status, Outcome::kFailed) << name();
@@ -270,7 +268,7 @@ TEST_P(EveryIntegrator, ReportsDivergenceWithTimeAndComponent) {
 // missed every interval longer than the one before).
 TEST_P(EveryIntegrator, StatisticsAccumulateAcrossRestarts) {
   Linear sys(-1.0);
-  const IntegratorOptions o = caps().adaptive ? tol(1e-8, 1e-12) : fixed(1e-3);
+  const IntegratorOptions o = caps().adaptive ? tol(1e-8, 1e-12) : fixed_step(1e-3);
   auto integ = make_integrator(name(), o);
   double x = 1.0, t = 0.0;
   integ->reset(sys, t, &x);
@@ -301,7 +299,7 @@ TEST_P(EveryIntegrator, StatisticsAccumulateAcrossRestarts) {
 // size underflow at a 10 kHz servo rate.)
 TEST_P(EveryIntegrator, PassesStopsOneRoundingApart) {
   Linear sys(-1.0);
-  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-8, 1e-12) : fixed(1e-3));
+  auto integ = make_integrator(name(), caps().adaptive ? tol(1e-8, 1e-12) : fixed_step(1e-3));
   const double x0 = 1.0;
   integ->reset(sys, 0.0, &x0);
   for (int k = 1; k <= 100; ++k) {
@@ -334,8 +332,6 @@ class TwoScales final : public OdeSystem {
 // method that says it takes it (IntegratorCapabilities::exact_jacobian), its
 // own differences with IntegratorOptions::exact_jacobian false where it has the
 // choice, counted by calls to OdeSystem::jacobian on a linear system.
-std::vector<std::string> all_names();  // the registry's integrators (below)
-
 class CountingJacobians final : public OdeSystem {
  public:
   int size() const override { return 2; }
@@ -357,8 +353,8 @@ TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
       {"arkode-imex", "DD"},   {"odeint-rosenbrock4", "EE"}, {"odeint-rodas4p", "EE"},
       {"moreau-jean", "EE"},   {"moreau-jean-075", "EE"}};
   int seen = 0;
-  for (const std::string& name : all_names()) {
-    IntegratorOptions o = fixed(1e-3);
+  for (const std::string& name : integrator_names()) {
+    IntegratorOptions o = fixed_step(1e-3);
     o.rtol = 1e-6, o.atol = 1e-9;
     const IntegratorCapabilities c = make_integrator(name, o)->capabilities();
     if (!c.uses_jacobian) continue;
@@ -384,13 +380,12 @@ TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
 // with the scale, the 1e-9-sized component is as accurate, relatively, as the
 // rtol asks (within the factor 100 of ConvergesAtItsOrder); with scale 1 its
 // error is left to atol = 1e-8, far above its size, and is much larger.
-std::vector<std::string> all_names();  // the registry's integrators (below)
 
 TEST(AbsoluteTolerance, FollowsEachComponentsScaleInEveryAdaptiveIntegrator) {
   const double rtol = 1e-6, T = 0.2, exact = 1e-9 * std::exp(-20.0 * T);
   int adaptive = 0;
-  for (const std::string& name : all_names()) {
-    if (!make_integrator(name, fixed(1e-3))->capabilities().adaptive) continue;  // no tolerances
+  for (const std::string& name : integrator_names()) {
+    if (!make_integrator(name, fixed_step(1e-3))->capabilities().adaptive) continue;  // no tolerances
     ++adaptive;
     double rel[2];
     for (bool scaled : {true, false}) {
@@ -464,13 +459,7 @@ TEST(Stability, PredictedStepsMatchClosedFormsAndTheIntegrators) {
   }
 }
 
-std::vector<std::string> all_names() {
-  std::vector<std::string> v;
-  for (const auto& i : integrators()) v.emplace_back(i.name);
-  return v;
-}
-
-INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(all_names()),
+INSTANTIATE_TEST_SUITE_P(Registry, EveryIntegrator, ::testing::ValuesIn(integrator_names()),
                          [](const auto& info) {
                            std::string s = info.param;
                            for (char& c : s) if (c == '-') c = '_';
@@ -503,7 +492,7 @@ TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
   std::vector<double> a, b;
   for (const char* name : {"rk4", "cvode-bdf"}) {
     Plant plant(sc.plant);
-    IntegratorOptions o = fixed(2.5e-4);
+    IntegratorOptions o = fixed_step(2.5e-4);
     o.rtol = 1e-10, o.atol = 1e-12;
     auto integ = make_integrator(name, o);
     std::vector<double>& out = std::string(name) == "rk4" ? a : b;
@@ -644,7 +633,7 @@ TEST(Run, EndsWhenItsCancelFlagIsSet) {
   const Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/passive_arm.toml",
                               {"scene.duration=1e4", "scene.output_interval=1e3"});
   Plant plant(sc.plant);
-  auto integ = make_integrator("rk4", fixed(1e-6));
+  auto integ = make_integrator("rk4", fixed_step(1e-6));
   std::atomic<bool> cancel{false};
   std::atomic<long> polls{0};
   ProgressHook hook;

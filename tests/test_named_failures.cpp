@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
+#include "tests/cli_capture.hpp"
 #include "experiments/simulation/driver.hpp"
 #include "experiments/simulation/run_request.hpp"
 #include "integrators/registry.hpp"
@@ -26,6 +27,9 @@
 
 namespace pumasim {
 namespace {
+
+using testing::cli;
+using testing::CliResult;
 
 const std::string kScenes = PUMASIM_SCENES_DIR;
 
@@ -133,27 +137,16 @@ TEST(PhysicalBounds, TheShippedPaperRunIsNeitherWarnedNorFlagged) {
 namespace pumasim {
 namespace {
 
-struct Cli {
-  int status;
-  std::string out, err;
-};
-
-Cli cli(const std::vector<std::string>& args) {
-  std::ostringstream out, err;
-  const int status = run_cli(args, out, err);
-  return {status, out.str(), err.str()};
-}
-
 // The paper's rule is discontinuous in the state: `check` says so, and `run`
 // warns before an adaptive method starts on it, naming what to use instead.
 TEST(NamedFailures, ThePapersRuleIsNamedDiscontinuousUpFront) {
-  const Cli c = cli({"check", kScenes + "/paper_slow.toml"});
+  const CliResult c = cli({"check", kScenes + "/paper_slow.toml"});
   ASSERT_EQ(c.status, kExitOk) << c.err;
   EXPECT_NE(c.out.find("# note: friction.model = \"paper\" is discontinuous in the state"), std::string::npos);
   EXPECT_NE(c.out.find("moreau-jean"), std::string::npos);
-  const Cli smooth = cli({"check", kScenes + "/passive_arm.toml"});
+  const CliResult smooth = cli({"check", kScenes + "/passive_arm.toml"});
   EXPECT_EQ(smooth.out.find("# note:"), std::string::npos) << smooth.out;
-  const Cli r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6", "--t-end",
+  const CliResult r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6", "--t-end",
                      "0.05", "--out", ::testing::TempDir() + "/pumasim_paper_bdf", "--force", "--quiet"});
   EXPECT_NE(r.err.find("warning: cvode-bdf is adaptive and friction.model = \"paper\" is discontinuous"),
             std::string::npos)
@@ -163,7 +156,7 @@ TEST(NamedFailures, ThePapersRuleIsNamedDiscontinuousUpFront) {
 // An adaptive method grinding on the rule ends at its step budget with the
 // chattering named (the joint, its sign changes), not with "more steps".
 TEST(NamedFailures, AStepCollapseOnTheRuleIsDiagnosedAsChattering) {
-  const Cli r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6",
+  const CliResult r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6",
                      "--max-steps", "20000", "--out", ::testing::TempDir() + "/pumasim_chatter", "--force", "--quiet"});
   EXPECT_EQ(r.status, kExitInternal) << r.err;
   const auto stats = nlohmann::json::parse(r.out);
@@ -177,7 +170,7 @@ TEST(NamedFailures, AStepCollapseOnTheRuleIsDiagnosedAsChattering) {
 // --rtol alone: atol = 1e-3 rtol (per unit of each state's scale), printed;
 // absurd tolerances refused with the range.
 TEST(NamedFailures, RtolAloneSetsAtolAndAbsurdTolerancesAreRefused) {
-  const Cli r = cli({"run", kScenes + "/passive_arm.toml", "--integrator", "cvode-bdf", "--rtol", "1e-10", "--t-end",
+  const CliResult r = cli({"run", kScenes + "/passive_arm.toml", "--integrator", "cvode-bdf", "--rtol", "1e-10", "--t-end",
                      "0.01", "--out", ::testing::TempDir() + "/pumasim_rtol_alone", "--force"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   const auto stats = nlohmann::json::parse(r.out);
@@ -185,11 +178,11 @@ TEST(NamedFailures, RtolAloneSetsAtolAndAbsurdTolerancesAreRefused) {
   EXPECT_DOUBLE_EQ(stats["atol"].get<double>(), 1e-13);
   EXPECT_NE(r.err.find("rtol 1e-10, atol 1e-13"), std::string::npos) << r.err;
   for (const char* bad : {"0.9", "1e-20"}) {
-    const Cli b = cli({"run", kScenes + "/passive_arm.toml", "--integrator", "cvode-bdf", "--rtol", bad});
+    const CliResult b = cli({"run", kScenes + "/passive_arm.toml", "--integrator", "cvode-bdf", "--rtol", bad});
     EXPECT_EQ(b.status, kExitBadInput) << bad;
     EXPECT_NE(b.err.find("--rtol: expected a number in [1e-14, 0.1]"), std::string::npos) << b.err;
   }
-  const Cli s = cli({"check", kScenes + "/passive_arm.toml", "--set", "integrator.rtol=0.9"});
+  const CliResult s = cli({"check", kScenes + "/passive_arm.toml", "--set", "integrator.rtol=0.9"});
   EXPECT_EQ(s.status, kExitBadInput) << s.err;
   EXPECT_NE(s.err.find("integrator.rtol"), std::string::npos) << s.err;
 }
@@ -207,7 +200,7 @@ TEST(NamedFailures, AMisspeltTableIsNamedUnknown) {
   s.replace(at, 7, "[motors]");
   const std::string file = dir + "/scene.toml";
   std::ofstream(file) << s;
-  const Cli c = cli({"check", file});
+  const CliResult c = cli({"check", file});
   EXPECT_EQ(c.status, kExitBadInput);
   EXPECT_NE(c.err.find("unknown key 'motors'"), std::string::npos) << c.err;
   EXPECT_EQ(c.err.find("both [amplifier] and [motor]"), std::string::npos) << c.err;

@@ -264,7 +264,7 @@ struct Refused {
   std::string key = "controller.";  // the scene's key the message names
 };
 
-void expect_refused(const Refused& c) {
+void expect_input_refused(const Refused& c) {
   const std::string scene = write_scene(c.scene_text, c.csv);
   std::ostringstream out, err;
   const int status = run_cli({"check", scene}, out, err);
@@ -289,18 +289,18 @@ TEST(OpenLoop, BadFilesAreRefusedNamingTheKeyAndTheFilesLine) {
        "controller.file: "},
       {scene, "t,u1\n0,1\n", csv + ": expected at least two points (rows t, u1 ... un)", "controller.file: "},
   };
-  for (const Refused& c : cases) expect_refused(c);
+  for (const Refused& c : cases) expect_input_refused(c);
   // A file that is not there.
   std::string missing = scene;
   missing.replace(missing.find("input.csv"), 9, "absent.csv");
-  expect_refused({missing, "t,u1\n0,1\n1,1\n",
+  expect_input_refused({missing, "t,u1\n0,1\n1,1\n",
                   (scratch() / "absent.csv").string() + ": cannot be read (no such file); expected a CSV file",
                   "controller.file: "});
   // A folder where the file should be: said as such, not as an empty or unreadable file.
   std::filesystem::create_directories(scratch() / "a_folder.csv");
   std::string folder = scene;
   folder.replace(folder.find("input.csv"), 9, "a_folder.csv");
-  expect_refused({folder, "t,u1\n0,1\n1,1\n",
+  expect_input_refused({folder, "t,u1\n0,1\n1,1\n",
                   (scratch() / "a_folder.csv").string() + ": cannot be read (a folder, not a file)",
                   "controller.file: "});
 }
@@ -328,14 +328,14 @@ TEST(OpenLoop, CombinationsThatMeanNothingAreRefused) {
        }(),
        csv, "expected a number > 0 or inf, got -1", "controller.output_limit: "},
   };
-  for (const Refused& c : cases) expect_refused(c);
+  for (const Refused& c : cases) expect_input_refused(c);
 }
 
 // Another law has no file: the key is unknown there, named with the law.
 TEST(OpenLoop, TheFileKeyMeansNothingForAnotherLaw) {
   std::string s = joint1_scene("torque", "zoh", "");
   s.replace(s.find("law = \"open_loop\""), 17, "law = \"piv\"\nkp = 1.0");
-  expect_refused({s, "t,u1\n0,1\n1,1\n", "does not apply to controller.law = \"piv\"", "unknown key 'controller.file'"});
+  expect_input_refused({s, "t,u1\n0,1\n1,1\n", "does not apply to controller.law = \"piv\"", "unknown key 'controller.file'"});
 }
 
 }  // namespace

@@ -27,7 +27,7 @@ using testing::Quantities;
 using testing::rel_err;
 
 // Closed form against a back-end: a few hundred roundings of O(1..10) numbers.
-constexpr double kClosedForm = 1e-12;
+constexpr double kPrismaticClosedForm = 1e-12;
 
 // One prismatic joint, link of mass m, rotor Im behind a screw of ratio Z.
 RobotModel slider(DhConvention convention, double alpha, const Eigen::Vector3d& gravity) {
@@ -66,11 +66,11 @@ void expect_slider_law(const RobotModel& m, const Eigen::Vector3d& z) {
       const double gz = m.gravity.dot(z);
       const Eigen::VectorXd weight = Eigen::VectorXd::Constant(1, -mass * gz);
       const std::string who = std::string(info.name) + " " + m.name;
-      EXPECT_LT(rel_err(r.H, Eigen::MatrixXd::Constant(1, 1, mass + arm)), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.g, weight), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.h, weight), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.tau, (mass + arm) * qdd + weight), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.qdd, (tau - weight) / (mass + arm)), kClosedForm) << who;
+      EXPECT_LT(rel_err(r.H, Eigen::MatrixXd::Constant(1, 1, mass + arm)), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.g, weight), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.h, weight), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.tau, (mass + arm) * qdd + weight), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.qdd, (tau - weight) / (mass + arm)), kPrismaticClosedForm) << who;
     }
   }
 }
@@ -125,11 +125,11 @@ TEST(Prismatic, PolarArmHasTheTextbookClosedForm) {
       H << J1 + J2 + m2 * rad * rad + arm1, 0, 0, m2 + arm2;
       const Eigen::Vector2d h(2 * m2 * rad * qd[1] * qd[0], -m2 * rad * qd[0] * qd[0]);
       const std::string who = std::string(info.name) + " state " + std::to_string(s);
-      EXPECT_LT(rel_err(r.H, H), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.h, h), kClosedForm) << who;
+      EXPECT_LT(rel_err(r.H, H), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.h, h), kPrismaticClosedForm) << who;
       EXPECT_LT(r.g.norm(), 1e-12) << who;  // vertical axis, horizontal slide
-      EXPECT_LT(rel_err(r.tau, H * qdd + h), kClosedForm) << who;
-      EXPECT_LT(rel_err(r.qdd, H.inverse() * (tau - h)), kClosedForm) << who;
+      EXPECT_LT(rel_err(r.tau, H * qdd + h), kPrismaticClosedForm) << who;
+      EXPECT_LT(rel_err(r.qdd, H.inverse() * (tau - h)), kPrismaticClosedForm) << who;
     }
   }
   EXPECT_EQ(backends, 6);  // all but the generated ones made for the PUMA 560

@@ -33,7 +33,7 @@ std::string write_temp(const std::string& name, const std::string& text) {
 
 // load_robot_file refuses `text` with every fragment in its message, and
 // `pumasim dynamics` exits with status 2 on it.
-void expect_refused(const std::string& name, const std::string& text, const std::vector<std::string>& fragments) {
+void expect_toml_refused(const std::string& name, const std::string& text, const std::vector<std::string>& fragments) {
   const std::string path = write_temp(name, text);
   try {
     load_robot_file(path);
@@ -53,29 +53,29 @@ constexpr const char* kNoKey = ": TOML syntax error: expected a table name after
 // toml++ 3.3 calls parse_key() on a character that cannot start a key: an
 // assertion with asserts on, undefined behaviour (an assumption) without.
 TEST(TomlGuard, TableHeaderWithoutAKeyIsRefusedBeforeToml) {
-  expect_refused("bracket_newline", std::string(kHead) + "[\n", {"bracket_newline.toml:5", kNoKey, "got a line break"});
-  expect_refused("bracket_eof", "[", {"bracket_eof.toml:1", kNoKey, "got the end of the text"});
-  expect_refused("brackets_newline", std::string(kHead) + "[[\njoint]]\n", {":5", "after '[['", "got a line break"});
-  expect_refused("three_brackets", "[[[1]]]\n", {":1", "after '[['", "got '['"});
-  expect_refused("bracket_equals", "a = 1\n  [ =\n", {":2", "after '['", "got '='"});
-  expect_refused("bracket_hash", "[# a comment\n", {":1", "after '['", "got '#'"});
+  expect_toml_refused("bracket_newline", std::string(kHead) + "[\n", {"bracket_newline.toml:5", kNoKey, "got a line break"});
+  expect_toml_refused("bracket_eof", "[", {"bracket_eof.toml:1", kNoKey, "got the end of the text"});
+  expect_toml_refused("brackets_newline", std::string(kHead) + "[[\njoint]]\n", {":5", "after '[['", "got a line break"});
+  expect_toml_refused("three_brackets", "[[[1]]]\n", {":1", "after '[['", "got '['"});
+  expect_toml_refused("bracket_equals", "a = 1\n  [ =\n", {":2", "after '['", "got '='"});
+  expect_toml_refused("bracket_hash", "[# a comment\n", {":1", "after '['", "got '#'"});
 }
 
 // toml++ 3.3 calls parse_value() on a '}' where an array expects a value: an
 // assertion with asserts on, an assumption without (found by fuzz_scene).
 TEST(TomlGuard, ClosingBraceInAnArrayIsRefused) {
   const std::string expected = ": TOML syntax error: expected a value, ',' or ']' in the array opened before, got '}'";
-  expect_refused("brace_in_array", "a = [}\n", {"brace_in_array.toml:1" + expected});
-  expect_refused("brace_after_comma", "a = [ 1,\n  }\n", {"brace_after_comma.toml:2" + expected});
-  expect_refused("brace_in_nested_array", "a = { b = [}] }\n", {":1" + expected});
+  expect_toml_refused("brace_in_array", "a = [}\n", {"brace_in_array.toml:1" + expected});
+  expect_toml_refused("brace_after_comma", "a = [ 1,\n  }\n", {"brace_after_comma.toml:2" + expected});
+  expect_toml_refused("brace_in_nested_array", "a = { b = [}] }\n", {":1" + expected});
 }
 
 // A date, a space and one digit: toml++ 3.3 scans for a time from a value
 // terminator, an asserted precondition (found by fuzz_robot's long run).
 TEST(TomlGuard, DateSpaceDigitIsRefused) {
   const std::string expected = ": TOML syntax error: expected a time hh:mm:ss after a date and a space, got '0'";
-  expect_refused("date_space_digit", "d = 1979-05-27 0\n", {"date_space_digit.toml:1" + expected});
-  expect_refused("date_space_digit_in_array", "d = [1979-05-27 0]\n", {":1" + expected});
+  expect_toml_refused("date_space_digit", "d = 1979-05-27 0\n", {"date_space_digit.toml:1" + expected});
+  expect_toml_refused("date_space_digit_in_array", "d = [1979-05-27 0]\n", {":1" + expected});
   const std::string ok = "d = 1979-05-27 07:32:00\ne = 1979-05-27 # 0\nf = [1979-05-27 ]\n";
   EXPECT_FALSE(find_toml_hazard(ok).has_value());
   const toml::table t = toml::parse(std::string_view(ok), std::string_view("dates"));
@@ -87,19 +87,19 @@ TEST(TomlGuard, DateSpaceDigitIsRefused) {
 // for 'é' (U+00E9) and others.
 TEST(TomlGuard, NonAsciiWhereTomlAsksForWhitespaceIsRefused) {
   const std::string ascii = "expected ASCII outside strings and comments";
-  expect_refused("bare_key", std::string(kHead) + "\xC3\xA9 = 1\n", {":5: TOML syntax error: " + ascii,
+  expect_toml_refused("bare_key", std::string(kHead) + "\xC3\xA9 = 1\n", {":5: TOML syntax error: " + ascii,
                                                                       "got a non-ASCII character (first byte 0xC3)"});
-  expect_refused("after_value", "a = 1\xC3\xA9\n", {":1", "expected ASCII in a value that is not a string"});
-  expect_refused("in_header", "[r\xC3\xA9]\n", {":1", ascii});
-  expect_refused("after_quoted_key", "\"a\"\xE2\x80\x83= 1\n", {":1", ascii});
-  expect_refused("escape", "a = \"\"\"x\n\\\xC3\xA9\"\"\"\n", {":2", "expected an escape sequence after '\\'"});
-  expect_refused("escape_single_line", "a = \"\\\xC3\xA9\"\n", {":1", "expected an escape sequence"});
+  expect_toml_refused("after_value", "a = 1\xC3\xA9\n", {":1", "expected ASCII in a value that is not a string"});
+  expect_toml_refused("in_header", "[r\xC3\xA9]\n", {":1", ascii});
+  expect_toml_refused("after_quoted_key", "\"a\"\xE2\x80\x83= 1\n", {":1", ascii});
+  expect_toml_refused("escape", "a = \"\"\"x\n\\\xC3\xA9\"\"\"\n", {":2", "expected an escape sequence after '\\'"});
+  expect_toml_refused("escape_single_line", "a = \"\\\xC3\xA9\"\n", {":1", "expected an escape sequence"});
   // A quote after a value's first characters opens no string: toml++ reads on (found by fuzz_robot).
-  expect_refused("quote_inside_bare_value", "a = 0[offso\"x\xC3\xA9 \"ro]\n", {":1", "expected ASCII in a value"});
+  expect_toml_refused("quote_inside_bare_value", "a = 0[offso\"x\xC3\xA9 \"ro]\n", {":1", "expected ASCII in a value"});
   const std::string bare = "expected ASCII in a value that is not a string";
-  expect_refused("quote_after_dot_in_value", "a = [3, 665.\"x\xEF\xBB\xB5\"]\n", {":1", bare});
-  expect_refused("quote_after_equals_in_value", "a=+a=+OOa=\"off\xEF\xB5\xBF\"\n", {":1", bare});
-  expect_refused("after_line_ending_backslash", "a = \"\"\"x \\\n\n   \xC3\xA9\"\"\"\n",
+  expect_toml_refused("quote_after_dot_in_value", "a = [3, 665.\"x\xEF\xBB\xB5\"]\n", {":1", bare});
+  expect_toml_refused("quote_after_equals_in_value", "a=+a=+OOa=\"off\xEF\xB5\xBF\"\n", {":1", bare});
+  expect_toml_refused("after_line_ending_backslash", "a = \"\"\"x \\\n\n   \xC3\xA9\"\"\"\n",
                  {":3", "expected an ASCII character first after a line-ending backslash", "\\uXXXX"});
 }
 

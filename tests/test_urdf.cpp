@@ -579,7 +579,7 @@ TEST(UrdfClosedForm, ContinuousJointHasNoLimits) {
 
 // The URDF is refused with every fragment in the message, which starts with
 // the file's path; the command line exits with status 2 on it.
-void expect_refused(const std::string& name, const std::string& xml, const std::vector<std::string>& fragments,
+void expect_urdf_refused(const std::string& name, const std::string& xml, const std::vector<std::string>& fragments,
                     const std::string& side = "") {
   const std::string path = write_urdf(name, xml, side);
   try {
@@ -597,13 +597,13 @@ void expect_refused(const std::string& name, const std::string& xml, const std::
 const std::string kInertial = inertial(1.0, "0.1 0 0", "0 0 0", "0.01 0.01 0.01");
 
 TEST(UrdfRefused, ATree) {
-  expect_refused("tree",
+  expect_urdf_refused("tree",
                  robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
                        joint("j2", "revolute", "l1", "l2") + link("l2", kInertial) +
                        joint("j3", "revolute", "l1", "l3") + link("l3", kInertial)),
                  {"tree.urdf:", "joints 'j2'", "'j3'", "(a tree)", "serial chain"});
   // A branch behind a fixed joint is a tree too.
-  expect_refused("tree_behind_fixed",
+  expect_urdf_refused("tree_behind_fixed",
                  robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
                        joint("j2", "revolute", "l1", "l2") + link("l2", kInertial) +
                        joint("f", "fixed", "l1", "bracket") + link("bracket") +
@@ -612,7 +612,7 @@ TEST(UrdfRefused, ATree) {
 }
 
 TEST(UrdfRefused, AClosedLoop) {
-  expect_refused("loop",
+  expect_urdf_refused("loop",
                  robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
                        joint("j2", "revolute", "base", "l2") + link("l2", kInertial) +
                        joint("j3", "revolute", "l1", "l3") + joint("j4", "revolute", "l2", "l3") +
@@ -621,11 +621,11 @@ TEST(UrdfRefused, AClosedLoop) {
 }
 
 TEST(UrdfRefused, FloatingPlanarAndMimicJoints) {
-  expect_refused("floating", robot(link("base") + joint("f", "floating", "base", "l1") + link("l1", kInertial)),
+  expect_urdf_refused("floating", robot(link("base") + joint("f", "floating", "base", "l1") + link("l1", kInertial)),
                  {"joint 'f'", "type=\"floating\""});
-  expect_refused("planar", robot(link("base") + joint("p", "planar", "base", "l1") + link("l1", kInertial)),
+  expect_urdf_refused("planar", robot(link("base") + joint("p", "planar", "base", "l1") + link("l1", kInertial)),
                  {"joint 'p'", "type=\"planar\""});
-  expect_refused("mimic",
+  expect_urdf_refused("mimic",
                  robot(link("base") + joint("j1", "revolute", "base", "l1") + link("l1", kInertial) +
                        joint("j2", "revolute", "l1", "l2", "0 0 0", "0 0 0", "0 0 1",
                              "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/><mimic joint=\"j1\"/>") +
@@ -634,28 +634,28 @@ TEST(UrdfRefused, FloatingPlanarAndMimicJoints) {
 }
 
 TEST(UrdfRefused, BadValues) {
-  expect_refused("limits", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
+  expect_urdf_refused("limits", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
                                                       "<limit effort=\"1\" velocity=\"1\"/>") +
                                  link("l1", kInertial)),
                  {"joint 'j1'", "lower < upper", "lower=\"0\" upper=\"0\""});
-  expect_refused("zero_axis", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 0") +
+  expect_urdf_refused("zero_axis", robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 0") +
                                     link("l1", kInertial)),
                  {"joint 'j1'", "non-zero <axis xyz>"});
-  expect_refused("negative_mass", robot(link("base") + joint("j1", "revolute", "base", "l1") +
+  expect_urdf_refused("negative_mass", robot(link("base") + joint("j1", "revolute", "base", "l1") +
                                         link("l1", inertial(-1.0, "0 0 0", "0 0 0", "0.01 0.01 0.01"))),
                  {"link 'l1'", "a mass >= 0"});
-  expect_refused("damping",
+  expect_urdf_refused("damping",
                  robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
                                             "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>"
                                             "<dynamics damping=\"0.5\"/>") +
                        link("l1", kInertial)),
                  {"joint 'j1'", "damping", "[friction]"});
-  expect_refused("no_joint", robot(link("base")), {"at least one revolute"});
-  expect_refused("not_urdf", "<robot><link/></robot>", {"URDF error", "urdfdom"});
+  expect_urdf_refused("no_joint", robot(link("base")), {"at least one revolute"});
+  expect_urdf_refused("not_urdf", "<robot><link/></robot>", {"URDF error", "urdfdom"});
   // Principal moments 0.1, 0.1, 0.3: no rigid body's, unless the side file says why.
   const std::string bad = robot(link("base") + joint("j1", "revolute", "base", "l1") +
                                 link("l1", inertial(1.0, "0 0 0", "0 0 0", "0.1 0.1 0.3")));
-  expect_refused("inconsistent", bad, {"joint 'j1'", "triangle inequalities", "inconsistent_inertia"});
+  expect_urdf_refused("inconsistent", bad, {"joint 'j1'", "triangle inequalities", "inconsistent_inertia"});
   EXPECT_EQ(load_robot(write_urdf("excused", bad,
                                   "[joint.j1]\nrotor_inertia = 0.0\ngear_ratio = 1.0\n"
                                   "inconsistent_inertia = \"kept as published\"\n"))
@@ -676,7 +676,7 @@ TEST(UrdfRefused, AnElementUrdfdomCouldNotParse) {
                                   "iyz=\"0\"/></inertial>\n</link>\n");
     const auto line = 1 + std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(xml.find("<link name=\"l1\"")),
                                      '\n');
-    expect_refused(std::string("mass_") + (*mass ? mass : "empty"), xml,
+    expect_urdf_refused(std::string("mass_") + (*mass ? mass : "empty"), xml,
                    {".urdf:" + std::to_string(line) + ": link 'l1'", "Could not parse inertial element",
                     std::string("mass [") + mass + "] is not a float"});
   }
