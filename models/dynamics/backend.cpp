@@ -1,6 +1,7 @@
 #include "models/dynamics/backend.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <array>
 #include <stdexcept>
 
@@ -57,6 +58,14 @@ std::span<const BackendInfo> backends() {
   if (!sorted) throw std::logic_error("backend registry is not sorted by name");
   return registry();
 }
+
+namespace {
+std::atomic<long> built_count{0};
+}  // namespace
+
+long backends_built() { return built_count.load(std::memory_order_relaxed); }
+
+void detail::count_backend_built() { built_count.fetch_add(1, std::memory_order_relaxed); }
 
 std::string backend_names() {
   std::string s;

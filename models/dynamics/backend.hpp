@@ -102,6 +102,14 @@ const BackendInfo& find_backend(std::string_view name);
 // "a, b, c": the registered names, for messages.
 std::string backend_names();
 
+// How many back-end instances the registry's make and make_dual have built
+// in this process (all threads). For tests: loading a scene builds none.
+long backends_built();
+
+namespace detail {
+void count_backend_built();
+}  // namespace detail
+
 inline std::unique_ptr<DynamicsBackend> make_backend(std::string_view name,
                                                      const RobotModel& model) {
   return find_backend(name).make(model);

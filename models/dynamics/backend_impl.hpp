@@ -120,6 +120,7 @@ std::unique_ptr<BasicDynamicsBackend<S>> make(const RobotModel& model) {
   if (const std::string why = why_unsupported<Algo>(model); !why.empty()) {
     throw std::invalid_argument(why);
   }
+  count_backend_built();
   if constexpr (std::is_same_v<S, double>) {
     switch (model.dof()) {
       case 3: return std::make_unique<Adapter<Algo, 3, S>>(model);

@@ -39,6 +39,30 @@ ReferenceTable::ReferenceTable(const Reference& ref, bool truncate) : ref_(ref),
   }
   first_.push_back(static_cast<int>(subs_.size()));
   coefs_.resize(subs_.size());
+  state_ = std::make_unique<std::atomic<State>[]>(subs_.size());
+  for (std::size_t k = 0; k < subs_.size(); ++k) state_[k].store(kEmpty, std::memory_order_relaxed);
+}
+
+int ReferenceTable::filled() const {
+  const std::lock_guard<std::mutex> lock(fill_lock_);
+  return filled_;
+}
+int ReferenceTable::exact_fallbacks() const {
+  const std::lock_guard<std::mutex> lock(fill_lock_);
+  return fallbacks_;
+}
+int ReferenceTable::max_degree_kept() const {
+  const std::lock_guard<std::mutex> lock(fill_lock_);
+  return max_degree_kept_;
+}
+
+ReferenceTable::State ReferenceTable::state(int segment, int k) const {
+  std::atomic<State>& s = state_[static_cast<std::size_t>(k)];
+  const State seen = s.load(std::memory_order_acquire);
+  if (seen != kEmpty) return seen;
+  const std::lock_guard<std::mutex> lock(fill_lock_);
+  if (s.load(std::memory_order_relaxed) == kEmpty) fill(segment, k);  // another thread may have filled it
+  return s.load(std::memory_order_relaxed);
 }
 
 void ReferenceTable::pack(const ReferenceSample& s, double* c) {
@@ -50,7 +74,7 @@ void ReferenceTable::pack(const ReferenceSample& s, double* c) {
 // coefficients of the interpolant sum_j c_j T_j(x) (Trefethen 2013, ch. 3:
 // c_j = (2 / N) sum_k'' f_k cos(pi j k / N), the end terms halved, c_0 and
 // c_N halved too).
-void ReferenceTable::fill(int segment, int k) {
+void ReferenceTable::fill(int segment, int k) const {
   Sub& sub = subs_[static_cast<std::size_t>(k)];
   constexpr int N = kDegree;
   Eigen::Matrix<double, kComponents, N + 1> f;
@@ -68,10 +92,11 @@ void ReferenceTable::fill(int segment, int k) {
     c.col(j) = (j == 0 || j == N ? 1.0 : 2.0) / N * sum;
   }
   const double tail = (c.col(N - 1).cwiseAbs() + c.col(N).cwiseAbs()).maxCoeff();
-  sub.state = tail <= kTailTol ? Sub::kTable : Sub::kExact;
+  const State filled = tail <= kTailTol ? kTable : kExact;
   ++filled_;
-  if (sub.state == Sub::kExact) {
+  if (filled == kExact) {
     ++fallbacks_;
+    state_[static_cast<std::size_t>(k)].store(kExact, std::memory_order_release);
     return;
   }
   double dropped = 0;  // sum over j >= d of the largest |c_j|: degree d is kept once it passes kChopTol
@@ -82,9 +107,10 @@ void ReferenceTable::fill(int segment, int k) {
   }
   sub.degree = d;
   max_degree_kept_ = std::max(max_degree_kept_, d);
+  state_[static_cast<std::size_t>(k)].store(kTable, std::memory_order_release);  // the sub-interval published
 }
 
-void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool extend) {
+void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool extend) const {
   const int m = static_cast<int>(first_.size()) - 1;  // tabulated segments
   if (segment < 0 || segment >= m) return ref_.eval(t, out, segment, extend);
   const int k0 = first_[static_cast<std::size_t>(segment)], k1 = first_[static_cast<std::size_t>(segment) + 1];
@@ -92,9 +118,8 @@ void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool exte
   const double tol = 1e-12 * std::max(1.0, b);  // Reference's rounding of a segment's ends
   if (!(t >= a - tol && t <= b + tol)) return ref_.eval(t, out, segment, extend);
   const int k = std::clamp(k0 + static_cast<int>((t - a) / (b - a) * (k1 - k0)), k0, k1 - 1);
-  Sub& sub = subs_[static_cast<std::size_t>(k)];
-  if (sub.state == Sub::kEmpty) fill(segment, k);
-  if (sub.state == Sub::kExact) return ref_.eval(t, out, segment, extend);
+  if (state(segment, k) == kExact) return ref_.eval(t, out, segment, extend);
+  const Sub& sub = subs_[static_cast<std::size_t>(k)];
   // Clenshaw's recurrence for all components at once.
   const Coefs& c = coefs_[static_cast<std::size_t>(k)];
   const double x = (2 * t - sub.a - sub.b) / (sub.b - sub.a);

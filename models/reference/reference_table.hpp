@@ -11,6 +11,12 @@
 //
 // A sub-interval is filled the first time a time inside it is asked for
 // (the storage is allocated once, at construction: lookups never allocate).
+// Lookups are const and thread-safe: the table is one of the immutable parts
+// that plant models share (models/plant/plant_model.hpp), so that threads
+// evaluating f on one model share it. A sub-interval is filled under a lock,
+// once, and published by its state (release/acquire); a filled one is read
+// without a lock. Its coefficients depend only on the reference, so which
+// thread fills it, and when, changes no value.
 // Where the interpolant has not converged -- the magnitude of its last two
 // Chebyshev coefficients, which bounds the error of a smooth function's
 // interpolant to about that size (Trefethen 2013, ch. 8), above kTailTol
@@ -19,6 +25,9 @@
 // breakpoint, a piece continued past its ends) use the exact reference too.
 #pragma once
 
+#include <atomic>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include <Eigen/Core>
@@ -56,31 +65,36 @@ class ReferenceTable {
   explicit ReferenceTable(const Reference& ref, bool truncate = true);
 
   // As Reference::eval(t, out, segment, extend), from the interpolant where
-  // there is one. Allocation-free.
-  void eval(double t, ReferenceSample& out, int segment, bool extend);
+  // there is one. Allocation-free; thread-safe.
+  void eval(double t, ReferenceSample& out, int segment, bool extend) const;
 
   // How many sub-intervals were filled / fell back to the exact reference,
   // and the largest degree kept after truncation (for tests).
-  int filled() const { return filled_; }
-  int exact_fallbacks() const { return fallbacks_; }
-  int max_degree_kept() const { return max_degree_kept_; }
+  int filled() const;
+  int exact_fallbacks() const;
+  int max_degree_kept() const;
 
  private:
   using Coefs = Eigen::Matrix<double, kComponents, kDegree + 1>;
   struct Sub {
     double a = 0, b = 0;
-    int degree = kDegree;  // kept after truncation
-    enum State : char { kEmpty, kTable, kExact } state = kEmpty;
+    int degree = kDegree;  // kept after truncation (written by fill, before its state)
   };
-  void fill(int segment, int k);
+  enum State : char { kEmpty, kTable, kExact };
+  // Sub-interval k's state, filling it first if it is empty.
+  State state(int segment, int k) const;
+  void fill(int segment, int k) const;  // under fill_lock_
   static void pack(const ReferenceSample& s, double* c);
 
   const Reference& ref_;
   bool truncate_;
   std::vector<int> first_;   // per segment: index of its first sub-interval; one past the end at the back
-  std::vector<Sub> subs_;
-  std::vector<Coefs> coefs_;  // per sub-interval
-  int filled_ = 0, fallbacks_ = 0, max_degree_kept_ = 0;
+  // The lazily filled part: written only by fill(), under fill_lock_.
+  mutable std::vector<Sub> subs_;
+  mutable std::vector<Coefs> coefs_;  // per sub-interval
+  mutable std::unique_ptr<std::atomic<State>[]> state_;  // per sub-interval; published last
+  mutable std::mutex fill_lock_;
+  mutable int filled_ = 0, fallbacks_ = 0, max_degree_kept_ = 0;
 };
 
 }  // namespace pumasim

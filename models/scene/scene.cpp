@@ -838,14 +838,12 @@ void write_initial(toml::table& doc, const PlantConfig& pc) {
 // joint that moves no mass): checked at the run's start pose, the pose the
 // plant must first invert H at (the robot file checked its zero and named
 // poses; every rotor inertia > 0 makes H definite at every pose).
-void check_start_inertia(StrictTable& root, const Scene& sc, Plant& plant) {
+void check_start_inertia(StrictTable& root, const Scene& sc) {
   const PlantConfig& pc = sc.plant;
   const RobotModel sim = simulated_robot(pc.robot, pc.n, pc.q_held);
   const auto has_rotor = [](const JointParams& J) { return J.rotor_inertia > 0; };
   if (std::all_of(sim.joints.begin(), sim.joints.end(), has_rotor)) return;
-  std::vector<double> x(static_cast<std::size_t>(plant.size()));
-  plant.initial_state(x.data());
-  const int j = joint_without_inertia(sim, Eigen::Map<const Eigen::VectorXd>(x.data(), pc.n));
+  const int j = joint_without_inertia(sim, start_pose(pc));
   if (j < 0) return;
   const std::string J = std::to_string(j + 1);
   root.table("scene").fail(sc.rotor_inertia ? "robot" : "rotor_inertia",
@@ -890,8 +888,8 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
                                         "the planner's limits or the CSV's last time)"
                                       : "the open-loop input's last time (controller.file)";
   try {
-    Plant check(pc);  // the last consistency checks
-    check_start_inertia(root, sc, check);
+    PlantModel::validate(pc);  // the last consistency checks, with no plant and no back-end built
+    check_start_inertia(root, sc);
   } catch (const std::invalid_argument& e) {
     throw ConfigError(path + ": " + e.what());
   }
