@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The README's test command: install what is missing, build, run every test;
-# then the sanitizer build (preset asan) and its tests, and a 20-second fuzz
-# run of each parser (scripts/fuzz.sh --smoke). Each phase's wall time goes to stderr.
+# then the sanitizer build (preset asan) and its tests, a 20-second fuzz run
+# of each parser (scripts/fuzz.sh --smoke), and the threading tests under
+# ThreadSanitizer (preset tsan, which builds them alone). Each phase's wall
+# time goes to stderr.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 phase() {
@@ -15,3 +17,6 @@ phase cmake --preset asan >/dev/null
 phase cmake --build --preset asan -j "$(nproc)"
 phase ctest --preset asan -j "$(nproc)"
 phase scripts/fuzz.sh --smoke
+phase cmake --preset tsan >/dev/null
+phase cmake --build --preset tsan -j "$(nproc)"
+phase ctest --preset tsan -j "$(nproc)"

@@ -1,0 +1,224 @@
+// One const model, many threads (models/plant/plant_model.hpp): f evaluated
+// from 8 threads, each with its own context and evaluators on one shared
+// PlantModel, is bitwise the serial result; so are whole runs of the
+// discrete state (time events, root functions, the friction modes). The
+// sanitizer that checks these for data races is ThreadSanitizer (preset
+// tsan, which builds this binary alone); the release build runs them too.
+// Also here: loading a scene builds no plant and no back-end.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "models/dynamics/backend.hpp"
+#include "models/plant/plant.hpp"
+#include "models/scene/scene.hpp"
+
+namespace pumasim {
+namespace {
+
+const std::string kScenes = PUMASIM_SCENES_DIR;
+constexpr int kThreads = 8;
+
+// The shipped scenes that cover the model's kinds: the paper's chain on a
+// Cartesian path (tabulated reference, filled lazily by whichever thread
+// first asks), the hybrid friction's events, a sampled controller, an
+// open-loop input, a joint-space CSV reference, a passive arm.
+const std::vector<std::string> kSceneNames = {
+    "paper_slow_6dof",  "paper_slow_6dof_hybrid", "sampled_control", "open_loop_voltage",
+    "joint_space_csv",  "stanford_passive",       "stick_slip",
+};
+
+struct Point {
+  double t;
+  std::vector<double> x;
+};
+
+// Points about the scene's start state, spread over its duration:
+// deterministic perturbations scaled by each component's typical magnitude.
+std::vector<Point> sample_points(Plant& plant, double duration, int count) {
+  std::vector<double> x0(static_cast<std::size_t>(plant.size()));
+  plant.initial_state(x0.data());
+  std::vector<Point> pts;
+  for (int k = 0; k < count; ++k) {
+    Point p{duration * (k + 0.5) / count, x0};
+    for (int i = 0; i < plant.size(); ++i) {
+      p.x[static_cast<std::size_t>(i)] += 1e-2 * plant.tolerance_scale(i) * std::sin(1.7 * k + 0.3 * i);
+    }
+    pts.push_back(std::move(p));
+  }
+  return pts;
+}
+
+std::vector<double> evaluate_all(Plant& plant, const std::vector<Point>& pts, int rotate) {
+  const int m = plant.size(), count = static_cast<int>(pts.size());
+  std::vector<double> out(static_cast<std::size_t>(m) * count);
+  std::vector<double> x0(static_cast<std::size_t>(m));
+  plant.initial_state(x0.data());
+  for (int s = 0; s < count; ++s) {  // each thread in its own order
+    const int k = (s + rotate) % count;
+    plant.rhs(pts[k].t, pts[k].x.data(), out.data() + static_cast<std::ptrdiff_t>(k) * m);
+  }
+  return out;
+}
+
+bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+TEST(ConstModel, FFromEightThreadsIsBitwiseTheSerialResult) {
+  for (const std::string& name : kSceneNames) {
+    const Scene sc = load_scene(kScenes + "/" + name + ".toml");
+    Plant serial(sc.plant);
+    const std::vector<Point> pts = sample_points(serial, sc.duration, 64);
+    const std::vector<double> expected = evaluate_all(serial, pts, 0);
+    // A fresh model, so that its reference table is filled by the threads.
+    const auto shared = std::make_shared<const PlantModel>(sc.plant);
+    std::vector<std::vector<double>> got(kThreads);
+    std::vector<std::thread> threads;
+    for (int i = 0; i < kThreads; ++i) {
+      threads.emplace_back([&, i] {
+        Plant mine(shared);
+        got[static_cast<std::size_t>(i)] = evaluate_all(mine, pts, 7 * i);
+      });
+    }
+    for (auto& th : threads) th.join();
+    for (int i = 0; i < kThreads; ++i) {
+      EXPECT_TRUE(bitwise_equal(got[static_cast<std::size_t>(i)], expected)) << name << ", thread " << i;
+    }
+  }
+}
+
+// A run: classical RK4 at a fixed step with the discrete updates between
+// steps (time events when one is due, root functions at every step, a mode
+// switch where one changed sign). Not an integrator of the library: the same
+// sequence of calls in every thread, so that the end state and the mode log
+// must agree to the bit.
+struct RunEnd {
+  std::vector<double> x;
+  std::vector<ModeChange> modes;
+};
+
+RunEnd run(Plant& p, double t_end, double h) {
+  const int m = p.size(), r = p.num_roots();
+  std::vector<double> x(static_cast<std::size_t>(m)), k1(x), k2(x), k3(x), k4(x), y(x);
+  std::vector<double> g0(static_cast<std::size_t>(r)), g1(g0);
+  p.initial_state(x.data());
+  double t = 0, next = p.next_time_event(0.0);
+  if (r > 0) p.roots(t, x.data(), g0.data());
+  const auto stage = [&](double ts, const std::vector<double>& base, const std::vector<double>& k, double a,
+                         std::vector<double>& out) {
+    for (int i = 0; i < m; ++i) y[i] = base[i] + a * k[i];
+    p.rhs(ts, y.data(), out.data());
+  };
+  while (t < t_end) {
+    p.rhs(t, x.data(), k1.data());
+    stage(t + h / 2, x, k1, h / 2, k2);
+    stage(t + h / 2, x, k2, h / 2, k3);
+    stage(t + h, x, k3, h, k4);
+    for (int i = 0; i < m; ++i) x[i] += h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+    t += h;
+    if (t >= next) {
+      p.on_time_event(t, x.data());
+      next = p.next_time_event(t);
+    }
+    if (r == 0) continue;
+    p.roots(t, x.data(), g1.data());
+    for (int j = 0; j < r; ++j) {
+      if ((g0[j] > 0) != (g1[j] > 0)) p.on_root(j, t, x.data());
+    }
+    p.roots(t, x.data(), g0.data());
+  }
+  return {x, p.mode_changes()};
+}
+
+bool same_modes(const std::vector<ModeChange>& a, const std::vector<ModeChange>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (std::memcmp(&a[k].t, &b[k].t, sizeof(double)) != 0 || a[k].joint != b[k].joint || a[k].mode != b[k].mode ||
+        std::memcmp(&a[k].applied, &b[k].applied, sizeof(double)) != 0) {
+      return false;
+    }
+  }
+  return true;
+}
+
+TEST(ConstModel, RunsFromEightThreadsOnOneModelAreBitwiseTheSerialRun) {
+  for (const std::string& name : {"paper_slow_6dof_hybrid", "sampled_control", "stick_slip"}) {
+    const Scene sc = load_scene(kScenes + "/" + name + ".toml");
+    const double t_end = std::min(sc.duration, 0.05), h = 2.5e-5;
+    Plant serial(sc.plant);
+    const RunEnd expected = run(serial, t_end, h);
+    const auto shared = std::make_shared<const PlantModel>(sc.plant);
+    std::vector<RunEnd> got(kThreads);
+    std::vector<std::thread> threads;
+    for (int i = 0; i < kThreads; ++i) {
+      threads.emplace_back([&, i] {
+        Plant mine(shared);
+        got[static_cast<std::size_t>(i)] = run(mine, t_end, h);
+      });
+    }
+    for (auto& th : threads) th.join();
+    for (int i = 0; i < kThreads; ++i) {
+      const RunEnd& g = got[static_cast<std::size_t>(i)];
+      EXPECT_TRUE(bitwise_equal(g.x, expected.x)) << name << ", thread " << i;
+      EXPECT_TRUE(same_modes(g.modes, expected.modes)) << name << ", thread " << i;
+    }
+    if (std::string(name) != "sampled_control") {
+      EXPECT_GE(expected.modes.size(), 1u) << name << ": the run exercised the mode log";
+    }
+  }
+}
+
+// Loading a scene validates the plant without building one: no back-end is
+// made (the counter counts every registry make and make_dual). A plant then
+// builds its double evaluator's back-end, and the Jacobian its own.
+TEST(ConstModel, LoadingASceneBuildsNoBackend) {
+  for (const std::string& name : kSceneNames) {
+    const long before = backends_built();
+    const Scene sc = load_scene(kScenes + "/" + name + ".toml");
+    EXPECT_EQ(backends_built(), before) << name;
+    const long model_start = backends_built();
+    const auto model = std::make_shared<const PlantModel>(sc.plant);
+    // A passive arm's speed bound needs H at its start pose: one back-end.
+    const long expected_model = sc.plant.controller == ControllerMode::kNone ? 1 : 0;
+    EXPECT_EQ(backends_built() - model_start, expected_model) << name;
+    const long plant_start = backends_built();
+    Plant plant(model);
+    EXPECT_EQ(backends_built() - plant_start, 1) << name << ": the double evaluator";
+    std::vector<double> x(static_cast<std::size_t>(plant.size()));
+    plant.initial_state(x.data());
+    Eigen::MatrixXd J;
+    plant.jacobian_exact(0.0, x.data(), J);
+    EXPECT_EQ(backends_built() - plant_start, 2) << name << ": and the exact Jacobian's, at its first use";
+  }
+}
+
+// Two parameter sets on one reference share its table (the immutable part),
+// and each model's f is its own parameters'.
+TEST(ConstModel, AParameterSetMakesItsOwnModelSharingTheReferenceTable) {
+  const Scene sc = load_scene(kScenes + "/paper_slow_6dof.toml");
+  const auto base = std::make_shared<const PlantModel>(sc.plant);
+  PlantConfig heavier = sc.plant;
+  heavier.robot.joints[1].mass *= 1.5;
+  const auto varied = std::make_shared<const PlantModel>(heavier, *base);
+  ASSERT_NE(base->reference_table(), nullptr);
+  EXPECT_EQ(varied->reference_table(), base->reference_table());
+  Plant a(base), b(varied), c(heavier);
+  EXPECT_NE(c.model().reference_table(), base->reference_table()) << "a model of its own makes its own";
+  std::vector<double> x(static_cast<std::size_t>(a.size())), fa(x), fb(x), fc(x);
+  a.initial_state(x.data());
+  a.rhs(0.3, x.data(), fa.data());
+  b.rhs(0.3, x.data(), fb.data());
+  c.rhs(0.3, x.data(), fc.data());
+  EXPECT_FALSE(bitwise_equal(fa, fb)) << "the heavier link changes f";
+  EXPECT_TRUE(bitwise_equal(fb, fc)) << "a shared table gives the values of the model's own";
+}
+
+}  // namespace
+}  // namespace pumasim
