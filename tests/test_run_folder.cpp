@@ -177,10 +177,14 @@ TEST(RunFolder, LeftoversOfAGoneProcessAreRemovedByTheNextRun) {
   leftover(".run." + alive + "-0.partial", true);      // its process still runs
   leftover(".other." + dead + "-0.partial", true);     // another target's
   leftover(".run." + dead + ".partial", true);         // not pumasim's naming
+  // Killed between making its folder and writing the marker (a CI run's
+  // KilledRun left one): empty, so removed.
+  fs::create_directories(root / (".run." + dead + "-3.partial"));
   ASSERT_EQ(run({"--out", d.string()}), kExitOk);
   EXPECT_EQ(incomplete(d), "");
   EXPECT_FALSE(fs::exists(root / (".run." + dead + "-0.partial")));
   EXPECT_FALSE(fs::exists(root / (".run." + dead + "-7.old")));
+  EXPECT_FALSE(fs::exists(root / (".run." + dead + "-3.partial")));
   for (const std::string kept : {".run." + dead + "-1.partial", ".run." + alive + "-0.partial",
                                  ".other." + dead + "-0.partial", ".run." + dead + ".partial"}) {
     EXPECT_TRUE(fs::exists(root / kept / "trajectory.csv")) << kept;

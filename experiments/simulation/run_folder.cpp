@@ -99,8 +99,8 @@ class FolderLock {
 };
 
 // The temporary folders of earlier runs to this target
-// (".<name>.<pid>-<k>.partial" or ".old", with pumasim's marker) whose
-// process is gone: a run killed before its swap, or after the exchange.
+// (".<name>.<pid>-<k>.partial" or ".old", with pumasim's marker, or empty)
+// whose process is gone: a run killed before its swap, or after the exchange.
 void remove_leftovers(const fs::path& parent, const std::string& base) {
   const std::string prefix = "." + base + ".";
   std::error_code ec;
@@ -119,8 +119,14 @@ void remove_leftovers(const fs::path& parent, const std::string& base) {
     const long p = std::stol(pid);
     if (p == ::getpid() || ::kill(static_cast<pid_t>(p), 0) == 0 || errno != ESRCH) continue;  // alive, or unknown
     std::error_code e2;
-    if (!fs::exists(it->path() / kRunMarker, e2)) continue;
-    fs::remove_all(it->path(), e2);
+    if (fs::exists(it->path() / kRunMarker, e2)) {
+      fs::remove_all(it->path(), e2);
+      continue;
+    }
+    // No marker: a run killed between making its folder and writing the
+    // marker into it leaves the folder empty. Removed only if it is (rmdir
+    // refuses a folder with anything in it), so nobody's file can go.
+    fs::remove(it->path(), e2);
   }
 }
 
