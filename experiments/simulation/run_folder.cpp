@@ -6,6 +6,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include <fcntl.h>
 #include <signal.h>
@@ -98,6 +99,29 @@ class FolderLock {
   int fd_;
 };
 
+// Removes a folder of pumasim's (its marker inside), the marker last, so
+// that a process killed at any instant of it leaves the folder either still
+// marked or empty: both are known as pumasim's by remove_leftovers.
+void remove_marked_folder(const fs::path& dir, std::error_code& ec) {
+  std::vector<fs::path> entries;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().filename() != kRunMarker) entries.push_back(it->path());
+  }
+  if (ec) return;
+  for (const fs::path& e : entries) {
+    fs::remove_all(e, ec);
+    if (ec) return;
+  }
+  fs::remove(dir / kRunMarker, ec);
+  if (!ec) fs::remove(dir, ec);
+}
+
+void remove_marked_folder(const fs::path& dir) {
+  std::error_code ec;
+  remove_marked_folder(dir, ec);
+  if (ec) throw fs::filesystem_error("cannot remove", dir, ec);
+}
+
 // The temporary folders of earlier runs to this target
 // (".<name>.<pid>-<k>.partial" or ".old", with pumasim's marker, or empty)
 // whose process is gone: a run killed before its swap, or after the exchange.
@@ -120,7 +144,7 @@ void remove_leftovers(const fs::path& parent, const std::string& base) {
     if (p == ::getpid() || ::kill(static_cast<pid_t>(p), 0) == 0 || errno != ESRCH) continue;  // alive, or unknown
     std::error_code e2;
     if (fs::exists(it->path() / kRunMarker, e2)) {
-      fs::remove_all(it->path(), e2);
+      remove_marked_folder(it->path(), e2);
       continue;
     }
     // No marker: a run killed between making its folder and writing the
@@ -165,7 +189,7 @@ RunFolderWriter::~RunFolderWriter() {
   if (committed_) return;
   streams_.clear();
   std::error_code ec;
-  fs::remove_all(tmp_, ec);
+  remove_marked_folder(tmp_, ec);
 }
 
 std::ostream& RunFolderWriter::stream(const std::string& name) {
@@ -203,12 +227,12 @@ void RunFolderWriter::commit() {
     if (!fs::exists(fs::symlink_status(dir_))) {
       fs::rename(tmp_, dir_);
     } else if (::renameat2(AT_FDCWD, tmp_.c_str(), AT_FDCWD, dir_.c_str(), RENAME_EXCHANGE) == 0) {
-      fs::remove_all(tmp_);  // the old folder, under the temporary name
+      remove_marked_folder(tmp_);  // the old folder, under the temporary name
     } else {  // a file system without the exchange: two renames
       const fs::path old = temporary_path(dir_, "old");
       fs::rename(dir_, old);
       fs::rename(tmp_, dir_);
-      fs::remove_all(old);
+      remove_marked_folder(old);
     }
     committed_ = true;
   } catch (const fs::filesystem_error& e) {  // a folder that cannot be renamed: the path, not "internal"
