@@ -9,7 +9,7 @@
 // with it; CVODE and ARKODE stop exactly at their stop time. (A step meant to
 // end at the stop snaps to it when it lands within 1e-12 of its own length,
 // odeint.cpp: a rounding of the step, not a comparison of two instants.) The plant's
-// sample grids (models/plant/plant.cpp, on_grid) are a different question,
+// sample grids (models/plant/plant_model.cpp, on_grid) are a different question,
 // whether a time it announced is a multiple of a period, answered on the
 // sample index.
 #pragma once
