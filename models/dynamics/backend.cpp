@@ -5,43 +5,15 @@
 #include <array>
 #include <stdexcept>
 
+#include "backend_registry.inc"  // generated: the back-ends this build has (PUMASIM_BACKENDS)
 
 namespace pumasim {
-namespace detail {
-// One file each in models/dynamics/backends/.
-BackendInfo aba_entry();
-BackendInfo crba_entry();
-BackendInfo crba_symbolic_entry();
-BackendInfo crba_symbolic_puma560_entry();
-BackendInfo crba_world_entry();
-BackendInfo lagrange_euler_entry();
-BackendInfo lagrange_symbolic_entry();
-BackendInfo lagrange_symbolic_puma560_entry();
-BackendInfo rnea_probing_entry();
-BackendInfo rnea_probing_shared_entry();
-BackendInfo rnea_probing_symbolic_entry();
-BackendInfo rnea_probing_symbolic_puma560_entry();
-}  // namespace detail
-
 namespace {
 
 // Sorted by name (checked below). A new back-end is one file in
-// models/dynamics/backends/ and one line here.
-const std::array<BackendInfo, 12>& registry() {
-  static const std::array<BackendInfo, 12> table{{
-      detail::aba_entry(),
-      detail::crba_entry(),
-      detail::crba_symbolic_entry(),
-      detail::crba_symbolic_puma560_entry(),
-      detail::crba_world_entry(),
-      detail::lagrange_euler_entry(),
-      detail::lagrange_symbolic_entry(),
-      detail::lagrange_symbolic_puma560_entry(),
-      detail::rnea_probing_entry(),
-      detail::rnea_probing_shared_entry(),
-      detail::rnea_probing_symbolic_entry(),
-      detail::rnea_probing_symbolic_puma560_entry(),
-  }};
+// models/dynamics/backends/ and its name in models/dynamics/CMakeLists.txt.
+const detail::BackendTable& registry() {
+  static const detail::BackendTable table = detail::make_backend_table();
   return table;
 }
 
