@@ -297,7 +297,7 @@ TEST(PlantJacobian, HybridFrictionStuckAndSlippingJointsAlongARun) {
     EXPECT_TRUE(r.ok);
     EXPECT_GT(some_stuck, 0);
     EXPECT_GT(some_slipping, 0);
-    if (std::string(scene) == "paper_slow_6dof_hybrid") EXPECT_GT(mixed, 0) << "no sample with both modes";
+    if (std::string(scene) == "paper_slow_6dof_hybrid") { EXPECT_GT(mixed, 0) << "no sample with both modes"; }
   }
 }
 

@@ -195,7 +195,7 @@ TEST(Prismatic, RandomChainPatternKeepsTheOtherJoints) {
       EXPECT_EQ(x.prismatic(), j % 3 == 2) << j;
       EXPECT_EQ(a.mass, x.mass);
       EXPECT_EQ(a.alpha, x.alpha);
-      if (!x.prismatic()) EXPECT_EQ(a.d, x.d);
+      if (!x.prismatic()) { EXPECT_EQ(a.d, x.d); }
       if (x.prismatic()) {  // the drawn angle is its theta, the drawn length its offset
         EXPECT_EQ(x.d, 0.0);
         EXPECT_EQ(x.theta, a.offset);

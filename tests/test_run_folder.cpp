@@ -185,7 +185,7 @@ TEST(RunFolder, LeftoversOfAGoneProcessAreRemovedByTheNextRun) {
   EXPECT_FALSE(fs::exists(root / (".run." + dead + "-0.partial")));
   EXPECT_FALSE(fs::exists(root / (".run." + dead + "-7.old")));
   EXPECT_FALSE(fs::exists(root / (".run." + dead + "-3.partial")));
-  for (const std::string kept : {".run." + dead + "-1.partial", ".run." + alive + "-0.partial",
+  for (const std::string& kept : {".run." + dead + "-1.partial", ".run." + alive + "-0.partial",
                                  ".other." + dead + "-0.partial", ".run." + dead + ".partial"}) {
     EXPECT_TRUE(fs::exists(root / kept / "trajectory.csv")) << kept;
   }

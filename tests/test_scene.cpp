@@ -82,7 +82,7 @@ void expect_same_controller(const PlantConfig& a, const PlantConfig& b, const st
         }
         for (const auto& k : Params::Law::text_keys()) {
           EXPECT_EQ(pa.settings.*k.member, pb.settings.*k.member) << what << ": " << k.key;
-          if (k.rows) EXPECT_EQ(pa.settings.*k.rows, pb.settings.*k.rows) << what << ": " << k.key << "'s rows";
+          if (k.rows) { EXPECT_EQ(pa.settings.*k.rows, pb.settings.*k.rows) << what << ": " << k.key << "'s rows"; }
         }
       },
       a.controller_params);

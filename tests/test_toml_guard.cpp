@@ -139,7 +139,7 @@ TEST(TomlGuard, ValidLookAlikesParse) {
 
 TEST(TomlGuard, EveryShippedFilePassesTheGuard) {
   std::vector<std::filesystem::path> files;
-  for (const std::string dir : {robots_dir(), std::string(PUMASIM_SCENES_DIR)}) {
+  for (const std::string& dir : {robots_dir(), std::string(PUMASIM_SCENES_DIR)}) {
     for (const auto& e : std::filesystem::directory_iterator(dir)) {
       if (e.path().extension() == ".toml") files.push_back(e.path());
     }
