@@ -20,6 +20,7 @@
 
 #include "experiments/cli.hpp"
 #include "tests/cli_capture.hpp"
+#include "tests/scratch.hpp"
 #include "experiments/simulation/driver.hpp"
 #include "experiments/simulation/run_documents.hpp"
 
@@ -44,7 +45,7 @@ void expect_bad(const std::vector<std::string>& args, const std::vector<std::str
 }
 
 fs::path scratch(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("pumasim_cli_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d = testing::scratch_root() / ("pumasim_cli_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

@@ -13,6 +13,7 @@
 
 #include "experiments/cli.hpp"
 #include "tests/cli_capture.hpp"
+#include "tests/scratch.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
@@ -79,7 +80,7 @@ TEST(Cli, BadInputExitsWithStatus2AndSaysWhatWasExpected) {
 class RobotFile : public ::testing::Test {
  protected:
   std::string write(const std::string& text) {
-    const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_robot";
+    const auto dir = testing::scratch_root() / "pumasim_test_robot";
     std::filesystem::create_directories(dir);
     const std::string path = (dir / (std::string(::testing::UnitTest::GetInstance()
                                                       ->current_test_info()
@@ -261,7 +262,7 @@ TEST(SceneNumbers, ASceneWithoutRotorInertiaOnAMasslessLinkIsRefused) {
     ASSERT_NE(at, std::string::npos) << from;
     robot.replace(at, from.size(), to);
   }
-  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_test_massless_" + std::to_string(::getpid()));
+  const auto dir = testing::scratch_root() / ("pumasim_test_massless_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "arm.toml") << robot;
   ASSERT_EQ(load_robot_file((dir / "arm.toml").string()).joints[5].mass, 0.0);
@@ -414,7 +415,7 @@ TEST(SceneNumbers, CheckRefusesWhatRunWouldRefuse) {
   EXPECT_NE(r.err.find("integrator.name: expected one of: ab2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("got \"RK4\""), std::string::npos) << r.err;
   r = cli({"run", scene, "--set", "scene.duration=1e300", "--out",
-           (std::filesystem::temp_directory_path() / ("pumasim_rows_" + std::to_string(::getpid()))).string()});
+           (testing::scratch_root() / ("pumasim_rows_" + std::to_string(::getpid()))).string()});
   EXPECT_EQ(r.status, kExitBadInput);
   EXPECT_NE(r.err.find("output rows over scene.duration"), std::string::npos) << r.err;
   // check refuses the same (its budgets are run's defaults), and a servo period whose samples exceed them.
@@ -443,7 +444,7 @@ TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
   const std::size_t end = robot.find("\n[", last + 1);
   const std::string seventh = robot.substr(last, end == std::string::npos ? std::string::npos : end - last);
   robot = robot.substr(0, end == std::string::npos ? robot.size() : end) + "\n" + seventh + "\n";  // poses dropped
-  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_test_seven_" + std::to_string(::getpid()));
+  const auto dir = testing::scratch_root() / ("pumasim_test_seven_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "seven.toml") << robot;
   ASSERT_EQ(load_robot_file((dir / "seven.toml").string()).dof(), 7);

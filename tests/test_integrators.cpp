@@ -19,6 +19,7 @@
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "tests/integrator_helpers.hpp"
+#include "tests/scratch.hpp"
 #include "integrators/stability.hpp"
 #include "integrators/time_rule.hpp"
 #include "models/scene/scene.hpp"
@@ -606,7 +607,7 @@ TEST(HybridFriction, WithoutFrictionLevelsIsTheViscousLaw) {
 // time and a state component, its files written (the reliability issue: a
 // 1e-12 s period ground through 10 million steps, about 40 s, first).
 TEST(Run, EndsWithinItsBudgets) {
-  const auto dir = std::filesystem::temp_directory_path() / ("pumasim_budget_" + std::to_string(::getpid()));
+  const auto dir = testing::scratch_root() / ("pumasim_budget_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::ostringstream out, err;
   EXPECT_EQ(run_cli({"run", std::string(PUMASIM_SCENES_DIR) + "/sampled_control.toml", "--set",
@@ -659,7 +660,7 @@ TEST(Run, EndsWhenItsCancelFlagIsSet) {
 
 TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
   const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
-  const auto dir = std::filesystem::temp_directory_path() / "pumasim_run_test";
+  const auto dir = testing::scratch_root() / "pumasim_run_test";
   std::filesystem::remove_all(dir);
   std::ostringstream out, err;
   ASSERT_EQ(run_cli({"run", scene, "--integrator", "rk4", "--dt=0.0005", "--t-end", "0.2", "--out", dir.string()},

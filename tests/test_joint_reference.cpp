@@ -24,6 +24,7 @@
 #include "models/scene/scene.hpp"
 
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -257,7 +258,7 @@ TEST(JointReference, ThroughThePointsAndHeldAfterTheLast) {
 // ---------------------------------------------------------------- CSV
 
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / name;
+  const auto path = testing::scratch_root() / name;
   std::ofstream(path) << text;
   return path.string();
 }

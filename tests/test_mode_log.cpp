@@ -27,6 +27,7 @@
 #include "experiments/simulation/mode_log.hpp"
 #include "experiments/simulation/scene_run.hpp"
 #include "models/scene/scene.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -39,7 +40,7 @@ const std::string kLevels = "static_torque = 0.146\nkinetic_torque = 0.124\n";
 // The scene (written to a fresh folder) with the [friction] section's keys
 // `friction`; U = 2 Z Fs (Z < 0 here: u / Z rises from 0 to 2 Fs).
 std::string scene_file(const std::string& friction) {
-  const fs::path d = fs::temp_directory_path() /
+  const fs::path d = testing::scratch_root() /
                      ("pumasim_mode_log_" + std::to_string(::getpid()) + "_" +
                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::create_directories(d);

@@ -23,6 +23,7 @@
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -232,7 +233,7 @@ struct OneJoint {
   double Fs = 0.02, Fk = 0.015;   // [N m] motor side (chosen)
   double t_end = 3.0;
   std::string scene_file() const {
-    const fs::path d = fs::temp_directory_path() /
+    const fs::path d = testing::scratch_root() /
                        ("pumasim_mj_" + std::to_string(::getpid()) + "_" +
                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(d);

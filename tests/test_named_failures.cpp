@@ -24,6 +24,7 @@
 #include "integrators/registry.hpp"
 #include "models/plant/physical_bounds.hpp"
 #include "models/scene/scene.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -105,7 +106,7 @@ TEST(PhysicalBounds, PassiveArmSpeedsStayWithinTheEnergyBound) {
 TEST(PhysicalBounds, ADivergedRunIsANamedUnstableFailure) {
   std::ostringstream out, err;
   const int status = run_cli({"run", kScenes + "/paper_slow_6dof_hybrid.toml", "--integrator", "ab4", "--dt", "5e-4",
-                              "--out", ::testing::TempDir() + "/pumasim_unstable_run", "--force", "--quiet"},
+                              "--out", (testing::scratch_root() / "pumasim_unstable_run").string(), "--force", "--quiet"},
                              out, err);
   EXPECT_EQ(status, kExitInternal) << err.str();
   const auto stats = nlohmann::json::parse(out.str());
@@ -147,7 +148,7 @@ TEST(NamedFailures, ThePapersRuleIsNamedDiscontinuousUpFront) {
   const CliResult smooth = cli({"check", kScenes + "/passive_arm.toml"});
   EXPECT_EQ(smooth.out.find("# note:"), std::string::npos) << smooth.out;
   const CliResult r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6", "--t-end",
-                     "0.05", "--out", ::testing::TempDir() + "/pumasim_paper_bdf", "--force", "--quiet"});
+                     "0.05", "--out", (testing::scratch_root() / "pumasim_paper_bdf").string(), "--force", "--quiet"});
   EXPECT_NE(r.err.find("warning: cvode-bdf is adaptive and friction.model = \"paper\" is discontinuous"),
             std::string::npos)
       << r.err;
@@ -157,7 +158,7 @@ TEST(NamedFailures, ThePapersRuleIsNamedDiscontinuousUpFront) {
 // chattering named (the joint, its sign changes), not with "more steps".
 TEST(NamedFailures, AStepCollapseOnTheRuleIsDiagnosedAsChattering) {
   const CliResult r = cli({"run", kScenes + "/paper_slow.toml", "--integrator", "cvode-bdf", "--rtol", "1e-6",
-                     "--max-steps", "20000", "--out", ::testing::TempDir() + "/pumasim_chatter", "--force", "--quiet"});
+                     "--max-steps", "20000", "--out", (testing::scratch_root() / "pumasim_chatter").string(), "--force", "--quiet"});
   EXPECT_EQ(r.status, kExitInternal) << r.err;
   const auto stats = nlohmann::json::parse(r.out);
   const std::string why = stats["failure"];
@@ -171,7 +172,7 @@ TEST(NamedFailures, AStepCollapseOnTheRuleIsDiagnosedAsChattering) {
 // absurd tolerances refused with the range.
 TEST(NamedFailures, RtolAloneSetsAtolAndAbsurdTolerancesAreRefused) {
   const CliResult r = cli({"run", kScenes + "/passive_arm.toml", "--integrator", "cvode-bdf", "--rtol", "1e-10", "--t-end",
-                     "0.01", "--out", ::testing::TempDir() + "/pumasim_rtol_alone", "--force"});
+                     "0.01", "--out", (testing::scratch_root() / "pumasim_rtol_alone").string(), "--force"});
   ASSERT_EQ(r.status, kExitOk) << r.err;
   const auto stats = nlohmann::json::parse(r.out);
   EXPECT_DOUBLE_EQ(stats["rtol"].get<double>(), 1e-10);
@@ -189,7 +190,7 @@ TEST(NamedFailures, RtolAloneSetsAtolAndAbsurdTolerancesAreRefused) {
 
 // A misspelt table is named as unknown first, not as the missing half of the drive.
 TEST(NamedFailures, AMisspeltTableIsNamedUnknown) {
-  const std::string dir = ::testing::TempDir() + "/pumasim_misspelt";
+  const std::string dir = (testing::scratch_root() / "pumasim_misspelt").string();
   std::filesystem::create_directories(dir);
   std::ifstream in(kScenes + "/paper_slow.toml");
   std::stringstream text;
@@ -236,7 +237,7 @@ TEST(Bounded, SizesAreRefusedBeforeTheyAreSpent) {
   // An earlier end time rescues the run: the bound is on the rows a run holds.
   std::ostringstream out, err;
   EXPECT_EQ(run_cli({"run", kScenes + "/paper_slow.toml", "--set", "reference.max_speed=1e-9", "--t-end", "0.05",
-                     "--out", ::testing::TempDir() + "/pumasim_slow_reference", "--force", "--quiet"},
+                     "--out", (testing::scratch_root() / "pumasim_slow_reference").string(), "--force", "--quiet"},
                     out, err),
             kExitOk)
       << err.str();

@@ -36,6 +36,7 @@
 #include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -44,7 +45,7 @@ namespace fs = std::filesystem;
 
 // A fresh folder for this test's files (CTest runs tests in parallel processes).
 fs::path scratch() {
-  const fs::path d = fs::temp_directory_path() /
+  const fs::path d = testing::scratch_root() /
                      ("pumasim_open_loop_" + std::to_string(::getpid()) + "_" +
                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::create_directories(d);

@@ -16,6 +16,7 @@
 #include "models/reference/trajectory.hpp"
 
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -260,7 +261,7 @@ TEST(PathDistance, OffsetPointsAreTheirOffsetAway) {
 // output the distance to the path is at most the distance to the reference
 // point (which lies on the path), and no amplifier voltage exceeds its limit.
 TEST(RunReport, DeviationBelowTrackingErrorAndVoltagesWithinTheLimit) {
-  const auto dir = std::filesystem::temp_directory_path() / "pumasim_planning_run";
+  const auto dir = testing::scratch_root() / "pumasim_planning_run";
   std::ostringstream out, err;
   ASSERT_EQ(run_cli({"run", scene_path("planning"), "--set", "reference.timing=\"quintic\"", "--set",
                      "reference.traversal_time=2.0", "--out", dir.string()},

@@ -19,6 +19,7 @@
 #include "models/scene/scene.hpp"
 
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -220,7 +221,7 @@ TEST(Reference, ContinuousThroughTheWristSingularityAndBeyondPi) {
     text = std::regex_replace(ss.str(), std::regex("orientation = \\[\\[.*"),
                               "orientation = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]");
   }
-  const auto path = std::filesystem::temp_directory_path() / "pumasim_reference_down.toml";
+  const auto path = testing::scratch_root() / "pumasim_reference_down.toml";
   std::ofstream(path) << text;
   const Scene sc = load_scene(path.string());
   const Reference& ref = *sc.plant.reference;
@@ -540,7 +541,7 @@ TEST(Scene, ResolvedSceneLoadsBackToTheSameScene) {
   for (const char* name : {"paper_slow", "paper_fast", "paper_slow_6dof", "paper_slow_reduced", "passive_arm"}) {
     const Scene a = load_scene(scene_path(name));
     const std::string text = resolved_toml(a);
-    const auto path = std::filesystem::temp_directory_path() / (std::string("resolved_") + name + ".toml");
+    const auto path = testing::scratch_root() / (std::string("resolved_") + name + ".toml");
     std::ofstream(path) << text;
     const std::string again = resolved_toml(load_scene(path.string()));
     // Identical but for the header line naming the source file and the
@@ -567,7 +568,7 @@ class BadScene : public ::testing::Test {
     ASSERT_NE(at, std::string::npos) << from;
     text.replace(at, from.size(), to);
     // One file per test: CTest runs the tests in parallel processes.
-    const auto path = std::filesystem::temp_directory_path() /
+    const auto path = testing::scratch_root() /
                       (std::string("pumasim_bad_scene_") +
                        ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".toml");
     std::ofstream(path) << text;

@@ -23,6 +23,7 @@
 #include "experiments/simulation/run_folder.hpp"
 #include "experiments/simulation/run_recorder.hpp"
 #include "experiments/simulation/run_request.hpp"
+#include "tests/scratch.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"
@@ -37,7 +38,7 @@ const std::string kScene = std::string(PUMASIM_SCENES_DIR) + "/paper_slow.toml";
 
 // A fresh folder of this test's own (CTest runs tests in parallel processes).
 fs::path scratch(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("pumasim_run_folder_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d = testing::scratch_root() / ("pumasim_run_folder_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

@@ -15,6 +15,7 @@
 
 #include "models/scene/scene.hpp"
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -167,7 +168,7 @@ void expect_round_trip(const std::string& scene, const std::vector<std::string>&
   const Scene a = load_scene(scene, overrides);
   const std::string text = resolved_toml(a);
   static int count = 0;
-  const fs::path path = fs::temp_directory_path() /
+  const fs::path path = testing::scratch_root() /
                         ("pumasim_resolved_" + std::to_string(::getpid()) + "_" + std::to_string(++count) + ".toml");
   std::ofstream(path) << text;
   Scene b;

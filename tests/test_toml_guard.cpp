@@ -19,12 +19,13 @@
 #include "models/robot/toml_writer.hpp"
 #include "models/scene/scene.hpp"
 #include "tests/scene_paths.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
 
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_toml_guard";
+  const auto dir = testing::scratch_root() / "pumasim_test_toml_guard";
   std::filesystem::create_directories(dir);
   const std::string path = (dir / (name + ".toml")).string();
   std::ofstream(path, std::ios::binary) << text;

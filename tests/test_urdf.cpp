@@ -36,6 +36,7 @@
 #include "models/robot/urdf_file.hpp"
 #include "models/scene/scene.hpp"
 #include "tests/helpers.hpp"
+#include "tests/scratch.hpp"
 
 #ifndef PUMASIM_TEST_ROBOTS_DIR
 #error "PUMASIM_TEST_ROBOTS_DIR must be defined by the build"
@@ -56,7 +57,7 @@ const std::string kPumaUrdf = std::string(PUMASIM_SCENES_DIR) + "/../../models/r
 
 fs::path scratch() {
   static const fs::path d = [] {
-    const fs::path p = fs::temp_directory_path() / ("pumasim_urdf_" + std::to_string(::getpid()));
+    const fs::path p = testing::scratch_root() / ("pumasim_urdf_" + std::to_string(::getpid()));
     fs::remove_all(p);
     fs::create_directories(p);
     return p;
