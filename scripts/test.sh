@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's test command: install what is missing, build, run every test;
-# then the sanitizer build (preset asan) and its tests, a 20-second fuzz run
+# then the sanitizer build (preset asan) and its tests, a 10-second fuzz run
 # of each parser (scripts/fuzz.sh --smoke), and the threading tests under
 # ThreadSanitizer (preset tsan, which builds them alone). Each phase's wall
 # time goes to stderr.
