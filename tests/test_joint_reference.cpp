@@ -308,6 +308,42 @@ TEST(JointCsv, BadFilesAreRefusedNamingFileLineAndColumn) {
   EXPECT_EQ(rows[1], (std::vector<double>{1.5, -0.2, 0.2, 0.3}));
 }
 
+// Rows whose steps each pass the reader's check but whose spline couples a
+// huge jump in a short step with a long neighbouring step (found by
+// fuzz_joint_csv in CI's smoke run): the quintic's knot equations overflow.
+// The curve refuses them, and a scene loading them names its file.
+TEST(JointCsv, ASplineThatOverflowsIsRefusedByTheCurveAndTheScene) {
+  const std::string csv = "t,q1,q2,q3\n0,0,0,0\n1e-6,1e280,0,0\n1,0,0,0\n";
+  const std::string path = write_temp("pumasim_csv_coupled_overflow.csv", csv);
+  const auto rows = read_joint_csv(path, 3);  // each step alone passes
+  std::vector<double> knots;
+  std::vector<JointCurve::Vec6> points;
+  for (const auto& r : rows) {
+    knots.push_back(r[0]);
+    JointCurve::Vec6 q = JointCurve::Vec6::Zero();
+    for (int j = 0; j < 3; ++j) q[j] = r[static_cast<std::size_t>(j) + 1];
+    points.push_back(q);
+  }
+  std::string msg;
+  try {
+    JointCurve(knots, points, 3, JointCurve::Kind::kQuintic);
+  } catch (const std::invalid_argument& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("joint 1's spline"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("not finite"), std::string::npos) << msg;
+  std::ifstream in(scene_path("joint_space_csv"));
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  const std::string from = "joints = \"joint_space_csv.csv\"";
+  text.replace(text.find(from), from.size(), "joints = \"pumasim_csv_coupled_overflow.csv\"");
+  const std::string scene = write_temp("pumasim_csv_coupled_overflow.toml", text);
+  const std::string smsg = refusal([&] { load_scene(scene); });  // the scene's joint-quintic
+  EXPECT_NE(smsg.find(scene + ":"), std::string::npos) << smsg;
+  EXPECT_NE(smsg.find("not finite"), std::string::npos) << smsg;
+}
+
 // Through a scene: the scene's file, line and key, then the CSV's file and line.
 TEST(JointCsv, SceneNamesItsKeyAndTheFilesLine) {
   write_temp("pumasim_csv_scene.csv", "t,q1,q2,q3\n0,-0.2349,0.6706,-3.5105\n1,x,0.6,-3.5\n");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -126,6 +127,34 @@ JointCurve::JointCurve(std::vector<double> knots, std::vector<Vec6> points, int 
                                                                    : clamped_quintic_spline(knots_, y, 0, 0, 0, 0);
     for (std::size_t k = 0; k + 1 < K; ++k)
       for (int e = 0; e < 6; ++e) coef_[k](j, e) = c[k][static_cast<std::size_t>(e)];
+  }
+  check_finite();
+}
+
+// Every number eval_piece forms on a piece of length h, for u in [0, h], is
+// at most 20 sum_{e >= k} |c_e| h^(e - k) for some k (Horner's partial sums,
+// the derivatives' factors e and e (e - 1) at most 20): all finite, the curve
+// is finite everywhere. The rows' check (models/scene/joint_csv.cpp) bounds
+// each step's terms, but the spline's knot equations couple neighbouring
+// steps, and a value jump of 1e280 rad in 1e-6 s beside a step of 1 s passed
+// it and overflowed the quintic (fuzz_joint_csv, in CI's smoke run).
+void JointCurve::check_finite() const {
+  for (std::size_t k = 0; k < coef_.size(); ++k) {
+    const double h = knots_[k + 1] - knots_[k];
+    for (int j = 0; j < n_; ++j) {
+      for (int lo = 0; lo < 6; ++lo) {
+        double sum = 0, power = 1;
+        for (int e = lo; e < 6; ++e, power *= h) sum += std::abs(coef_[k](j, e)) * power;
+        if (!std::isfinite(20 * sum)) {
+          char buf[200];
+          std::snprintf(buf, sizeof buf,
+                        "joint curve: joint %d's spline between the points at t = %.6g s and %.6g s is not finite "
+                        "(values too large for their time steps)",
+                        j + 1, knots_[k], knots_[k + 1]);
+          throw std::invalid_argument(buf);
+        }
+      }
+    }
   }
 }
 

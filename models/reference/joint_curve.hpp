@@ -58,6 +58,9 @@ class JointCurve {
   // q, dq/dx, d2q/dx2 on piece k at x (its polynomial continued past its
   // ends); entries beyond n are 0. Allocation-free.
   void eval_piece(int k, double x, Vec6& q, Vec6& dq, Vec6& ddq) const;
+  // std::invalid_argument naming the joint and the piece if a piece could
+  // evaluate to a non-finite number.
+  void check_finite() const;
   // The same at x clamped to [0, L], on the piece holding it.
   void eval(double x, Vec6& q, Vec6& dq, Vec6& ddq) const;
   // The inner knots: where a derivative jumps (cubic: the third, quintic: the fifth).
