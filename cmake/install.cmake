@@ -24,7 +24,7 @@ include(CMakePackageConfigHelpers)
 # all below it). The in-tree ALIASes let a parent project use the same names
 # after add_subdirectory().
 set(_pumasim_exported
-  pumasim_dynamics:dynamics pumasim_robot:robot pumasim_reference:reference pumasim_plant:plant
+  pumasim_core:core pumasim_dynamics:dynamics pumasim_robot:robot pumasim_reference:reference pumasim_plant:plant
   pumasim_scene:scene pumasim_models:models pumasim_integrators:integrators pumasim_simulation:simulation)
 add_library(pumasim_package INTERFACE)
 target_link_libraries(pumasim_package INTERFACE pumasim_simulation)
@@ -65,7 +65,7 @@ install(TARGETS ${_pumasim_targets} EXPORT pumasim-targets
 # files that include SUNDIALS and Boost's uBLAS (implementation details of
 # the integrators' .cpp files; DESIGN.md keeps SUNDIALS behind one wall) and
 # the test set, which is not part of the package.
-foreach(_dir models/dynamics models/robot models/reference models/plant models/scene integrators
+foreach(_dir core models/dynamics models/robot models/reference models/plant models/scene integrators
              experiments/simulation)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/pumasim/${_dir}
     FILES_MATCHING PATTERN "*.hpp"

@@ -538,13 +538,47 @@ void add_conditioning(CLI::App* app, ConditioningArgs& a) {
 
 // ---------------------------------------------------------------- the command table
 
-int cmd_integrators(std::ostream& out) {
-  for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
+// With --json, every field of every registry entry (what scripts read; the
+// text is for people).
+Json integrator_json(const IntegratorInfo& i) {
+  Json j;
+  j["name"] = i.name;
+  j["summary"] = i.summary;
+  j["kind"] = i.kind == IntegratorKind::kAdaptive ? "adaptive" : "fixed-step";
+  j["order"] = i.order;
+  j["variable_order"] = i.variable_order;
+  j["implicit"] = i.implicit;
+  j["rhs_per_step"] = i.rhs_per_step;
+  j["real_stability"] = std::isfinite(i.real_stability) ? Json(i.real_stability) : Json("infinity");
+  j["dense_order"] = i.dense_order;
+  j["starter_steps"] = i.starter_steps;
+  j["uses_jacobian"] = i.uses_jacobian;
+  j["exact_jacobian"] = i.exact_jacobian;
+  j["jacobian_choice"] = i.jacobian_choice;
+  j["finds_roots"] = i.finds_roots;
+  j["set_valued_friction"] = i.set_valued_friction;
+  return j;
+}
+
+int cmd_integrators(bool json, std::ostream& out) {
+  if (!json) {
+    for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
+    return kExitOk;
+  }
+  Json all = Json::array();
+  for (const auto& i : integrators()) all.push_back(integrator_json(i));
+  out << all.dump(2) << "\n";
   return kExitOk;
 }
 
-int cmd_backends(std::ostream& out) {
-  for (const auto& b : backends()) out << b.name << "\t" << b.summary << "\n";
+int cmd_backends(bool json, std::ostream& out) {
+  if (!json) {
+    for (const auto& b : backends()) out << b.name << "\t" << b.summary << "\n";
+    return kExitOk;
+  }
+  Json all = Json::array();
+  for (const auto& b : backends()) all.push_back(Json{{"name", b.name}, {"summary", b.summary}});
+  out << all.dump(2) << "\n";
   return kExitOk;
 }
 
@@ -556,6 +590,7 @@ struct Parsed {
   StiffnessArgs stiffness;
   ConditioningArgs conditioning;
   std::string help_topic;
+  bool json = false;  // integrators, backends: --json
 };
 
 using Handler = std::function<int(std::ostream& out, std::ostream& err)>;
@@ -576,8 +611,9 @@ const Command kCommands[] = {
     {"dynamics", "prints H, h, g (and tau from qdd, qdd from tau) as one JSON object", "",
      [](CLI::App* a, Parsed& p) { add_dynamics(a, p.dynamics); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_dynamics(p.dynamics, o); }},
-    {"backends", "lists the dynamics back-ends", "", [](CLI::App*, Parsed&) {},
-     [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(o); }},
+    {"backends", "lists the dynamics back-ends", "",
+     [](CLI::App* a, Parsed& p) { a->add_flag("--json", p.json, "one JSON array of the entries (name, summary)"); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(p.json, o); }},
     {"check", "checks a scene; prints it resolved, its state layout and initial state",
      "Prints the scene with every default filled in (a robot file path made absolute), its state layout, its "
      "initial state and the robot file with its hash.",
@@ -613,8 +649,13 @@ const Command kCommands[] = {
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) {
        return cmd_conditioning(p.conditioning, o, e);
      }},
-    {"integrators", "lists the integrators", "", [](CLI::App*, Parsed&) {},
-     [](const Parsed&, CLI::App&, std::ostream& o, std::ostream&) { return cmd_integrators(o); }},
+    {"integrators", "lists the integrators", "",
+     [](CLI::App* a, Parsed& p) {
+       a->add_flag("--json", p.json,
+                   "one JSON array of the registry's entries, every field (kind, order, stability interval, "
+                   "Jacobian use, ...)");
+     },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_integrators(p.json, o); }},
     {"help", "prints this text, or a command's options", "",
      [](CLI::App* a, Parsed& p) {
        a->add_option("command", p.help_topic, "the command whose options to print")->type_name("COMMAND");

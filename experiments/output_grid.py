@@ -28,6 +28,7 @@ build/output_grid/), with a private copy of the pumasim binary. --reduced (CI):
 cvode-adams and cvode-bdf, rtol 1e-4 only, 2.5 s, into build/output_grid-reduced/.
 """
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -41,9 +42,8 @@ MODES = [("dense", []), ("stops", ["--stop-at-outputs"])]
 
 
 def adaptive_integrators():
-    p = subprocess.run([PUMASIM, "integrators"], capture_output=True, text=True, check=True)
-    return [line.split("\t")[0] for line in p.stdout.splitlines() if line.rstrip().endswith("adaptive")
-            or "; adaptive" in line or ", adaptive" in line]
+    p = subprocess.run([PUMASIM, "integrators", "--json"], capture_output=True, text=True, check=True)
+    return [entry["name"] for entry in json.loads(p.stdout) if entry["kind"] == "adaptive"]
 
 
 def run(work, integ, rtol, atol, interval, mode_flags, t_end):

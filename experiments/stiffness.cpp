@@ -11,7 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "experiments/simulation/driver.hpp"
-#include "integrators/time_rule.hpp"
+#include "core/time_rule.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
 #include "models/dynamics/backend.hpp"
@@ -33,7 +33,7 @@ Run run_scene(const Scene& sc, const std::string& integrator, const IntegratorOp
     if (at) at(plant, t, x);
     r.final_state.assign(x, x + plant.size());
   }, 20'000'000);
-  r.ok = res.ok && !before(res.t_final, t_end, t_end);  // integrators/time_rule.hpp
+  r.ok = res.ok && !before(res.t_final, t_end, t_end);  // core/time_rule.hpp
   return r;
 }
 

@@ -205,10 +205,10 @@ def _variants(path, doc, s):
 
 def _listed_integrators():
     """The integrators `pumasim integrators` lists."""
-    p = subprocess.run([PUMASIM, "integrators"], capture_output=True, text=True)
+    p = subprocess.run([PUMASIM, "integrators", "--json"], capture_output=True, text=True)
     if p.returncode != 0:
-        raise SweepError(f"{PUMASIM} integrators: exit status {p.returncode}: {p.stderr.strip()}")
-    return {line.split("\t")[0] for line in p.stdout.splitlines() if line.strip()}
+        raise SweepError(f"{PUMASIM} integrators --json: exit status {p.returncode}: {p.stderr.strip()}")
+    return {entry["name"] for entry in json.loads(p.stdout)}
 
 
 def _guarded(s):

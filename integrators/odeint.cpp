@@ -44,7 +44,7 @@
 #include <boost/numeric/odeint.hpp>
 
 #include "integrators/integrator.hpp"
-#include "integrators/time_rule.hpp"
+#include "core/time_rule.hpp"
 #include "integrators/rosenbrock_coefficients.hpp"
 #include "integrators/registry_entries.hpp"
 

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/registry.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/registry_entries.hpp"
@@ -99,86 +100,373 @@ namespace {
 // (RODAS-type rosenbrock4: order 4, dense output order 3); the SUNDIALS 6.4
 // manuals (CVODE BDF 1-5 / Adams 1-12; ARKODE's order-4 tables, whose dense
 // output is ARKODE's Hermite interpolant, degree 3 by default).
-constexpr auto F = IntegratorKind::kFixedStep;
-constexpr auto A = IntegratorKind::kAdaptive;
 constexpr std::array<IntegratorInfo, 19> kIntegrators{{
-    {"ab2", "Adams-Bashforth, order 2, fixed step (RK4 start)", &detail::make_ab2, F, 2, false, false, 1, 1.0, 2, 1},
-    {"ab3", "Adams-Bashforth, order 3, fixed step (RK4 start)", &detail::make_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
-    {"ab4", "Adams-Bashforth, order 4, fixed step (RK4 start)", &detail::make_ab4, F, 4, false, false, 1, 0.3, 4, 3},
-    {"arkode-dirk", "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
-     &detail::make_arkode_dirk, A, 4, false, true, 0, 0.0, 3, 0},
-    {"arkode-erk", "SUNDIALS ARKODE, explicit RK (order 4); adaptive", &detail::make_arkode_erk, A, 4, false, false, 0,
-     0.0, 3, 0},
-    {"arkode-imex", "SUNDIALS ARKODE, additive IMEX RK (order 4): the system's stiff part implicit; adaptive",
-     &detail::make_arkode_imex, A, 4, false, true, 0, 0.0, 3, 0},
-    {"cvode-adams", "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive", &detail::make_cvode_adams, A, 12,
-     true, true, 0, 0.0, 12, 0},
-    {"cvode-bdf", "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive", &detail::make_cvode_bdf, A, 5, true, true, 0,
-     0.0, 5, 0},
+    {
+        .name = "ab2",
+        .summary = "Adams-Bashforth, order 2, fixed step (RK4 start)",
+        .make = &detail::make_ab2,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 2,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 1.0,
+        .dense_order = 2,
+        .starter_steps = 1,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "ab3",
+        .summary = "Adams-Bashforth, order 3, fixed step (RK4 start)",
+        .make = &detail::make_ab3,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 3,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 6.0 / 11,
+        .dense_order = 3,
+        .starter_steps = 2,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "ab4",
+        .summary = "Adams-Bashforth, order 4, fixed step (RK4 start)",
+        .make = &detail::make_ab4,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 4,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 0.3,
+        .dense_order = 4,
+        .starter_steps = 3,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "arkode-dirk",
+        .summary = "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
+        .make = &detail::make_arkode_dirk,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 4,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = true,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "arkode-erk",
+        .summary = "SUNDIALS ARKODE, explicit RK (order 4); adaptive",
+        .make = &detail::make_arkode_erk,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 4,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "arkode-imex",
+        .summary = "SUNDIALS ARKODE, additive IMEX RK (order 4): the system's stiff part implicit; adaptive",
+        .make = &detail::make_arkode_imex,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 4,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "cvode-adams",
+        .summary = "SUNDIALS CVODE, Adams-Moulton 1-12, Newton, dense; adaptive",
+        .make = &detail::make_cvode_adams,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 12,
+        .variable_order = true,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 12,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = true,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "cvode-bdf",
+        .summary = "SUNDIALS CVODE, BDF 1-5, Newton, dense; adaptive",
+        .make = &detail::make_cvode_bdf,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 5,
+        .variable_order = true,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 5,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = true,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
     // The exponential methods' stability interval is their explicit parent's,
     // for the eigenvalues of N's Jacobian: the linear part (the system's
     // linear_diagonal) is integrated exactly, stable for any lambda <= 0.
-    {"etd-ab2", "exponential Adams-Bashforth, order 2: the system's diagonal linear part (the armature) exact, the "
-     "rest AB2; fixed step (etd-rk4 start)", &detail::make_etd_ab2, F, 2, false, false, 1, 1.0, 2, 1},
-    {"etd-ab3", "exponential Adams-Bashforth, order 3: the diagonal linear part exact, the rest AB3; fixed step "
-     "(etd-rk4 start)", &detail::make_etd_ab3, F, 3, false, false, 1, 6.0 / 11, 3, 2},
-    {"etd-ab4", "exponential Adams-Bashforth, order 4: the diagonal linear part exact, the rest AB4; fixed step "
-     "(etd-rk4 start)", &detail::make_etd_ab4, F, 4, false, false, 1, 0.3, 4, 3},
-    {"etd-rk4", "Cox-Matthews exponential RK, order 4: the diagonal linear part exact (RK4 without one); fixed step",
-     &detail::make_etd_rk4, F, 4, false, false, 4, 2.785293563405282, 3, 0},
-    {"euler", "forward Euler, fixed step", &detail::make_euler, F, 1, false, false, 1, 2.0, 1, 0},
+    {
+        .name = "etd-ab2",
+        .summary = "exponential Adams-Bashforth, order 2: the system's diagonal linear part (the armature) exact, the "
+                   "rest AB2; fixed step (etd-rk4 start)",
+        .make = &detail::make_etd_ab2,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 2,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 1.0,
+        .dense_order = 2,
+        .starter_steps = 1,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "etd-ab3",
+        .summary = "exponential Adams-Bashforth, order 3: the diagonal linear part exact, the rest AB3; fixed step "
+                   "(etd-rk4 start)",
+        .make = &detail::make_etd_ab3,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 3,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 6.0 / 11,
+        .dense_order = 3,
+        .starter_steps = 2,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "etd-ab4",
+        .summary = "exponential Adams-Bashforth, order 4: the diagonal linear part exact, the rest AB4; fixed step "
+                   "(etd-rk4 start)",
+        .make = &detail::make_etd_ab4,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 4,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 0.3,
+        .dense_order = 4,
+        .starter_steps = 3,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "etd-rk4",
+        .summary = "Cox-Matthews exponential RK, order 4: the diagonal linear part exact (RK4 without one); fixed step",
+        .make = &detail::make_etd_rk4,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 4,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 4,
+        .real_stability = 2.785293563405282,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "euler",
+        .summary = "forward Euler, fixed step",
+        .make = &detail::make_euler,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 1,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 1,
+        .real_stability = 2.0,
+        .dense_order = 1,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
     // Moreau-Jean: linearly implicit theta = 1, stable on the whole negative
     // real axis (real_stability: infinity); one f_smooth per step (a
     // difference Jacobian's m + 1 more are counted when the system has no exact one).
-    {"moreau-jean", "Moreau-Jean time-stepping: linearly implicit theta-method (theta = 1) on the state, set-valued "
-     "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
-     "step; no events; order 1, fixed step", &detail::make_moreau_jean, F, 1, false, true, 1,
-     std::numeric_limits<double>::infinity(), 1, 0},
-    {"moreau-jean-075", "moreau-jean with theta = 3/4: less numerical damping, A-stable; order 1, fixed step",
-     &detail::make_moreau_jean_075, F, 1, false, true, 1, std::numeric_limits<double>::infinity(), 1, 0},
-    {"odeint-dopri5", "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit", &detail::make_odeint_dopri5, A, 5,
-     false, false, 0, 0.0, 4, 0},
-    {"odeint-rodas4p",
-     "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order reduction), "
-     "adaptive, linearly implicit, the system's Jacobian",
-     &detail::make_odeint_rodas4p, A, 4, false, true, 0, 0.0, 3, 0},
-    {"odeint-rosenbrock4",
-     "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; order "
-     "4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly implicit, the "
-     "system's Jacobian",
-     &detail::make_odeint_rosenbrock4, A, 4, false, true, 0, 0.0, 3, 0},
-    {"rk4", "classical Runge-Kutta, order 4, fixed step", &detail::make_rk4, F, 4, false, false, 4, 2.785293563405282,
-     3, 0},
+    {
+        .name = "moreau-jean",
+        .summary = "Moreau-Jean time-stepping: linearly implicit theta-method (theta = 1) on the state, set-valued "
+                   "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
+                   "step; no events; order 1, fixed step",
+        .make = &detail::make_moreau_jean,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 1,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 1,
+        .real_stability = std::numeric_limits<double>::infinity(),
+        .dense_order = 1,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = true,
+    },
+    {
+        .name = "moreau-jean-075",
+        .summary = "moreau-jean with theta = 3/4: less numerical damping, A-stable; order 1, fixed step",
+        .make = &detail::make_moreau_jean_075,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 1,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 1,
+        .real_stability = std::numeric_limits<double>::infinity(),
+        .dense_order = 1,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = true,
+    },
+    {
+        .name = "odeint-dopri5",
+        .summary = "Boost.Odeint Dormand-Prince 5(4), adaptive, explicit",
+        .make = &detail::make_odeint_dopri5,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 5,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 4,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "odeint-rodas4p",
+        .summary = "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order reduction), "
+                   "adaptive, linearly implicit, the system's Jacobian",
+        .make = &detail::make_odeint_rodas4p,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 4,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "odeint-rosenbrock4",
+        .summary = "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; order "
+                   "4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly implicit, the "
+                   "system's Jacobian",
+        .make = &detail::make_odeint_rosenbrock4,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 4,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "rk4",
+        .summary = "classical Runge-Kutta, order 4, fixed step",
+        .make = &detail::make_rk4,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 4,
+        .variable_order = false,
+        .implicit = false,
+        .rhs_per_step = 4,
+        .real_stability = 2.785293563405282,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+    },
 }};
 
 }  // namespace
 
-std::span<const IntegratorInfo> integrators() {
-  static const bool sorted = std::is_sorted(kIntegrators.begin(), kIntegrators.end(), [](auto& a, auto& b) {
-    return std::string_view(a.name) < std::string_view(b.name);
-  });
-  if (!sorted) throw std::logic_error("integrator registry is not sorted by name");
-  return kIntegrators;
-}
+static_assert(entries_sorted_unique(kIntegrators), "the integrator registry must be sorted by name, each name once");
 
-std::string integrator_names() {
-  std::string s;
-  for (const auto& i : integrators()) {
-    if (!s.empty()) s.append(", ");
-    s.append(i.name);
-  }
-  return s;
-}
+std::span<const IntegratorInfo> integrators() { return kIntegrators; }
 
-const IntegratorInfo& find_integrator(std::string_view name) {
-  const auto all = integrators();
-  const auto it = std::lower_bound(all.begin(), all.end(), name,
-                                   [](const auto& i, auto key) { return std::string_view(i.name) < key; });
-  if (it == all.end() || std::string_view(it->name) != name) {
-    throw std::invalid_argument("unknown integrator '" + std::string(name) + "'; expected one of: " +
-                                integrator_names());
-  }
-  return *it;
-}
+std::string integrator_names() { return entry_names(integrators()); }
+
+const IntegratorInfo& find_integrator(std::string_view name) { return find_entry(integrators(), name, "integrator"); }
 
 }  // namespace pumasim

@@ -29,7 +29,27 @@ struct IntegratorInfo {
                              // h lambda in [-real_stability, 0] (closed forms); 0: implicit, or not one number
   int dense_order;           // order of the dense output (continuous extension) over a step
   int starter_steps;         // multistep methods: steps of the RK4 (etd-ab: ETDRK4) starter after every (re)start (k - 1)
+  // What IntegratorCapabilities says of an instance (integrator.hpp), known
+  // without building one (capabilities_of; a test checks that they agree).
+  bool uses_jacobian;        // a Newton or Rosenbrock method: uses a Jacobian
+  bool exact_jacobian;       // the system's (OdeSystem::jacobian); else its own differences (arkode-imex)
+  bool jacobian_choice;      // either, as IntegratorOptions::exact_jacobian says (cvode-*, arkode-dirk)
+  bool finds_roots;          // locates the system's roots; the fixed-step methods check signs per step
+  bool set_valued_friction;  // Coulomb friction as impulses of a coupled solve in each step, no events
+                             // (moreau-jean; OdeSystem::solve_set_valued); the others locate stick/slip events
 };
+
+// The capabilities of the entry's instances.
+inline IntegratorCapabilities capabilities_of(const IntegratorInfo& i) {
+  return IntegratorCapabilities{.adaptive = i.kind == IntegratorKind::kAdaptive,
+                                .order = i.order,
+                                .implicit = i.implicit,
+                                .uses_jacobian = i.uses_jacobian,
+                                .exact_jacobian = i.exact_jacobian,
+                                .jacobian_choice = i.jacobian_choice,
+                                .finds_roots = i.finds_roots,
+                                .set_valued_friction = i.set_valued_friction};
+}
 
 // All integrators, sorted by name.
 std::span<const IntegratorInfo> integrators();

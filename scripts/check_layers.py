@@ -2,6 +2,7 @@
 """Fails (exit 1) when a source file includes a header from a layer above its own.
 
 The layers, lowest first (each a folder and a CMake target; ARCHITECTURE.md):
+  core              the time rule, the registries' shape, invariants (standard library only)
   models/dynamics   chain, RNEA/CRBA/ABA/probing/Lagrange, scalars (Eigen only)
   models/robot      robot files, random chains, kinematics, drive parameters
   models/reference  paths, timing laws, time-optimal planning
@@ -20,10 +21,10 @@ import re
 import sys
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-MODELS = ["models/dynamics", "models/robot", "models/reference", "models/plant", "models/scene"]
+MODELS = ["core", "models/dynamics", "models/robot", "models/reference", "models/plant", "models/scene"]
 # Folder -> the project folders its files may include from (longest prefix wins).
 ALLOWED = {MODELS[k]: MODELS[:k + 1] for k in range(len(MODELS))}
-ALLOWED["integrators"] = ["integrators"]
+ALLOWED["integrators"] = ["core", "integrators"]
 ALLOWED["experiments/simulation"] = MODELS + ["integrators", "experiments/simulation"]
 ALLOWED["experiments"] = MODELS + ["integrators", "experiments"]
 ALLOWED["tests"] = MODELS + ["integrators", "experiments", "tests"]
@@ -43,7 +44,7 @@ def folder_of(path, folders):
 def main():
     bad = []
     checked = 0
-    for top in ("models", "integrators", "experiments", "tests", "python"):
+    for top in ("core", "models", "integrators", "experiments", "tests", "python"):
         for d, _, names in os.walk(os.path.join(ROOT, top)):
             for n in sorted(names):
                 if not n.endswith((".hpp", ".cpp", ".h")):
@@ -58,7 +59,7 @@ def main():
                     text = fh.read()
                 for m in INCLUDE.finditer(text):
                     inc = m.group(1)
-                    if not inc.startswith(("models/", "integrators/", "experiments/", "tests/", "python/")):
+                    if not inc.startswith(("core/", "models/", "integrators/", "experiments/", "tests/", "python/")):
                         continue  # a sibling or a system header
                     target = folder_of(inc, ALLOWED) or inc.split("/")[0]
                     if folder_of(inc, ALLOWED[own]) is None:

@@ -27,6 +27,7 @@ DIR/extreme_runs_summary.csv (the counts), which results/reliability/ keeps.
 """
 import argparse
 import concurrent.futures
+import json
 import math
 import os
 import re
@@ -80,12 +81,8 @@ def scenes(t_end):
 
 def integrators(pumasim):
     """(name, fixed step?) of every registry entry."""
-    p = subprocess.run([pumasim, "integrators"], capture_output=True, text=True, check=True)
-    out = []
-    for line in p.stdout.splitlines():
-        name, _, summary = line.partition("\t")
-        out.append((name, "fixed step" in summary or "fixed-step" in summary))
-    return out
+    p = subprocess.run([pumasim, "integrators", "--json"], capture_output=True, text=True, check=True)
+    return [(entry["name"], entry["kind"] == "fixed-step") for entry in json.loads(p.stdout)]
 
 
 def run_one(pumasim, work, scene, method, t_end):

@@ -4,10 +4,12 @@
 
 #include <Eigen/Core>
 
+#include <utility>
 #include <vector>
 
 #include "models/dynamics/algorithms.hpp"
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/built_algorithms.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/dynamics/robot_model.hpp"
 
@@ -52,25 +54,21 @@ inline std::vector<BackendInfo> supported(const RobotModel& m) {
   return out;
 }
 
-// Calls f.template operator()<Algo>() for every algorithm template that can
-// describe the model m.
+// Calls f.template operator()<Algo>() for every algorithm template of this
+// build's back-ends (BuiltAlgorithms, generated from
+// models/dynamics/built_algorithms.hpp.in and the back-end list: a new
+// back-end takes part with no edit here) that can describe the model m.
+template <template <class, int> class... Algo, class F>
+void for_each_algorithm_in(AlgorithmList<Algo...>, const RobotModel& m, F&& f) {
+  auto call = [&]<template <class, int> class A>() {
+    if (why_unsupported<A>(m).empty()) f.template operator()<A>();
+  };
+  (call.template operator()<Algo>(), ...);
+}
+
 template <class F>
 void for_each_algorithm(const RobotModel& m, F&& f) {
-  auto call = [&]<template <class, int> class Algo>() {
-    if (why_unsupported<Algo>(m).empty()) f.template operator()<Algo>();
-  };
-  call.template operator()<RneaProbing>();
-  call.template operator()<RneaProbingShared>();
-  call.template operator()<Crba>();
-  call.template operator()<CrbaWorld>();
-  call.template operator()<Aba>();
-  call.template operator()<LagrangeEuler>();
-  call.template operator()<LagrangeSymbolic>();
-  call.template operator()<LagrangeSymbolicPuma560>();
-  call.template operator()<RneaProbingSymbolic>();
-  call.template operator()<RneaProbingSymbolicPuma560>();
-  call.template operator()<CrbaSymbolic>();
-  call.template operator()<CrbaSymbolicPuma560>();
+  for_each_algorithm_in(BuiltAlgorithms{}, m, std::forward<F>(f));
 }
 
 }  // namespace pumasim::testing

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/built_algorithms.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
 #include "tests/helpers.hpp"
@@ -327,6 +328,19 @@ TEST(Registry, SortedUniqueAndUnknownNameListsTheValidOnes) {
     const std::string msg = e.what();
     for (const auto& b : all) EXPECT_NE(msg.find(b.name), std::string::npos) << msg;
   }
+}
+
+// The algorithm templates the tests iterate (BuiltAlgorithms) are the
+// registry's, in its order: a back-end added to the list is in both.
+template <template <class, int> class... Algo>
+std::vector<std::string> algorithm_names(AlgorithmList<Algo...>) {
+  return {Algo<double, 6>::kName...};
+}
+
+TEST(Registry, TheTestsIterateEveryBackEnd) {
+  std::vector<std::string> registered;
+  for (const auto& b : backends()) registered.emplace_back(b.name);
+  EXPECT_EQ(algorithm_names(BuiltAlgorithms{}), registered);
 }
 
 TEST(Registry, WrongArgumentSizeIsAnError) {

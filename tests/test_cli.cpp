@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -19,6 +20,8 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
+#include "integrators/registry.hpp"
+#include "models/dynamics/backend.hpp"
 #include "tests/cli_capture.hpp"
 #include "tests/scratch.hpp"
 #include "experiments/simulation/driver.hpp"
@@ -56,6 +59,33 @@ std::vector<std::string> lines_of(const fs::path& p) {
   std::vector<std::string> lines;
   for (std::string line; std::getline(f, line);) lines.push_back(line);
   return lines;
+}
+
+// `pumasim integrators --json` is the registry, entry by entry, every field
+// the scripts read (they decide fixed step or adaptive from "kind").
+TEST(CliRegistries, IntegratorsJsonIsTheRegistry) {
+  const CliResult r = testing::cli({"integrators", "--json"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const nlohmann::json all = nlohmann::json::parse(r.out);
+  const auto reg = integrators();
+  ASSERT_EQ(all.size(), reg.size());
+  for (std::size_t k = 0; k < reg.size(); ++k) {
+    const IntegratorInfo& i = reg[k];
+    const nlohmann::json& j = all[k];
+    EXPECT_EQ(j["name"], i.name);
+    EXPECT_EQ(j["kind"], i.kind == IntegratorKind::kAdaptive ? "adaptive" : "fixed-step") << i.name;
+    EXPECT_EQ(j["order"], i.order) << i.name;
+    EXPECT_EQ(j["implicit"], i.implicit) << i.name;
+    EXPECT_EQ(j["set_valued_friction"], i.set_valued_friction) << i.name;
+    if (std::isfinite(i.real_stability)) {
+      EXPECT_EQ(j["real_stability"], i.real_stability) << i.name;
+    } else {
+      EXPECT_EQ(j["real_stability"], "infinity") << i.name;
+    }
+  }
+  const CliResult b = testing::cli({"backends", "--json"});
+  ASSERT_EQ(b.status, kExitOk) << b.err;
+  EXPECT_EQ(nlohmann::json::parse(b.out).size(), backends().size());
 }
 
 TEST(CliParsing, AnUnknownOptionIsNamedWithTheValidOnes) {

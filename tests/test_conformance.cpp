@@ -98,6 +98,15 @@ TEST_P(Conformance, RegistryEntryDescribesTheMethod) {
   EXPECT_EQ(c.adaptive, i.kind == IntegratorKind::kAdaptive) << i.name;
   EXPECT_EQ(c.order, i.order) << i.name;
   EXPECT_EQ(c.implicit, i.implicit) << i.name;
+  // The entry's capabilities (capabilities_of: what the runs read without
+  // building an instance) are the instance's.
+  const IntegratorCapabilities e = capabilities_of(i);
+  EXPECT_EQ(c.adaptive, e.adaptive) << i.name;
+  EXPECT_EQ(c.uses_jacobian, e.uses_jacobian) << i.name;
+  EXPECT_EQ(c.exact_jacobian, e.exact_jacobian) << i.name;
+  EXPECT_EQ(c.jacobian_choice, e.jacobian_choice) << i.name;
+  EXPECT_EQ(c.finds_roots, e.finds_roots) << i.name;
+  EXPECT_EQ(c.set_valued_friction, e.set_valued_friction) << i.name;
   EXPECT_GE(i.order, 1) << i.name;
   EXPECT_GE(i.dense_order, 1) << i.name << ": no dense-output order in the registry entry";
   if (i.kind == IntegratorKind::kFixedStep) {

@@ -21,7 +21,7 @@
 #include "tests/integrator_helpers.hpp"
 #include "tests/scratch.hpp"
 #include "integrators/stability.hpp"
-#include "integrators/time_rule.hpp"
+#include "core/time_rule.hpp"
 #include "models/scene/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
@@ -712,7 +712,7 @@ TEST(Run, WritesTheResultFilesAndRejectsOptionsAMethodCannotHonour) {
 namespace pumasim {
 namespace {
 
-// integrators/time_rule.hpp: instants within 1e-12 max(1, |horizon|) s are one instant.
+// core/time_rule.hpp: instants within 1e-12 max(1, |horizon|) s are one instant.
 TEST(TimeRule, InstantsWithinRoundingOfTheRunsTimesAreOneInstant) {
   EXPECT_TRUE(same_time(0.3, 0.1 * 3, 1.0));  // 0.30000000000000004
   EXPECT_FALSE(before(0.3, 0.1 * 3, 1.0));    // a stop at 0.1 * 3 is reached at 0.3

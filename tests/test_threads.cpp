@@ -149,7 +149,7 @@ bool same_modes(const std::vector<ModeChange>& a, const std::vector<ModeChange>&
 }
 
 TEST(ConstModel, RunsFromEightThreadsOnOneModelAreBitwiseTheSerialRun) {
-  for (const std::string& name : {"paper_slow_6dof_hybrid", "sampled_control", "stick_slip"}) {
+  for (const std::string name : {"paper_slow_6dof_hybrid", "sampled_control", "stick_slip"}) {
     const Scene sc = load_scene(kScenes + "/" + name + ".toml");
     const double t_end = std::min(sc.duration, 0.01), h = 2.5e-5;  // 400 steps: seconds under TSan at -O0
     Plant serial(sc.plant);

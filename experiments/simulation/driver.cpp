@@ -1,6 +1,6 @@
 #include "experiments/simulation/driver.hpp"
 
-#include "integrators/time_rule.hpp"
+#include "core/time_rule.hpp"
 #include "models/plant/physical_bounds.hpp"
 #include "models/plant/profile.hpp"
 

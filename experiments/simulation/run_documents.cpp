@@ -62,7 +62,7 @@ void settings(Json& js, const Scene& sc, const RunControls& rc, const SceneRun& 
   for (std::size_t k = 0; k < run.state_names.size(); ++k) {
     atol[run.state_names[k]] = json_number(adaptive ? io.atol * run.tolerance_scales[k] : std::nan(""));
   }
-  js["jacobian"] = jacobian_used(find_integrator(sc.integrator.name).make(io)->capabilities(), io);
+  js["jacobian"] = jacobian_used(capabilities_of(find_integrator(sc.integrator.name)), io);
   js["late_events"] = rc.stops == Stops::kOutputsLateEvents;
   js["keep_history"] = io.keep_history;
   js["stops"] = rc.stops == Stops::kEvents             ? "events (outputs from the dense output)"

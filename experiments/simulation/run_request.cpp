@@ -51,7 +51,7 @@ void override_backend(Scene& sc, const std::string& name) {
 
 // --jacobian exact|differences, checked against what the method can take.
 bool jacobian_choice(const std::string& method, const IntegratorInfo& info, const std::string& choice) {
-  const IntegratorCapabilities c = info.make(IntegratorOptions{})->capabilities();
+  const IntegratorCapabilities c = capabilities_of(info);
   const bool exact = choice == "exact";
   if (!c.uses_jacobian) throw std::invalid_argument("--jacobian: " + method + " uses no Jacobian");
   if (exact && !c.exact_jacobian) {
@@ -73,7 +73,7 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
   io.rtol = sc.integrator.rtol;
   io.atol = sc.integrator.atol;
   io.keep_history = a.keep_history;
-  adaptive = info.make(io)->capabilities().adaptive;
+  adaptive = info.kind == IntegratorKind::kAdaptive;
   if (io.keep_history && adaptive) {
     throw std::invalid_argument("--keep-history: " + sc.integrator.name + " is adaptive; expected a fixed-step method");
   }
@@ -90,7 +90,7 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
     if (a.rtol && !a.atol) io.atol = sc.integrator.atol = kAtolPerRtol * *a.rtol;
   }
   if (a.jacobian) io.exact_jacobian = jacobian_choice(sc.integrator.name, info, *a.jacobian);
-  if (sc.integrator.name.starts_with("moreau-jean") && sc.plant.energy_ledger) {
+  if (info.set_valued_friction && sc.plant.energy_ledger) {
     for (const FrictionParams& f : sc.plant.friction) {
       if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {
         throw std::invalid_argument(

@@ -179,8 +179,12 @@ OpCounts count_ops(const RobotModel& model, Quantity what) {
 
 template <template <class, int> class Algo>
 BackendInfo entry(const char* summary) {
-  return BackendInfo{Algo<double, 6>::kName, summary, &why_unsupported<Algo>, &make<Algo>,
-                     &make<Algo, Dual>, &count_ops<Algo>};
+  return BackendInfo{.name = Algo<double, 6>::kName,
+                     .summary = summary,
+                     .why_unsupported = &why_unsupported<Algo>,
+                     .make = &make<Algo>,
+                     .make_dual = &make<Algo, Dual>,
+                     .count_ops = &count_ops<Algo>};
 }
 
 }  // namespace pumasim::detail

@@ -4,10 +4,12 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/invariant.hpp"
+
 namespace pumasim {
 
 int StateLayout::add(const std::vector<std::string>& slice_names, const std::vector<double>& slice_scale) {
-  if (slice_names.size() != slice_scale.size()) throw std::logic_error("StateLayout::add: one scale per name");
+  PUMASIM_DEMAND(slice_names.size() == slice_scale.size(), "StateLayout::add: one typical magnitude per name");
   const int offset = size;
   names.insert(names.end(), slice_names.begin(), slice_names.end());
   scale.insert(scale.end(), slice_scale.begin(), slice_scale.end());

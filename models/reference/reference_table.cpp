@@ -1,5 +1,7 @@
 #include "models/reference/reference_table.hpp"
 
+#include "core/time_rule.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -115,7 +117,7 @@ void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool exte
   if (segment < 0 || segment >= m) return ref_.eval(t, out, segment, extend);
   const int k0 = first_[static_cast<std::size_t>(segment)], k1 = first_[static_cast<std::size_t>(segment) + 1];
   const double a = subs_[static_cast<std::size_t>(k0)].a, b = subs_[static_cast<std::size_t>(k1) - 1].b;
-  const double tol = 1e-12 * std::max(1.0, b);  // Reference's rounding of a segment's ends
+  const double tol = time_tolerance(b);  // Reference's rounding of a segment's ends (core/time_rule.hpp)
   if (!(t >= a - tol && t <= b + tol)) return ref_.eval(t, out, segment, extend);
   const int k = std::clamp(k0 + static_cast<int>((t - a) / (b - a) * (k1 - k0)), k0, k1 - 1);
   if (state(segment, k) == kExact) return ref_.eval(t, out, segment, extend);

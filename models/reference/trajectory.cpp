@@ -1,5 +1,6 @@
 #include "models/reference/trajectory.hpp"
 
+#include "core/time_rule.hpp"
 #include "models/reference/numerical_ik.hpp"
 
 #include <algorithm>
@@ -276,7 +277,7 @@ void Reference::finish_breakpoints() {
   std::sort(breakpoints_.begin(), breakpoints_.end());
   // One instant for breakpoints that coincide to rounding (a piece of the
   // timing law ending where a path piece does).
-  seg_tol_ = 1e-12 * std::max(1.0, timing_.duration());
+  seg_tol_ = time_tolerance(timing_.duration());  // core/time_rule.hpp
   breakpoints_.erase(std::unique(breakpoints_.begin(), breakpoints_.end(),
                                  [this](double a, double b) { return b - a <= seg_tol_; }),
                      breakpoints_.end());

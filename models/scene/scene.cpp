@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "core/invariant.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/reference/time_optimal.hpp"
@@ -100,7 +101,7 @@ std::vector<double> get_held(const Scene& sc, int) {
 }
 void set_held(Scene& sc, const std::vector<double>& v) {
   const int n = sc.plant.n;
-  if (n + static_cast<int>(v.size()) > sc.plant.q_held.size()) throw std::logic_error("held: beyond the 6-vector");
+  PUMASIM_DEMAND(n + static_cast<int>(v.size()) <= sc.plant.q_held.size(), "held: beyond the held vector");
   for (std::size_t k = 0; k < v.size(); ++k) sc.plant.q_held[n + static_cast<int>(k)] = v[k];
 }
 

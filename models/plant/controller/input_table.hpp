@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "core/time_rule.hpp"
+
 namespace pumasim {
 
 enum class InputInterpolation { kZeroOrderHold, kLinear };
@@ -40,7 +42,7 @@ class InputTable {
       v_.insert(v_.end(), r.begin() + 1, r.end());
     }
     if (t_[0] != 0.0) throw std::invalid_argument("plant: an open-loop input starts at t = 0");
-    tol_ = 1e-12 * std::max(1.0, t_.back());
+    tol_ = time_tolerance(t_.back());  // core/time_rule.hpp
   }
 
   int pieces() const { return static_cast<int>(t_.size()); }

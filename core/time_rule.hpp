@@ -6,7 +6,11 @@
 // of steps) lands within it; a step shorter than it would drag a step-size
 // controller down to an underflow. The driver (experiments/simulation: end of
 // run, outputs, events due) and the odeint steppers (a stop reached) decide
-// with it; CVODE and ARKODE stop exactly at their stop time. (A step meant to
+// with it; CVODE and ARKODE stop exactly at their stop time. The models use
+// its width where they place a time among their own breakpoints: an
+// open-loop input's rows (models/plant/controller/input_table.hpp), the
+// reference's breakpoints (models/reference/trajectory.cpp) and its table's
+// segment ends (models/reference/reference_table.cpp). (A step meant to
 // end at the stop snaps to it when it lands within 1e-12 of its own length,
 // odeint.cpp: a rounding of the step, not a comparison of two instants.) The plant's
 // sample grids (models/plant/plant_model.cpp, on_grid) are a different question,
