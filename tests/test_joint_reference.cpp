@@ -344,6 +344,22 @@ TEST(JointCsv, ASplineThatOverflowsIsRefusedByTheCurveAndTheScene) {
   EXPECT_NE(smsg.find("not finite"), std::string::npos) << smsg;
 }
 
+// A step as long as the reader allows (up to kMaxRowStep) with finite values
+// is a finite curve, and the check must not refuse it (its bound once formed
+// h^5 alone: infinite for h = 1e62 s, times a zero coefficient NaN).
+TEST(JointCsv, ALongStepOfFiniteValuesIsAFiniteCurve) {
+  const std::vector<double> knots = {0.0, 1e62, 2e62};
+  std::vector<JointCurve::Vec6> points(3, JointCurve::Vec6::Zero());
+  points[1][0] = 1.0;
+  for (const auto kind : {JointCurve::Kind::kCubic, JointCurve::Kind::kQuintic}) {
+    const JointCurve c(knots, points, 1, kind);
+    JointCurve::Vec6 q, dq, ddq;
+    c.eval(1e62, q, dq, ddq);
+    EXPECT_DOUBLE_EQ(q[0], 1.0);  // the curve passes through its points
+    EXPECT_TRUE(dq.allFinite() && ddq.allFinite());
+  }
+}
+
 // Through a scene: the scene's file, line and key, then the CSV's file and line.
 TEST(JointCsv, SceneNamesItsKeyAndTheFilesLine) {
   write_temp("pumasim_csv_scene.csv", "t,q1,q2,q3\n0,-0.2349,0.6706,-3.5105\n1,x,0.6,-3.5\n");

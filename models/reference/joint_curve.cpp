@@ -142,9 +142,12 @@ void JointCurve::check_finite() const {
   for (std::size_t k = 0; k < coef_.size(); ++k) {
     const double h = knots_[k + 1] - knots_[k];
     for (int j = 0; j < n_; ++j) {
-      for (int lo = 0; lo < 6; ++lo) {
-        double sum = 0, power = 1;
-        for (int e = lo; e < 6; ++e, power *= h) sum += std::abs(coef_[k](j, e)) * power;
+      // Horner on the absolute values: after the step that adds |c_lo| the
+      // sum is sum_{e >= lo} |c_e| h^(e - lo), no power of h formed alone
+      // (h^5 overflows for steps the reader accepts, and 0 * inf is NaN).
+      double sum = 0;
+      for (int lo = 5; lo >= 0; --lo) {
+        sum = sum * h + std::abs(coef_[k](j, lo));
         if (!std::isfinite(20 * sum)) {
           char buf[200];
           std::snprintf(buf, sizeof buf,

@@ -3,9 +3,10 @@
 // point "t, q1, ..., qn" (t [s], angles [rad] of the scene's n simulated
 // joints), comma-separated; blank lines are skipped. The first t is 0, the
 // times increase by at least kMinRowStep and at most kMaxRowStep, every
-// value is a finite number whose curve stays finite (no jump whose slope or
-// curvature overflows), and
-// there are at least two rows. Anything else is a ConfigError naming the file, the line
+// value is a finite number, no step's jump has a slope or curvature that
+// overflows, and there are at least two rows. (A spline through rows that
+// pass can still overflow where neighbouring steps couple: the curve checks
+// itself, JointCurve::check_finite, and the scene reports it.) Anything else is a ConfigError naming the file, the line
 // and, for a value, the column (1-based, with its header name). The same
 // format holds an open-loop input's rows "t, u1, ..., un" (controller.file;
 // `column` names the values in messages).
