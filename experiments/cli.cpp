@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -560,26 +561,24 @@ Json integrator_json(const IntegratorInfo& i) {
   return j;
 }
 
-int cmd_integrators(bool json, std::ostream& out) {
+// A registry as text ("name<TAB>summary" lines) or as one JSON array.
+template <class Entry, class ToJson>
+int print_registry(std::span<const Entry> all, bool json, ToJson to_json, std::ostream& out) {
   if (!json) {
-    for (const auto& i : integrators()) out << i.name << "\t" << i.summary << "\n";
+    for (const Entry& e : all) out << e.name << "\t" << e.summary << "\n";
     return kExitOk;
   }
-  Json all = Json::array();
-  for (const auto& i : integrators()) all.push_back(integrator_json(i));
-  out << all.dump(2) << "\n";
+  Json doc = Json::array();
+  for (const Entry& e : all) doc.push_back(to_json(e));
+  out << doc.dump(2) << "\n";
   return kExitOk;
 }
 
+int cmd_integrators(bool json, std::ostream& out) { return print_registry(integrators(), json, integrator_json, out); }
+
 int cmd_backends(bool json, std::ostream& out) {
-  if (!json) {
-    for (const auto& b : backends()) out << b.name << "\t" << b.summary << "\n";
-    return kExitOk;
-  }
-  Json all = Json::array();
-  for (const auto& b : backends()) all.push_back(Json{{"name", b.name}, {"summary", b.summary}});
-  out << all.dump(2) << "\n";
-  return kExitOk;
+  return print_registry(backends(), json, [](const BackendInfo& b) { return Json{{"name", b.name}, {"summary", b.summary}}; },
+                        out);
 }
 
 // Every command's parsed options, filled by CLI11.

@@ -308,6 +308,17 @@ TEST(JointCsv, BadFilesAreRefusedNamingFileLineAndColumn) {
   EXPECT_EQ(rows[1], (std::vector<double>{1.5, -0.2, 0.2, 0.3}));
 }
 
+// joint_space_csv.toml, written beside `name`.csv reading it: the scene's path.
+std::string joint_space_scene_reading(const std::string& name) {
+  std::ifstream in(scene_path("joint_space_csv"));
+  std::stringstream buf;
+  buf << in.rdbuf();
+  std::string text = buf.str();
+  const std::string from = "joints = \"joint_space_csv.csv\"";
+  text.replace(text.find(from), from.size(), "joints = \"" + name + ".csv\"");
+  return write_temp(name + ".toml", text);
+}
+
 // Rows whose steps each pass the reader's check but whose spline couples a
 // huge jump in a short step with a long neighbouring step (found by
 // fuzz_joint_csv in CI's smoke run): the quintic's knot equations overflow.
@@ -332,13 +343,7 @@ TEST(JointCsv, ASplineThatOverflowsIsRefusedByTheCurveAndTheScene) {
   }
   EXPECT_NE(msg.find("joint 1's spline"), std::string::npos) << msg;
   EXPECT_NE(msg.find("not finite"), std::string::npos) << msg;
-  std::ifstream in(scene_path("joint_space_csv"));
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  const std::string from = "joints = \"joint_space_csv.csv\"";
-  text.replace(text.find(from), from.size(), "joints = \"pumasim_csv_coupled_overflow.csv\"");
-  const std::string scene = write_temp("pumasim_csv_coupled_overflow.toml", text);
+  const std::string scene = joint_space_scene_reading("pumasim_csv_coupled_overflow");
   const std::string smsg = refusal([&] { load_scene(scene); });  // the scene's joint-quintic
   EXPECT_NE(smsg.find(scene + ":"), std::string::npos) << smsg;
   EXPECT_NE(smsg.find("not finite"), std::string::npos) << smsg;
@@ -363,13 +368,7 @@ TEST(JointCsv, ALongStepOfFiniteValuesIsAFiniteCurve) {
 // Through a scene: the scene's file, line and key, then the CSV's file and line.
 TEST(JointCsv, SceneNamesItsKeyAndTheFilesLine) {
   write_temp("pumasim_csv_scene.csv", "t,q1,q2,q3\n0,-0.2349,0.6706,-3.5105\n1,x,0.6,-3.5\n");
-  std::ifstream in(scene_path("joint_space_csv"));
-  std::stringstream buf;
-  buf << in.rdbuf();
-  std::string text = buf.str();
-  const std::string from = "joints = \"joint_space_csv.csv\"";
-  text.replace(text.find(from), from.size(), "joints = \"pumasim_csv_scene.csv\"");
-  const std::string scene = write_temp("pumasim_csv_scene.toml", text);
+  const std::string scene = joint_space_scene_reading("pumasim_csv_scene");
   const std::string msg = refusal([&] { load_scene(scene); });
   EXPECT_NE(msg.find(scene + ":"), std::string::npos) << msg;
   EXPECT_NE(msg.find("reference.joints: "), std::string::npos) << msg;
