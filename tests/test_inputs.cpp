@@ -431,10 +431,13 @@ TEST(SceneNumbers, CheckRefusesWhatRunWouldRefuse) {
   EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
 }
 
-// A robot file with 7 joints (the PUMA file with its sixth joint repeated) is
-// refused at the robot key before any 6-sized buffer is written; before, a
-// scene with joints = 3 crashed and one with joints = 7 wrote out of bounds.
-TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
+// A robot file with 7 joints (the PUMA file with its sixth joint repeated)
+// loads, and a scene on it sizes everything from it: `held` takes the 4
+// joints beyond joints = 3 (once refused: "at most 6 joints", and before
+// that a scene with joints = 7 wrote out of bounds). Not a PUMA, its path
+// follows the numerical inverse kinematics, and the closed form's keys are
+// refused by name.
+TEST(SceneNumbers, ARobotWithSevenJointsSizesTheScene) {
   std::ifstream in(std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/puma560.toml");
   std::stringstream text;
   text << in.rdbuf();
@@ -456,12 +459,17 @@ TEST(SceneNumbers, ARobotWithSevenJointsIsRefusedBeforeItsSizesAreUsed) {
   ASSERT_NE(at, std::string::npos);
   sc.replace(at, std::string("robot = \"puma560\"").size(), "robot = \"" + (dir / "seven.toml").string() + "\"");
   std::ofstream(dir / "scene.toml") << sc;
-  for (const std::string joints : {"3", "7"}) {
-    const CliResult r = cli({"check", (dir / "scene.toml").string(), "--set", "scene.joints=" + joints,
-                          "--set", "scene.held=[]"});
-    EXPECT_EQ(r.status, kExitBadInput) << joints;
-    EXPECT_NE(r.err.find("robot: expected a robot with at most 6 joints"), std::string::npos) << r.err;
-  }
+  const std::string file = (dir / "scene.toml").string();
+  const CliResult held3 = cli({"check", file, "--set", "scene.joints=3", "--set", "scene.held=[0, 0, 0]"});
+  EXPECT_EQ(held3.status, kExitBadInput);
+  EXPECT_NE(held3.err.find("scene.held: expected an array of 4 numbers"), std::string::npos) << held3.err;
+  const CliResult closed = cli({"check", file, "--set", "scene.joints=3", "--set", "scene.held=[0, 0, 0, 0]"});
+  EXPECT_EQ(closed.status, kExitBadInput);
+  EXPECT_NE(closed.err.find("reference.arm"), std::string::npos) << closed.err;
+  const CliResult ok = cli({"check", file, "--set", "scene.joints=3", "--set", "scene.held=[0, 0.1, 0, 0.2]",
+                            "--unset", "reference.arm", "--unset", "reference.elbow"});
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  EXPECT_NE(ok.out.find("# state (12): q1 q2 q3 qd1"), std::string::npos) << ok.out;
 }
 
 }  // namespace

@@ -32,6 +32,9 @@ namespace {
 using test::scene_path;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
+// The points as the curve takes them (dynamic vectors).
+std::vector<Eigen::VectorXd> dyn(const std::vector<Vec6>& v) { return {v.begin(), v.end()}; }
+
 // The shipped planar arm (models/robots/planar2.toml), by its file path.
 std::string planar2_path() { return std::string(PUMASIM_SCENES_DIR) + "/../../models/robots/planar2.toml"; }
 
@@ -175,7 +178,7 @@ TEST(JointCurve, AtRestAtTheEndsReproducesTheRestToRestPolynomials) {
       q[0] = p, q[1] = -2 * p;
       pts.push_back(q);
     }
-    const JointCurve curve(x, pts, 2, kind);
+    const JointCurve curve(x, dyn(pts), 2, kind);
     for (double t = 0; t <= T; t += 0.01) {
       Vec6 q, dq, ddq;
       curve.eval(t, q, dq, ddq);
@@ -203,9 +206,9 @@ std::vector<Reference> planar_curve_references() {
   const std::vector<double> t = {0.0, 0.7, 1.5, 2.0, 3.0};
   std::vector<Reference> out;
   for (const auto kind : {JointCurve::Kind::kCubic, JointCurve::Kind::kQuintic}) {
-    const JointCurve curve(t, pts, 2, kind);
-    out.emplace_back(robot, Vec6::Zero(), curve, Timing::unit_speed(3.0));
-    out.emplace_back(robot, Vec6::Zero(), curve, Timing::trapezoid(3.0, 2.0, 0.25));
+    const JointCurve curve(t, dyn(pts), 2, kind);
+    out.emplace_back(robot, Eigen::VectorXd::Zero(robot.dof()), curve, Timing::unit_speed(3.0));
+    out.emplace_back(robot, Eigen::VectorXd::Zero(robot.dof()), curve, Timing::trapezoid(3.0, 2.0, 0.25));
   }
   return out;
 }
@@ -242,14 +245,14 @@ TEST(JointReference, ThroughThePointsAndHeldAfterTheLast) {
     for (std::size_t k = 0; k < c.knots().size(); ++k) {
       ReferenceSample r;
       ref.eval(c.knots()[k], r);
-      EXPECT_NEAR((r.q - c.points()[k]).norm(), 0.0, 1e-13) << k;
+      EXPECT_NEAR((r.q.head(c.joints()) - c.points()[k]).norm(), 0.0, 1e-13) << k;
     }
     EXPECT_EQ(ref.breakpoints(), (std::vector<double>{0.7, 1.5, 2.0, 3.0}));
     ReferenceSample r0, end;
     ref.eval(0.0, r0);
     ref.eval(7.0, end);
     EXPECT_LT(r0.qd.norm(), 1e-14);  // the clamped end slopes, to rounding
-    EXPECT_LT((end.q - c.points().back()).norm(), 1e-13);
+    EXPECT_LT((end.q.head(c.joints()) - c.points().back()).norm(), 1e-13);
     EXPECT_EQ(end.qd.norm(), 0.0);
     EXPECT_EQ(end.qdd.norm(), 0.0);
   }
@@ -328,16 +331,16 @@ TEST(JointCsv, ASplineThatOverflowsIsRefusedByTheCurveAndTheScene) {
   const std::string path = write_temp("pumasim_csv_coupled_overflow.csv", csv);
   const auto rows = read_joint_csv(path, 3);  // each step alone passes
   std::vector<double> knots;
-  std::vector<JointCurve::Vec6> points;
+  std::vector<Vec6> points;
   for (const auto& r : rows) {
     knots.push_back(r[0]);
-    JointCurve::Vec6 q = JointCurve::Vec6::Zero();
+    Vec6 q = Vec6::Zero();
     for (int j = 0; j < 3; ++j) q[j] = r[static_cast<std::size_t>(j) + 1];
     points.push_back(q);
   }
   std::string msg;
   try {
-    JointCurve(knots, points, 3, JointCurve::Kind::kQuintic);
+    JointCurve(knots, dyn(points), 3, JointCurve::Kind::kQuintic);
   } catch (const std::invalid_argument& e) {
     msg = e.what();
   }
@@ -354,11 +357,11 @@ TEST(JointCsv, ASplineThatOverflowsIsRefusedByTheCurveAndTheScene) {
 // h^5 alone: infinite for h = 1e62 s, times a zero coefficient NaN).
 TEST(JointCsv, ALongStepOfFiniteValuesIsAFiniteCurve) {
   const std::vector<double> knots = {0.0, 1e62, 2e62};
-  std::vector<JointCurve::Vec6> points(3, JointCurve::Vec6::Zero());
+  std::vector<Vec6> points(3, Vec6::Zero());
   points[1][0] = 1.0;
   for (const auto kind : {JointCurve::Kind::kCubic, JointCurve::Kind::kQuintic}) {
-    const JointCurve c(knots, points, 1, kind);
-    JointCurve::Vec6 q, dq, ddq;
+    const JointCurve c(knots, dyn(points), 1, kind);
+    Vec6 q, dq, ddq;
     c.eval(1e62, q, dq, ddq);
     EXPECT_DOUBLE_EQ(q[0], 1.0);  // the curve passes through its points
     EXPECT_TRUE(dq.allFinite() && ddq.allFinite());

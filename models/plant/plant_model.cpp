@@ -42,13 +42,14 @@ ControllerBlock controller_block(const PlantConfig& c) {
 bool has_tabulated_reference(const PlantConfig& c) {
   return c.tabulate_reference && c.reference && c.reference->has_path() &&
          c.reference->interpolation() == Interpolation::kCartesian &&
-         ReferenceTable::sub_intervals(*c.reference) <= ReferenceTable::kMaxSubs;
+         ReferenceTable::blocks(*c.reference) <= ReferenceTable::kMaxBlocks;
 }
 
 }  // namespace
 
-RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held) {
-  return n < robot.dof() ? lock_joints(robot, n, q_held.head(robot.dof())) : robot;
+RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::VectorXd& q_held) {
+  if (n >= robot.dof()) return robot;
+  return lock_joints(robot, n, q_held.size() == 0 ? Eigen::VectorXd::Zero(robot.dof()) : q_held);
 }
 
 Eigen::VectorXd start_pose(const PlantConfig& c) {
@@ -60,7 +61,8 @@ Eigen::VectorXd start_pose(const PlantConfig& c) {
 
 PlantConfig PlantModel::checked(PlantConfig c) {
   const int n = c.n;
-  if (c.robot.dof() != 6 && c.n != c.robot.dof()) throw std::invalid_argument("plant: held joints need a 6-joint robot");
+  if (c.q_held.size() == 0) c.q_held = Eigen::VectorXd::Zero(c.robot.dof());
+  if (c.q_held.size() != c.robot.dof()) throw std::invalid_argument("plant: q_held needs one entry per joint");
   if (n < 1 || n > c.robot.dof()) throw std::invalid_argument("plant: joint count out of range");
   const auto sized = [n](std::size_t s) { return s == static_cast<std::size_t>(n); };
   if (!sized(c.friction.size())) throw std::invalid_argument("plant: one friction block per joint");
@@ -170,15 +172,21 @@ PlantContext PlantModel::make_context() const {
   c.controller.u_held.assign(static_cast<std::size_t>(n), 0.0);
   c.controller.memory.assign(std::visit([](const auto& b) { return b.discrete_size(); }, controller_), 0.0);
   c.modes.assign(static_cast<std::size_t>(n), SlipMode::kStuck);
-  for (auto* v : {&c.ref_held.q, &c.ref_held.qd, &c.ref_held.qdd}) v->setZero();
-  c.ref_held.p.setZero();
-  c.ref_held.v.setZero();
+  if (cfg_.reference) {
+    c.ref_held = cfg_.reference->sample();
+  } else {
+    c.ref_held.q = cfg_.q_held;
+    c.ref_held.qd = c.ref_held.qdd = Eigen::VectorXd::Zero(cfg_.q_held.size());
+    c.ref_held.p.setZero();
+    c.ref_held.v.setZero();
+  }
   return c;
 }
 
 template <class S>
 std::unique_ptr<PlantWorkspace<S>> PlantModel::make_workspace() const {
   auto w = std::make_unique<PlantWorkspace<S>>(layout_.n, layout_.size);
+  if (cfg_.reference) w->reference = cfg_.reference->sample();
   if constexpr (std::is_same_v<S, double>) {
     w->backend = backend_.make(model_);
   } else if constexpr (std::is_same_v<S, Dual>) {
@@ -438,9 +446,14 @@ double PlantModel::magnetic_energy(const double* x) const {
 }
 
 void PlantModel::tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const {
-  Eigen::Matrix<double, 6, 1> q = cfg_.q_held;
-  for (int j = 0; j < layout_.n; ++j) q[j] = x[layout_.q + j];
-  forward_kinematics<double>(cfg_.robot, q, R, p);
+  // The simulated joints from x, the others held (no copy of q_held).
+  struct Joints {
+    const double* x;
+    int n;
+    const Eigen::VectorXd& held;
+    double operator[](int j) const { return j < n ? x[j] : held[j]; }
+  };
+  forward_kinematics<double>(cfg_.robot, Joints{x + layout_.q, layout_.n, cfg_.q_held}, R, p);
 }
 
 template std::unique_ptr<PlantWorkspace<double>> PlantModel::make_workspace<double>() const;

@@ -76,7 +76,7 @@ namespace pumasim {
 struct PlantConfig {
   RobotModel robot;                      // all joints
   int n = 6;                             // simulated joints: the first n
-  Eigen::Matrix<double, 6, 1> q_held = Eigen::Matrix<double, 6, 1>::Zero();  // joints > n [rad]
+  Eigen::VectorXd q_held;  // all the robot's joints (empty: zeros); those beyond n are held there [rad or m]
   std::string backend = "crba";
   bool drive = true;                     // amplifier + motor (needs a controller commanding a voltage)
   ControllerMode controller = ControllerMode::kContinuous;  // its timing
@@ -111,7 +111,7 @@ const std::vector<typename Law::Params>& law_params(const PlantConfig& c) {
 
 // The model the plant simulates: the first n joints of `robot`, the others
 // held at q_held with their links riding on link n.
-RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::Matrix<double, 6, 1>& q_held);
+RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::VectorXd& q_held);
 
 // The simulated joints' angles at t = 0: the reference's start, or q0.
 Eigen::VectorXd start_pose(const PlantConfig& c);

@@ -110,16 +110,20 @@ std::vector<PieceCoefficients> clamped_quintic_spline(const std::vector<double>&
   return c;
 }
 
-JointCurve::JointCurve(std::vector<double> knots, std::vector<Vec6> points, int n, Kind kind)
+JointCurve::JointCurve(std::vector<double> knots, std::vector<Eigen::VectorXd> points, int n, Kind kind)
     : knots_(std::move(knots)), points_(std::move(points)), n_(n), kind_(kind) {
   const std::size_t K = knots_.size();
   if (K < 2 || points_.size() != K) throw std::invalid_argument("joint curve: expected at least two points");
-  if (n_ < 1 || n_ > 6) throw std::invalid_argument("joint curve: expected 1 to 6 joints");
+  if (n_ < 1) throw std::invalid_argument("joint curve: expected at least one joint");
+  for (const Eigen::VectorXd& q : points_) {
+    if (q.size() < n_) throw std::invalid_argument("joint curve: a point with fewer entries than joints");
+  }
+  for (Eigen::VectorXd& q : points_) q.conservativeResize(n_);  // the curve's joints only
   if (knots_.front() != 0.0) throw std::invalid_argument("joint curve: expected the first point at 0");
   for (std::size_t k = 1; k < K; ++k) {
     if (!(knots_[k] > knots_[k - 1])) throw std::invalid_argument("joint curve: expected increasing knots");
   }
-  coef_.assign(K - 1, Eigen::Matrix<double, 6, 6>::Zero());
+  coef_.assign(K - 1, Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n_, 6));
   std::vector<double> y(K);
   for (int j = 0; j < n_; ++j) {
     for (std::size_t k = 0; k < K; ++k) y[k] = points_[k][j];
@@ -166,7 +170,8 @@ int JointCurve::piece(double x) const {
   return static_cast<int>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
 }
 
-void JointCurve::eval_piece(int k, double x, Vec6& q, Vec6& dq, Vec6& ddq) const {
+void JointCurve::eval_piece(int k, double x, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> dq,
+                            Eigen::Ref<Eigen::VectorXd> ddq) const {
   const auto& c = coef_[static_cast<std::size_t>(k)];
   const double u = x - knots_[static_cast<std::size_t>(k)];
   q.setZero(), dq.setZero(), ddq.setZero();
@@ -179,7 +184,8 @@ void JointCurve::eval_piece(int k, double x, Vec6& q, Vec6& dq, Vec6& ddq) const
   }
 }
 
-void JointCurve::eval(double x, Vec6& q, Vec6& dq, Vec6& ddq) const {
+void JointCurve::eval(double x, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> dq,
+                      Eigen::Ref<Eigen::VectorXd> ddq) const {
   const double xc = std::clamp(x, 0.0, length());
   eval_piece(piece(xc), xc, q, dq, ddq);
 }

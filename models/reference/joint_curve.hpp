@@ -38,41 +38,44 @@ std::vector<PieceCoefficients> clamped_quintic_spline(const std::vector<double>&
 // at 0 and (q1, v1, a1) at h.
 PieceCoefficients quintic_hermite(double h, double q0, double v0, double a0, double q1, double v1, double a1);
 
-// A curve q(x) in the space of the first n joints (at most 6), x in [0, L]:
+// A curve q(x) in the space of the first n joints, x in [0, L]:
 // a cubic or quintic spline per joint through the knots, at rest at both ends
 // (zero slopes; quintic: zero second derivatives too), held at its end values
 // outside [0, L].
 class JointCurve {
  public:
   enum class Kind { kCubic, kQuintic };
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
-  // knots: x_0 = 0 < x_1 < ... < x_M (M >= 1); points: q_k, first n entries used.
-  JointCurve(std::vector<double> knots, std::vector<Vec6> points, int n, Kind kind);
+  // knots: x_0 = 0 < x_1 < ... < x_M (M >= 1); points: q_k, first n entries
+  // used (points() keeps those).
+  JointCurve(std::vector<double> knots, std::vector<Eigen::VectorXd> points, int n, Kind kind);
   int joints() const { return n_; }
   Kind kind() const { return kind_; }
   double length() const { return knots_.back(); }
   const std::vector<double>& knots() const { return knots_; }
-  const std::vector<Vec6>& points() const { return points_; }
+  const std::vector<Eigen::VectorXd>& points() const { return points_; }
   // The piece holding x (the last one also holds L; clamped to the pieces).
   int piece(double x) const;
   // q, dq/dx, d2q/dx2 on piece k at x (its polynomial continued past its
-  // ends); entries beyond n are 0. Allocation-free.
-  void eval_piece(int k, double x, Vec6& q, Vec6& dq, Vec6& ddq) const;
+  // ends); q, dq, ddq have n entries or more, those beyond n set to 0.
+  // Allocation-free.
+  void eval_piece(int k, double x, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> dq,
+                  Eigen::Ref<Eigen::VectorXd> ddq) const;
   // std::invalid_argument naming the joint and the piece if a piece could
   // evaluate to a non-finite number.
   void check_finite() const;
   // The same at x clamped to [0, L], on the piece holding it.
-  void eval(double x, Vec6& q, Vec6& dq, Vec6& ddq) const;
+  void eval(double x, Eigen::Ref<Eigen::VectorXd> q, Eigen::Ref<Eigen::VectorXd> dq,
+            Eigen::Ref<Eigen::VectorXd> ddq) const;
   // The inner knots: where a derivative jumps (cubic: the third, quintic: the fifth).
   std::vector<double> breaks() const { return {knots_.begin() + 1, knots_.end() - 1}; }
 
  private:
   std::vector<double> knots_;
-  std::vector<Vec6> points_;
+  std::vector<Eigen::VectorXd> points_;
   int n_;
   Kind kind_;
   // coef_[k](j, e): joint j's coefficient of (x - x_k)^e on piece k.
-  std::vector<Eigen::Matrix<double, 6, 6>> coef_;
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 6>> coef_;
 };
 
 }  // namespace pumasim

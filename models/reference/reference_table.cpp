@@ -20,10 +20,11 @@ double ReferenceTable::sub_intervals(const Reference& ref) {
   return total;
 }
 
-ReferenceTable::ReferenceTable(const Reference& ref, bool truncate) : ref_(ref), truncate_(truncate) {
-  if (!(sub_intervals(ref) <= kMaxSubs)) {
-    throw std::invalid_argument("reference table: expected at most " + std::to_string(static_cast<long>(kMaxSubs)) +
-                                " sub-intervals (ReferenceTable::sub_intervals: check before making one)");
+ReferenceTable::ReferenceTable(const Reference& ref, bool truncate)
+    : ref_(ref), truncate_(truncate), n_(ref.simulated_joints()), blocks_(blocks_per_sample(ref)) {
+  if (!(blocks(ref) <= kMaxBlocks)) {
+    throw std::invalid_argument("reference table: expected at most " + std::to_string(static_cast<long>(kMaxBlocks)) +
+                                " blocks (ReferenceTable::blocks: check before making one)");
   }
   const std::vector<double>& bp = ref.breakpoints();
   // Segment s is [bp[s-1], bp[s]] (bp[-1] = 0); the one after the last
@@ -40,7 +41,9 @@ ReferenceTable::ReferenceTable(const Reference& ref, bool truncate) : ref_(ref),
     }
   }
   first_.push_back(static_cast<int>(subs_.size()));
-  coefs_.resize(subs_.size());
+  coefs_.assign(subs_.size(), Coefs::Zero(blocks_ * kBlock, kDegree + 1));
+  fill_sample_ = ref.sample();
+  fill_values_ = Eigen::MatrixXd::Zero(blocks_ * kBlock, kDegree + 1);
   state_ = std::make_unique<std::atomic<State>[]>(subs_.size());
   for (std::size_t k = 0; k < subs_.size(); ++k) state_[k].store(kEmpty, std::memory_order_relaxed);
 }
@@ -67,9 +70,24 @@ ReferenceTable::State ReferenceTable::state(int segment, int k) const {
   return s.load(std::memory_order_relaxed);
 }
 
-void ReferenceTable::pack(const ReferenceSample& s, double* c) {
-  for (int j = 0; j < 6; ++j) c[j] = s.q[j], c[6 + j] = s.qd[j], c[12 + j] = s.qdd[j];
-  for (int i = 0; i < 3; ++i) c[18 + i] = s.p[i], c[21 + i] = s.v[i];
+// Components: q (n), qd (n), qdd (n), p (3), v (3), then zeros to the block's end.
+void ReferenceTable::pack(const ReferenceSample& s, double* c) const {
+  const int n = n_;
+  for (int j = 0; j < n; ++j) c[j] = s.q[j], c[n + j] = s.qd[j], c[2 * n + j] = s.qdd[j];
+  for (int i = 0; i < 3; ++i) c[3 * n + i] = s.p[i], c[3 * n + 3 + i] = s.v[i];
+}
+
+void ReferenceTable::unpack(int b, const Eigen::Matrix<double, kBlock, 1>& v, ReferenceSample& out) const {
+  const int n = n_, lo = b * kBlock, hi = lo + kBlock;
+  // The part of [from, from + len) in this block, written to dst.
+  const auto take = [&](int from, int len, double* dst) {
+    for (int c = std::max(from, lo); c < std::min(from + len, hi); ++c) dst[c - from] = v[c - lo];
+  };
+  take(0, n, out.q.data());
+  take(n, n, out.qd.data());
+  take(2 * n, n, out.qdd.data());
+  take(3 * n, 3, out.p.data());
+  take(3 * n + 3, 3, out.v.data());
 }
 
 // The values at the Chebyshev extreme points x_k = cos(pi k / N) and the
@@ -79,8 +97,8 @@ void ReferenceTable::pack(const ReferenceSample& s, double* c) {
 void ReferenceTable::fill(int segment, int k) const {
   Sub& sub = subs_[static_cast<std::size_t>(k)];
   constexpr int N = kDegree;
-  Eigen::Matrix<double, kComponents, N + 1> f;
-  ReferenceSample s;
+  Eigen::MatrixXd& f = fill_values_;
+  ReferenceSample& s = fill_sample_;
   const double mid = 0.5 * (sub.a + sub.b), half = 0.5 * (sub.b - sub.a);
   for (int i = 0; i <= N; ++i) {
     const double t = i == 0 ? sub.b : i == N ? sub.a : mid + half * std::cos(std::numbers::pi * i / N);
@@ -89,9 +107,9 @@ void ReferenceTable::fill(int segment, int k) const {
   }
   Coefs& c = coefs_[static_cast<std::size_t>(k)];
   for (int j = 0; j <= N; ++j) {
-    Eigen::Matrix<double, kComponents, 1> sum = 0.5 * (f.col(0) + (j % 2 ? -1.0 : 1.0) * f.col(N));
-    for (int i = 1; i < N; ++i) sum += std::cos(std::numbers::pi * ((j * i) % (2 * N)) / N) * f.col(i);
-    c.col(j) = (j == 0 || j == N ? 1.0 : 2.0) / N * sum;
+    c.col(j) = 0.5 * (f.col(0) + (j % 2 ? -1.0 : 1.0) * f.col(N));
+    for (int i = 1; i < N; ++i) c.col(j) += std::cos(std::numbers::pi * ((j * i) % (2 * N)) / N) * f.col(i);
+    c.col(j) *= (j == 0 || j == N ? 1.0 : 2.0) / N;
   }
   const double tail = (c.col(N - 1).cwiseAbs() + c.col(N).cwiseAbs()).maxCoeff();
   const State filled = tail <= kTailTol ? kTable : kExact;
@@ -113,6 +131,7 @@ void ReferenceTable::fill(int segment, int k) const {
 }
 
 void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool extend) const {
+  if (!ref_.fits(out)) out = ref_.sample();  // allocates once
   const int m = static_cast<int>(first_.size()) - 1;  // tabulated segments
   if (segment < 0 || segment >= m) return ref_.eval(t, out, segment, extend);
   const int k0 = first_[static_cast<std::size_t>(segment)], k1 = first_[static_cast<std::size_t>(segment) + 1];
@@ -125,16 +144,17 @@ void ReferenceTable::eval(double t, ReferenceSample& out, int segment, bool exte
   // Clenshaw's recurrence for all components at once.
   const Coefs& c = coefs_[static_cast<std::size_t>(k)];
   const double x = (2 * t - sub.a - sub.b) / (sub.b - sub.a);
-  using Col = Eigen::Matrix<double, kComponents, 1>;
-  Col b1 = Col::Zero(), b2 = Col::Zero();
-  for (int j = sub.degree; j >= 1; --j) {
-    const Col b0 = c.col(j) + 2 * x * b1 - b2;
-    b2 = b1;
-    b1 = b0;
+  using Col = Eigen::Matrix<double, kBlock, 1>;
+  for (int blk = 0; blk < blocks_; ++blk) {
+    const int r0 = blk * kBlock;
+    Col b1 = Col::Zero(), b2 = Col::Zero();
+    for (int j = sub.degree; j >= 1; --j) {
+      const Col b0 = c.template block<kBlock, 1>(r0, j) + 2 * x * b1 - b2;
+      b2 = b1;
+      b1 = b0;
+    }
+    unpack(blk, c.template block<kBlock, 1>(r0, 0) + x * b1 - b2, out);
   }
-  const Col v = c.col(0) + x * b1 - b2;
-  for (int j = 0; j < 6; ++j) out.q[j] = v[j], out.qd[j] = v[6 + j], out.qdd[j] = v[12 + j];
-  for (int i = 0; i < 3; ++i) out.p[i] = v[18 + i], out.v[i] = v[21 + i];
 }
 
 }  // namespace pumasim

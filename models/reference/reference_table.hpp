@@ -3,7 +3,8 @@
 // seconds, each with a Chebyshev interpolant of degree kDegree (values at the
 // Chebyshev extreme points, Trefethen, Approximation Theory and Approximation
 // Practice, 2013, ch. 2-3) of every component the plant reads: q, qd, qdd of
-// the simulated joints, p and v. Each component is interpolated from the
+// the n simulated joints, p and v (3n + 6 components, in blocks of kBlock:
+// the PUMA's 6 joints fill one block, 3 joints one block with padding). Each component is interpolated from the
 // exact reference's own value (qd and qdd are not differences of q), so
 // their errors are of the same size. The nodes are evaluated on the
 // segment's own formula (Reference::eval with the segment and extend), so
@@ -50,15 +51,22 @@ class ReferenceTable {
   // Clenshaw's recurrence, a dependency chain as long as the degree, is the
   // table's whole cost per lookup.
   static constexpr double kChopTol = 1e-14;
-  static constexpr int kComponents = 24;     // q, qd, qdd (6 each), p, v (3 each)
-  // The most sub-intervals a table holds (65,536 s of reference at kSpan;
-  // about 200 MB of coefficients): a longer reference is not tabulated (the
-  // plant then evaluates it exactly), so that a derived duration (a speed of
-  // 1e-9 m/s) allocates nothing before the run's own bounds are checked.
-  static constexpr double kMaxSubs = 32768;
-  // How many sub-intervals ref's table would have, counted without
-  // allocating (a double: it may exceed any integer type).
+  // Components per block: Clenshaw's recurrence runs on a block at once
+  // (fixed-size vectors, no allocation).
+  static constexpr int kBlock = 24;
+  // The most blocks a table holds, over all its sub-intervals (for the PUMA,
+  // 65,536 s of reference at kSpan; about 200 MB of coefficients): a longer
+  // reference is not tabulated (the plant then evaluates it exactly), so that
+  // a derived duration (a speed of 1e-9 m/s) allocates nothing before the
+  // run's own bounds are checked.
+  static constexpr double kMaxBlocks = 32768;
+  // How many sub-intervals ref's table would have, and how many blocks,
+  // counted without allocating (doubles: they may exceed any integer type).
   static double sub_intervals(const Reference& ref);
+  static double blocks(const Reference& ref) { return sub_intervals(ref) * blocks_per_sample(ref); }
+  static int blocks_per_sample(const Reference& ref) {
+    return (3 * ref.simulated_joints() + 6 + kBlock - 1) / kBlock;
+  }
 
   // The reference must outlive the table. Allocates all storage. truncate:
   // cut each series as above (false: every series keeps kDegree; for tests).
@@ -75,7 +83,7 @@ class ReferenceTable {
   int max_degree_kept() const;
 
  private:
-  using Coefs = Eigen::Matrix<double, kComponents, kDegree + 1>;
+  using Coefs = Eigen::Matrix<double, Eigen::Dynamic, kDegree + 1>;  // blocks_ x kBlock rows
   struct Sub {
     double a = 0, b = 0;
     int degree = kDegree;  // kept after truncation (written by fill, before its state)
@@ -84,16 +92,22 @@ class ReferenceTable {
   // Sub-interval k's state, filling it first if it is empty.
   State state(int segment, int k) const;
   void fill(int segment, int k) const;  // under fill_lock_
-  static void pack(const ReferenceSample& s, double* c);
+  void pack(const ReferenceSample& s, double* c) const;
+  // Block b's values v into out's components.
+  void unpack(int b, const Eigen::Matrix<double, kBlock, 1>& v, ReferenceSample& out) const;
 
   const Reference& ref_;
   bool truncate_;
+  int n_;       // simulated joints
+  int blocks_;  // blocks per sample
   std::vector<int> first_;   // per segment: index of its first sub-interval; one past the end at the back
   // The lazily filled part: written only by fill(), under fill_lock_.
   mutable std::vector<Sub> subs_;
   mutable std::vector<Coefs> coefs_;  // per sub-interval
   mutable std::unique_ptr<std::atomic<State>[]> state_;  // per sub-interval; published last
   mutable std::mutex fill_lock_;
+  mutable ReferenceSample fill_sample_;  // fill's scratch (under fill_lock_)
+  mutable Eigen::MatrixXd fill_values_;  // the values at the nodes
   mutable int filled_ = 0, fallbacks_ = 0, max_degree_kept_ = 0;
 };
 

@@ -108,7 +108,7 @@ double Path::distance(const Eigen::Vector3d& p) const {
   return best;
 }
 
-Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held,
+Reference::Reference(RobotModel robot, int n, Eigen::VectorXd q_held,
                      PumaConfig config, Eigen::Matrix3d R_fixed, Path path, Timing timing,
                      Interpolation interpolation, int via_segments, IkSettings ik)
     : robot_(std::move(robot)),
@@ -120,15 +120,18 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
       timing_(std::move(timing)),
       interp_(interpolation),
       ik_(std::move(ik)) {
+  if (q_held_.size() != robot_.dof()) throw std::invalid_argument("reference: q_held needs one entry per joint");
   if (ik_.method == IkMethod::kClosedForm) {
     if (const std::string why = puma_ik_unsupported(robot_); !why.empty()) {
       throw std::invalid_argument(why);
     }
     if (n_ != 3 && n_ != 6) throw std::invalid_argument("reference: expected 3 or 6 joints");
-  } else if (n_ < 1 || n_ > robot_.dof() || n_ == 4 || n_ == 5) {
-    throw std::invalid_argument("reference: a Cartesian path needs 1 to 3 simulated joints (the position) or 6 "
-                                "(position and orientation), not " + std::to_string(n_));
+  } else if (n_ < 1 || n_ > robot_.dof()) {
+    throw std::invalid_argument("reference: a Cartesian path needs 1 to " + std::to_string(robot_.dof()) +
+                                " simulated joints, not " + std::to_string(n_));
   }
+  if (ik_.guess && ik_.guess->size() < n_) throw std::invalid_argument("reference: the guess needs n entries");
+  redundant_ = ik_.method == IkMethod::kNumerical && n_ > (n_ >= 6 ? 6 : 3);
   build_branch_table();
   if (interp_ != Interpolation::kCartesian) {
     if (via_segments < 1) throw std::invalid_argument("reference: expected at least one via-point segment");
@@ -141,7 +144,7 @@ Reference::Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held
   finish_breakpoints();
 }
 
-Reference::Reference(RobotModel robot, Eigen::Matrix<double, 6, 1> q_held, JointCurve curve, Timing timing)
+Reference::Reference(RobotModel robot, Eigen::VectorXd q_held, JointCurve curve, Timing timing)
     : robot_(std::move(robot)),
       n_(curve.joints()),
       q_held_(q_held),
@@ -151,6 +154,7 @@ Reference::Reference(RobotModel robot, Eigen::Matrix<double, 6, 1> q_held, Joint
       interp_(curve_->kind() == JointCurve::Kind::kCubic ? Interpolation::kJointCubic
                                                          : Interpolation::kJointQuintic) {
   if (n_ > robot_.dof()) throw std::invalid_argument("reference: the joint curve has more joints than the robot");
+  if (q_held_.size() != robot_.dof()) throw std::invalid_argument("reference: q_held needs one entry per joint");
   if (!(std::abs(timing_.length() - curve_->length()) <= 1e-9 * curve_->length())) {
     throw std::invalid_argument("reference: the timing law does not run along the whole curve");
   }
@@ -184,21 +188,23 @@ std::string Reference::point_at(const Eigen::Vector3d& p, double s) const {
 void Reference::build_branch_table() {
   const int points = 2000;
   const double L = path_->length();
-  Eigen::Matrix<double, 6, 1> prev = q_held_;
-  for (int j = 0; j < robot_.dof(); ++j) {  // the middle of the range; 0 for a joint without limits (a slide)
+  Eigen::VectorXd prev = q_held_;
+  for (int j = 0; j < n_; ++j) {  // the middle of the range; 0 for a joint without limits (a slide)
     const JointParams& J = robot_.joints[j];
     prev[j] = std::isfinite(J.q_min) && std::isfinite(J.q_max) ? 0.5 * (J.q_min + J.q_max) : 0.0;
   }
   if (ik_.method == IkMethod::kNumerical && ik_.guess) {
     for (int j = 0; j < n_; ++j) prev[j] = (*ik_.guess)[j];
   }
+  rest_ = prev;  // the redundancy rule's rest pose: the guess
+  IkWorkspace ik = ik_workspace();
   branch_.reserve(points);
   for (int k = 0; k < points; ++k) {
     const double s = L * k / (points - 1);
     Eigen::Vector3d p, dp, ddp;
     path_->eval(s, p, dp, ddp);
-    Eigen::Matrix<double, 6, 1> q;
-    if (!joint_angles(p, prev, k > 0, q)) {
+    Eigen::VectorXd q(robot_.dof());
+    if (!joint_angles(p, prev, k > 0, q, ik)) {
       throw std::runtime_error("reference: " + point_at(p, s) + " is out of reach");
     }
     for (int j = 0; j < n_; ++j) {
@@ -229,7 +235,7 @@ void Reference::check_curve_limits() const {
   for (std::size_t k = 0; k + 1 < x.size(); ++k) {
     for (int i = 0; i <= 16; ++i) {
       const double xi = i == 16 ? x[k + 1] : x[k] + (x[k + 1] - x[k]) * i / 16;
-      Eigen::Matrix<double, 6, 1> q, dq, ddq;
+      Eigen::VectorXd q(n_), dq(n_), ddq(n_);
       curve_->eval_piece(static_cast<int>(k), xi, q, dq, ddq);
       for (int j = 0; j < n_; ++j) {
         const JointParams& J = robot_.joints[j];
@@ -248,7 +254,7 @@ void Reference::check_curve_limits() const {
 void Reference::build_trace() {
   const std::vector<double>& x = curve_->knots();
   const double L = curve_->length();
-  Eigen::Matrix<double, 6, 1> q = q_held_, c, dc, ddc;
+  Eigen::VectorXd q = q_held_, c(n_), dc(n_), ddc(n_);
   for (std::size_t k = 0; k + 1 < x.size(); ++k) {
     const int sub = std::max(1, static_cast<int>(std::ceil(4000 * (x[k + 1] - x[k]) / L)));
     for (int i = 0; i < sub; ++i) {
@@ -313,7 +319,7 @@ void Reference::build_joint_spline(int M) {
   // Via-points at equal arc-length steps, at the times the timing law
   // reaches them; q, qd, qdd there from the Cartesian reference.
   knots_.resize(M + 1);
-  std::vector<ReferenceSample> via(M + 1);
+  std::vector<ReferenceSample> via(M + 1, sample());
   for (int k = 0; k <= M; ++k) {
     knots_[k] = k == 0 ? 0.0 : k == M ? timing_.duration() : timing_.time_at(path_->length() * k / M);
     eval_cartesian(knots_[k], via[k], -1);
@@ -321,7 +327,7 @@ void Reference::build_joint_spline(int M) {
   for (int k = 0; k < M; ++k) {
     if (!(knots_[k + 1] > knots_[k])) throw std::invalid_argument("reference: via-points at the same time");
   }
-  coef_.assign(M, Eigen::Matrix<double, 6, 6>::Zero());
+  coef_.assign(M, Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(n_, 6));
   std::vector<double> y(M + 1);
   for (int j = 0; j < n_; ++j) {
     std::vector<PieceCoefficients> c(M);
@@ -354,8 +360,8 @@ void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bo
                    : static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(after - 1, 0, std::ssize(coef_) - 1));
   const double u = tc - knots_[k];
   const auto& c = coef_[k];
-  Eigen::Matrix<double, 6, 1> q = q_held_, qd = Eigen::Matrix<double, 6, 1>::Zero(),
-                              qdd = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::VectorXd &q = out.q, &qd = out.qd, &qdd = out.qdd;
+  q = q_held_, qd.setZero(), qdd.setZero();
   for (int j = 0; j < n_; ++j) {
     double p = c(j, 5), v = 5 * c(j, 5), a = 20 * c(j, 5);
     for (int e = 4; e >= 0; --e) p = p * u + c(j, e);
@@ -366,19 +372,16 @@ void Reference::eval_joint_space(double t, ReferenceSample& out, int segment, bo
     const bool moving = continued || (segment >= 0 ? segment < std::ssize(breakpoints_) && t > 0 : t > 0 && t < T);
     if (moving) qd[j] = v, qdd[j] = a;
   }
-  Eigen::Matrix<double, 6, 6> J;
-  jacobian(q, J);
-  out.q = q, out.qd = qd, out.qdd = qdd;
   out.p = position(q);
-  out.v = J.topRows<3>() * qd;
+  out.v = flange_velocity(q, qd, out.work);
 }
 
-bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near,
-                             bool track_wrist, Eigen::Matrix<double, 6, 1>& q) const {
+bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::VectorXd& near, bool track_wrist,
+                             Eigen::VectorXd& q, IkWorkspace& ik) const {
   if (ik_.method == IkMethod::kNumerical) {
     q = near;
-    for (int j = n_; j < 6; ++j) q[j] = q_held_[j];
-    if (!dls_ik(robot_, n_, p, n_ == 6 ? &R_fixed_ : nullptr, q).converged) return false;
+    q.tail(robot_.dof() - n_) = q_held_.tail(robot_.dof() - n_);
+    if (!dls_ik(robot_, n_, p, n_ >= 6 ? &R_fixed_ : nullptr, q, ik, rest()).converged) return false;
     // Revolute joints: the same pose at every 2 pi; the representative nearest `near`.
     for (int j = 0; j < n_; ++j) {
       if (!robot_.joints[j].prismatic()) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
@@ -401,33 +404,45 @@ bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<doubl
     // one to the other, so take whichever is nearer.
     Eigen::Vector3d alt(q[3] + M_PI, -q[4], q[5] + M_PI);
     for (int j = 0; j < 3; ++j) alt[j] += 2 * M_PI * std::round((near[3 + j] - alt[j]) / (2 * M_PI));
-    if ((alt - near.tail<3>()).squaredNorm() < (q.tail<3>() - near.tail<3>()).squaredNorm()) q.tail<3>() = alt;
+    if ((alt - near.segment<3>(3)).squaredNorm() < (q.segment<3>(3) - near.segment<3>(3)).squaredNorm()) {
+      q.segment<3>(3) = alt;
+    }
   }
   return ok;
 }
 
-Eigen::Vector3d Reference::position(const Eigen::Matrix<double, 6, 1>& q_full) const {
+Eigen::Vector3d Reference::position(const Eigen::Ref<const Eigen::VectorXd>& q_full) const {
   Eigen::Matrix3d R;
   Eigen::Vector3d p;
   forward_kinematics<double>(robot_, q_full, R, p);
   return p;
 }
 
-void Reference::jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const {
-  geometric_jacobian(robot_, q, n_, J);
+Eigen::Vector3d Reference::flange_velocity(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                           ReferenceScratch& w) const {
+  geometric_jacobian(robot_, q, n_, w.J);
+  return w.J.topRows<3>() * qd;
 }
 
-void Reference::jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
-                              Eigen::Matrix<double, 6, 6>& Jdot) const {
-  Eigen::Matrix<Dual, 6, 1> qq;
-  for (int j = 0; j < 6; ++j) qq[j] = Dual(q[j], qd[j]);
-  Eigen::Matrix<Dual, 6, 6> JJ;
-  geometric_jacobian(robot_, qq, n_, JJ);
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) Jdot(r, c) = JJ(r, c).deriv();
+IkWorkspace Reference::ik_workspace() const {
+  return IkWorkspace(robot_.dof(), n_, path_ && n_ >= 6 ? 6 : 3);
+}
+
+ReferenceSample Reference::sample() const {
+  ReferenceSample s;
+  const int dof = robot_.dof();
+  s.q = q_held_, s.qd = Eigen::VectorXd::Zero(dof), s.qdd = Eigen::VectorXd::Zero(dof);
+  s.p.setZero(), s.v.setZero();
+  ReferenceScratch& w = s.work;
+  w.q = q_held_, w.near = q_held_;
+  w.c = w.dc = w.ddc = Eigen::VectorXd::Zero(dof);
+  w.J = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, dof);
+  w.ik = ik_workspace();
+  return s;
 }
 
 void Reference::eval(double t, ReferenceSample& out, int segment, bool extend) const {
+  if (!fits(out)) out = sample();  // allocates once
   const int m = static_cast<int>(breakpoints_.size());
   const bool inside = segment >= 0 && segment <= m &&
                       (extend ||
@@ -459,64 +474,18 @@ void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) cons
   // Joint positions: the IK's branch nearest the table's angles at this s.
   const double L = path_->length();
   const auto k = static_cast<std::size_t>(std::lround(std::clamp(s / L, 0.0, 1.0) * (branch_.size() - 1)));
-  Eigen::Matrix<double, 6, 1> q;
-  const bool ok = joint_angles(p, branch_[k], true, q);
+  const bool ok = joint_angles(p, branch_[k], true, out.q, out.work.ik);
   if (!ok) {
     throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
                              std::to_string(p.y()) + ", " + std::to_string(p.z()) +
                              ") m at t = " + std::to_string(t) + " s is out of reach");
   }
-  Eigen::Matrix<double, 6, 1> qd, qdd;
-  cartesian_rates(q, out.v, a, qd, qdd);
-  out.q = q;
-  out.qd = qd;
-  out.qdd = qdd;
-}
-
-void Reference::cartesian_rates(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Vector3d& v,
-                                const Eigen::Vector3d& a, Eigen::Matrix<double, 6, 1>& qd,
-                                Eigen::Matrix<double, 6, 1>& qdd) const {
-  // Rates: J qd = [v; 0] and J qdd = [a; 0] - Jdot qd, over the simulated joints
-  // (n = 3: position rows only). Jdot qd exactly: the Jacobian on dual numbers
-  // q + eps qd (a central difference here put noise of about 1e-10 into qdd,
-  // which a tight-tolerance reference run could not get past).
-  Eigen::Matrix<double, 6, 6> J;
-  jacobian(q, J);
-  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-  rhs.head<3>() = v;
-  qd.setZero();
-  qdd.setZero();
-  Eigen::Matrix<double, 6, 6> Jdot;
-  if (n_ < 3) {
-    // Fewer joints than position rows: least squares on the normal
-    // equations (exact when v and a are tangent to what the joints can
-    // reach, as along a reachable path); unused joints' equations q_j = 0.
-    Eigen::Matrix<double, 6, 6> A = J.topRows<3>().transpose() * J.topRows<3>();
-    for (int j = n_; j < 6; ++j) A(j, j) = 1.0;
-    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
-    qd = ldlt.solve(J.topRows<3>().transpose() * v);
-    jacobian_rate(q, qd, Jdot);
-    qdd = ldlt.solve(J.topRows<3>().transpose() * (a - Jdot.topRows<3>() * qd));
-  } else if (n_ == 3) {
-    const Eigen::Matrix3d A = J.topLeftCorner<3, 3>();
-    const Eigen::PartialPivLU<Eigen::Matrix3d> lu(A);
-    qd.head<3>() = lu.solve(v);
-    jacobian_rate(q, qd, Jdot);
-    const Eigen::Vector3d Jdot_qd = Jdot.topLeftCorner<3, 3>() * qd.head<3>();
-    qdd.head<3>() = lu.solve(a - Jdot_qd);
-  } else {
-    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(J);
-    qd = lu.solve(rhs);
-    jacobian_rate(q, qd, Jdot);
-    Eigen::Matrix<double, 6, 1> acc = Eigen::Matrix<double, 6, 1>::Zero();
-    acc.head<3>() = a;
-    qdd = lu.solve(acc - Jdot * qd);
-  }
+  task_rates(robot_, n_, tracks_orientation(), out.q, rest(), out.v, a, out.qd, out.qdd, out.work.ik);
 }
 
 void Reference::eval_curve(double t, ReferenceSample& out, int segment) const {
   double s, sd, sdd;
-  Eigen::Matrix<double, 6, 1> c, dc, ddc;
+  Eigen::VectorXd &c = out.work.c, &dc = out.work.dc, &ddc = out.work.ddc;
   if (segment < 0) {
     timing_.eval(t, s, sd, sdd);
     curve_->eval(s, c, dc, ddc);
@@ -529,10 +498,8 @@ void Reference::eval_curve(double t, ReferenceSample& out, int segment) const {
   for (int j = 0; j < n_; ++j) out.q[j] = c[j];
   out.qd = dc * sd;
   out.qdd = ddc * (sd * sd) + dc * sdd;
-  Eigen::Matrix<double, 6, 6> J;
-  jacobian(out.q, J);
   out.p = position(out.q);
-  out.v = J.topRows<3>() * out.qd;
+  out.v = flange_velocity(out.q, out.qd, out.work);
 }
 
 }  // namespace pumasim

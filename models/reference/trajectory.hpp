@@ -22,6 +22,7 @@
 #include <optional>
 
 #include "models/reference/joint_curve.hpp"
+#include "models/reference/numerical_ik.hpp"
 #include "models/reference/timing.hpp"
 
 namespace pumasim {
@@ -73,33 +74,49 @@ const char* to_string(Interpolation i);
 // or damped least squares on the geometric Jacobian (any arm), warm-started
 // from the solution at the nearest point of a table built by continuation
 // along the path from `guess` (default: the middle of each joint's range).
+// A redundant arm (more simulated joints than the task's rows) follows the
+// rule of numerical_ik.hpp with the guess as its rest pose: of the poses
+// that place the flange, the one nearest the guess, continued along the path.
 enum class IkMethod { kClosedForm, kNumerical };
 struct IkSettings {
   IkMethod method = IkMethod::kClosedForm;
-  std::optional<Eigen::Matrix<double, 6, 1>> guess;
+  std::optional<Eigen::VectorXd> guess;  // the simulated joints' angles (at least n entries)
 };
 
+// What Reference::eval writes: q, qd, qdd for all the robot's joints (the
+// simulated joints first; held joints fixed, their rates zero), and the
+// flange's position and velocity. `work` is the exact evaluation's scratch.
+// Reference::sample() gives one of the right sizes; eval sizes a sample of
+// other sizes first (allocating once), then allocates nothing.
+struct ReferenceScratch {
+  Eigen::VectorXd q, near, c, dc, ddc;  // dof
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J;
+  IkWorkspace ik;
+};
 struct ReferenceSample {
-  Eigen::Matrix<double, 6, 1> q, qd, qdd;  // the simulated joints first; held joints fixed
-  Eigen::Vector3d p, v;                    // Cartesian position [m], velocity [m/s]
+  Eigen::VectorXd q, qd, qdd;  // dof entries
+  Eigen::Vector3d p, v;        // Cartesian position [m], velocity [m/s]
+  ReferenceScratch work;
 };
 
 // Joint references for the first n joints of `robot`; the others are held at
-// q_held. A Cartesian path: n <= 3, the flange origin (the PUMA's wrist
-// centre) follows the path; n = 6: the flange also keeps the orientation
-// R_fixed (closed form: n = 3 or 6 on a PUMA-structured arm; n = 4, 5 are
-// refused: redundant for the position, short of the orientation). A joint
-// curve: q(t) = curve(s(t)), s the timing law along the curve's parameter.
+// q_held (dof entries). A Cartesian path: n <= 5, the flange origin (the
+// PUMA's wrist centre) follows the path; n >= 6: the flange also keeps the
+// orientation R_fixed (closed form: n = 3 or 6 on a PUMA-structured arm).
+// n = 1, 2 reach the path in least squares; n = 4, 5 are redundant for the
+// position and n >= 7 for the pose: numerical_ik.hpp's rule picks the pose.
+// A joint curve: q(t) = curve(s(t)), s the timing law along the curve's
+// parameter.
 class Reference {
  public:
   // via_segments: with joint-space interpolation, the via-points split the
   // path into this many pieces of equal length (>= 1).
-  Reference(RobotModel robot, int n, Eigen::Matrix<double, 6, 1> q_held, PumaConfig config,
+  Reference(RobotModel robot, int n, Eigen::VectorXd q_held, PumaConfig config,
             Eigen::Matrix3d R_fixed, Path path, Timing timing,
             Interpolation interpolation = Interpolation::kCartesian, int via_segments = 0,
             IkSettings ik = {});
   // A joint-space reference: the curve's joints are the first n (n = curve.joints()).
-  Reference(RobotModel robot, Eigen::Matrix<double, 6, 1> q_held, JointCurve curve, Timing timing);
+  Reference(RobotModel robot, Eigen::VectorXd q_held, JointCurve curve, Timing timing);
   bool has_path() const { return path_.has_value(); }
   const Path& path() const;  // std::logic_error for a joint curve
   const JointCurve* curve() const { return curve_ ? &*curve_ : nullptr; }
@@ -115,7 +132,13 @@ class Reference {
   Interpolation interpolation() const { return interp_; }
   IkMethod ik_method() const { return ik_.method; }
   int simulated_joints() const { return n_; }
-  // Allocation-free. Throws std::runtime_error if the path leaves the workspace.
+  // Whether a Cartesian path's task includes the orientation (n >= 6).
+  bool tracks_orientation() const { return path_ && n_ >= 6; }
+  // A sample of this reference's sizes, at the held pose and at rest.
+  ReferenceSample sample() const;
+  bool fits(const ReferenceSample& s) const { return s.q.size() == robot_.dof() && s.work.ik.n == n_; }
+  // Allocation-free for a sample of this reference's sizes (sample()).
+  // Throws std::runtime_error if the path leaves the workspace.
   // With a segment (the smooth piece between breakpoints segment - 1 and
   // segment, see breakpoints()) and t within rounding of it, that piece's
   // formula is evaluated, so that at a breakpoint the value is the limit from
@@ -137,7 +160,7 @@ class Reference {
   // The first breakpoint strictly after t (+inf if none).
   double next_breakpoint(double t) const;
   // The flange position for joint angles q (simulated joints first).
-  Eigen::Vector3d position(const Eigen::Matrix<double, 6, 1>& q_full) const;
+  Eigen::Vector3d position(const Eigen::Ref<const Eigen::VectorXd>& q_full) const;
 
  private:
   void eval_cartesian(double t, ReferenceSample& out, int segment) const;
@@ -149,26 +172,23 @@ class Reference {
   void build_trace();
   // The breakpoints (sorted, merged to rounding) and each segment's pieces.
   void finish_breakpoints();
-  // Joint rates from the Cartesian velocity v and acceleration a at q
-  // (J qd = [v; 0], J qdd = [a; 0] - Jdot qd; least squares for n < 3).
-  void cartesian_rates(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Vector3d& v, const Eigen::Vector3d& a,
-                       Eigen::Matrix<double, 6, 1>& qd, Eigen::Matrix<double, 6, 1>& qdd) const;
-  // Columns for the simulated joints of [Jv; Jw] at q (closed form).
-  void jacobian(const Eigen::Matrix<double, 6, 1>& q, Eigen::Matrix<double, 6, 6>& J) const;
-  // Its time derivative along qd (exact: one pass on dual numbers).
-  void jacobian_rate(const Eigen::Matrix<double, 6, 1>& q, const Eigen::Matrix<double, 6, 1>& qd,
-                     Eigen::Matrix<double, 6, 6>& Jdot) const;
-  // IK at the path point p, each angle the representative (mod 2 pi) nearest
-  // `near`, and with track_wrist the wrist solution nearest it; false if out
-  // of reach. Numerical: damped least squares from `near`.
-  bool joint_angles(const Eigen::Vector3d& p, const Eigen::Matrix<double, 6, 1>& near, bool track_wrist,
-                    Eigen::Matrix<double, 6, 1>& q) const;
+  // The flange velocity J(q) qd (the simulated joints' columns).
+  Eigen::Vector3d flange_velocity(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, ReferenceScratch& w) const;
+  // IK at the path point p into q, each angle the representative (mod 2 pi)
+  // nearest `near`, and with track_wrist the wrist solution nearest it; false
+  // if out of reach. Numerical: damped least squares from `near` (and the
+  // redundancy rule). near and q: dof entries, not the same vector.
+  bool joint_angles(const Eigen::Vector3d& p, const Eigen::VectorXd& near, bool track_wrist, Eigen::VectorXd& q,
+                    IkWorkspace& ik) const;
+  // The rest pose of the redundancy rule, or nullptr when the task is not redundant.
+  const Eigen::VectorXd* rest() const { return redundant_ ? &rest_ : nullptr; }
+  IkWorkspace ik_workspace() const;
   // "the path point (x, y, z) m at s = ... m (t = ... s)".
   std::string point_at(const Eigen::Vector3d& p, double s) const;
 
   RobotModel robot_;
   int n_;
-  Eigen::Matrix<double, 6, 1> q_held_;
+  Eigen::VectorXd q_held_;
   PumaConfig config_;
   Eigen::Matrix3d R_fixed_;
   std::optional<Path> path_;
@@ -180,13 +200,17 @@ class Reference {
   // Joint-space interpolation: knot times, and per piece the coefficients
   // c(j, k) of (t - t_k)^k for each simulated joint j.
   std::vector<double> knots_;
-  std::vector<Eigen::Matrix<double, 6, 6>> coef_;
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 6>> coef_;
   // Joint angles along the path, unwrapped by continuity, at equal steps of
   // arc length: the wrist solution, and the branch of a joint whose range
   // exceeds 2 pi (the PUMA's wrist roll), are chosen nearest these, so the
   // reference stays continuous where the IK's (-pi, pi] would jump and through
   // a wrist singularity.
-  std::vector<Eigen::Matrix<double, 6, 1>> branch_;
+  std::vector<Eigen::VectorXd> branch_;
+  // The redundancy rule (numerical IK, more joints than the task's rows):
+  // its rest pose, the guess (default: the middle of each range).
+  bool redundant_ = false;
+  Eigen::VectorXd rest_;
   std::vector<double> breakpoints_;
   // Per segment: the timing law's and the path's or curve's piece (Cartesian,
   // joint curve), or the spline piece (joint-space interpolation of a path),

@@ -59,11 +59,11 @@ bool puma_ik_position(const RobotModel& m, const Eigen::Vector3d& p, const PumaC
 }
 
 bool puma_ik(const RobotModel& m, const Eigen::Vector3d& p, const Eigen::Matrix3d& R,
-             const PumaConfig& c, Eigen::Matrix<double, 6, 1>& q) {
+             const PumaConfig& c, Eigen::Ref<Eigen::VectorXd> q) {
   Eigen::Vector3d q123;
   if (!puma_ik_position(m, p, c, q123)) return false;
   q.head<3>() = q123;
-  q.tail<3>().setZero();
+  q.segment<3>(3).setZero();
   // R03 from the first three joints, then R36 = R03^T R = Rz(q4) Ry(-q5) Rz(q6).
   Eigen::Matrix3d R03;
   Eigen::Vector3d p3;

@@ -2,7 +2,6 @@
 // (exact, by dual numbers) and the closed-form inverse kinematics of the PUMA 560.
 #pragma once
 
-#include <array>
 #include <cmath>
 #include <string>
 
@@ -49,51 +48,62 @@ void forward_kinematics(const RobotModel& m, const Q& q, Eigen::Matrix<S, 3, 3>&
   }
 }
 
-// Geometric Jacobian of the flange (forward_kinematics' default frame) of a
-// robot with 6 joints (rows: linear velocity of the flange's origin, angular
-// velocity; base frame), for the first `columns` joints
-// (the others zero): the closed form [z_i x (p_e - o_i); z_i] for a revolute
-// joint and [z_i; 0] for a prismatic one (Siciliano et al. 2009, eq. 3.30)
-// from one kinematic pass. Allocation-free.
-// With S = Dual and q = Dual(q, qd), the derivative parts are dJ/dt exactly.
-template <class S>
-void geometric_jacobian(const RobotModel& m, const Eigen::Matrix<S, 6, 1>& q, int columns,
-                        Eigen::Matrix<S, 6, 6>& J) {
+// Geometric Jacobian of the flange (forward_kinematics' default frame)
+// (rows: linear velocity of the flange's origin, angular velocity; base
+// frame) for the first `columns` joints, the others' columns zero: the
+// closed form [z_i x (p_e - o_i); z_i] for a revolute joint and [z_i; 0] for
+// a prismatic one (Siciliano et al. 2009, eq. 3.30) from one kinematic pass.
+// q: any vector of at least dof entries; J: 6 rows and dof columns (a
+// dynamic J is resized to that, which allocates only when its size changes).
+// Allocation-free for a J of the right size: the axes z_i and points o_i
+// wait in J's own columns until the pass has found p_e.
+// With S = Dual and q = Dual(q, qd), the derivative parts are dJ/dt exactly
+// (and with S = Jet2, the second derivative along qd too).
+template <class QD, class JD>
+void geometric_jacobian(const RobotModel& m, const Eigen::MatrixBase<QD>& q, int columns,
+                        const Eigen::MatrixBase<JD>& J_out) {
+  using S = typename JD::Scalar;
   using std::cos;
   using std::sin;
   using V3 = Eigen::Matrix<S, 3, 1>;
   using M3 = Eigen::Matrix<S, 3, 3>;
-  std::array<V3, 6> z, o;
+  auto& J = const_cast<Eigen::MatrixBase<JD>&>(J_out).derived();
+  if (J.rows() != 6 || J.cols() != m.dof()) J.resize(6, m.dof());
   M3 R = m.base_R.template cast<S>();
   V3 p = m.base_p.template cast<S>();
   for (int j = 0; j < m.dof(); ++j) {
     const JointParams& P = m.joints[j];
-    const S th = P.dh_theta(q[j]), d = P.dh_d(q[j]), ct = cos(th), st = sin(th);
+    const S qj = S(q[j]);
+    const S th = P.dh_theta(qj), d = P.dh_d(qj), ct = cos(th), st = sin(th);
     const double ca = std::cos(P.alpha), sa = std::sin(P.alpha);
     M3 Rz, Rx;
     Rz << ct, -st, S(0), st, ct, S(0), S(0), S(0), S(1);
     Rx << S(1), S(0), S(0), S(0), S(ca), S(-sa), S(0), S(sa), S(ca);
     if (m.convention == DhConvention::kStandard) {  // joint j turns about z of frame j-1
-      z[j] = R.col(2), o[j] = p;
+      J.template block<3, 1>(0, j) = p, J.template block<3, 1>(3, j) = R.col(2);
       p += R * (Rz * V3(S(P.a), S(0), d));
       R = (R * Rz * Rx).eval();
     } else {  // about z of frame j, after Rx(alpha) Tx(a)
       p += R * V3(S(P.a), S(0), S(0));
       R = (R * Rx).eval();
-      z[j] = R.col(2), o[j] = p;
+      J.template block<3, 1>(0, j) = p, J.template block<3, 1>(3, j) = R.col(2);
       p += R * V3(S(0), S(0), d);
       R = (R * Rz).eval();
     }
   }
   p += R * m.tool_p.template cast<S>();  // the flange's origin
-  J.setZero();
-  for (int k = 0; k < columns; ++k) {
-    if (m.joints[k].prismatic()) {
-      J.template block<3, 1>(0, k) = z[k];
+  for (int k = 0; k < m.dof(); ++k) {
+    if (k >= columns) {
+      J.col(k).setZero();
       continue;
     }
-    J.template block<3, 1>(0, k) = z[k].cross(p - o[k]);
-    J.template block<3, 1>(3, k) = z[k];
+    const V3 o = J.template block<3, 1>(0, k), z = J.template block<3, 1>(3, k);
+    if (m.joints[k].prismatic()) {
+      J.template block<3, 1>(0, k) = z;
+      J.template block<3, 1>(3, k).setZero();
+    } else {
+      J.template block<3, 1>(0, k) = z.cross(p - o);
+    }
   }
 }
 
@@ -110,8 +120,9 @@ struct PumaConfig {
 // three set the flange orientation. Returns false if p is out of reach.
 bool puma_ik_position(const RobotModel& m, const Eigen::Vector3d& p, const PumaConfig& c,
                       Eigen::Vector3d& q123);
+// q: 6 entries or more (the first six written).
 bool puma_ik(const RobotModel& m, const Eigen::Vector3d& p, const Eigen::Matrix3d& R,
-             const PumaConfig& c, Eigen::Matrix<double, 6, 1>& q);
+             const PumaConfig& c, Eigen::Ref<Eigen::VectorXd> q);
 
 // Empty if the model has the structure puma_ik needs, else why not.
 std::string puma_ik_unsupported(const RobotModel& m);

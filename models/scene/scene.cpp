@@ -66,34 +66,29 @@ void load_robot_of(StrictTable& t, Scene& sc) {
   } catch (const ConfigError& e) {
     throw ConfigError(t.where("robot") + e.what());
   }
-  const int dof = sc.plant.robot.dof();
-  if (dof > 6) t.fail("robot", "a robot with at most 6 joints", "one with " + std::to_string(dof));
+  sc.plant.q_held = Eigen::VectorXd::Zero(sc.plant.robot.dof());
 }
 
 void apply_rotor_inertia(StrictTable&, Scene& sc) {
   if (!sc.rotor_inertia) sc.plant.robot = without_rotor_inertia(sc.plant.robot);
 }
 
-// joints: a whole number in [1, the robot's joint count]; fewer than all only
-// on a 6-joint robot (the held joints are locked on its wrist).
+// joints: a whole number in [1, the robot's joint count]; the joints beyond
+// it are held (locked at `held`, their links riding on link n).
 Codec<Scene> joints_codec() {
   return {[](StrictTable& t, std::string_view key, Scene& sc, int) {
             const int dof = sc.plant.robot.dof();
             const double x = t.number(key, {1.0, static_cast<double>(dof)});
             if (x != std::floor(x)) t.fail(key, "an integer in [1, " + std::to_string(dof) + "]", std::to_string(x));
             const int n = static_cast<int>(x);
-            if (n < dof && dof != 6) {
-              t.fail(key, "all " + std::to_string(dof) + " joints of this robot (held joints need a 6-joint robot)",
-                     std::to_string(n));
-            }
             sc.plant.n = n;
           },
           [](toml::table& out, std::string_view key, const Scene& sc, int) { out.insert(key, sc.plant.n); },
           nullptr};
 }
 
-// held: the angles of joints n+1..dof, the tail of the 6-vector q_held
-// (dof <= 6 is checked at the robot, n <= dof at joints).
+// held: the angles of joints n+1..dof, the tail of q_held (dof entries,
+// sized when the robot is read; n <= dof is checked at joints).
 int held_count(const Scene& sc, int) { return sc.plant.robot.dof() - sc.plant.n; }
 std::vector<double> get_held(const Scene& sc, int) {
   const int n = sc.plant.n;
@@ -666,7 +661,7 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
      "inverse kinematics branch: elbow", Need::kOptional, {closed_form_ik, "ik"}},
     {"wrist", scene_io::choice<bool>({{"noflip", false}, {"flip", true}}, PUMASIM_AT(s.config.wrist_flip)),
      "inverse kinematics branch: wrist", Need::kOptional, {closed_form_ik, "ik"}},
-    {"orientation", orientation_codec(), "6 joints: the flange's fixed orientation (rows)", Need::kOptional,
+    {"orientation", orientation_codec(), "6 joints or more: the flange's fixed orientation (rows)", Need::kOptional,
      {cartesian_path, {}}},
 };
 
@@ -698,10 +693,10 @@ void read_planning(std::optional<StrictTable>& plan, const std::string& file, Re
 // The joint-space source's spline (its points' times as the parameter).
 JointCurve joint_curve_of(const ReferenceSettings& r, int n) {
   std::vector<double> knots;
-  std::vector<JointCurve::Vec6> points;
+  std::vector<Eigen::VectorXd> points;
   for (const auto& row : r.points) {
     knots.push_back(row[0]);
-    JointCurve::Vec6 q = JointCurve::Vec6::Zero();
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(n);
     for (int j = 0; j < n; ++j) q[j] = row[static_cast<std::size_t>(j + 1)];
     points.push_back(q);
   }
@@ -713,7 +708,7 @@ JointCurve joint_curve_of(const ReferenceSettings& r, int n) {
 IkSettings ik_of(const ReferenceSettings& r, int n) {
   IkSettings ik{r.ik, std::nullopt};
   if (!r.ik_guess.empty()) {
-    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
     for (int j = 0; j < n; ++j) g[j] = r.ik_guess[static_cast<std::size_t>(j)];
     ik.guess = g;
   }
