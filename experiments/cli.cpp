@@ -31,6 +31,9 @@
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/dynamics_query.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
 
 namespace pumasim {
@@ -188,6 +191,16 @@ void add_scene(CLI::App* app, SceneArgs& a) {
 // the file, line and key, as `run` would otherwise fail without them).
 Scene load_checked_scene(const SceneArgs& a) { return pumasim::load_checked_scene(a.file, a.sets, a.unsets); }
 
+// ---------------------------------------------------------------- robot
+
+struct RobotArgs {
+  std::string robot;
+  int random = 0;  // --random N: a random chain of N joints
+  long seed = 1;
+  std::string types = "R";
+  std::string convention = "standard";
+};
+
 // ---------------------------------------------------------------- dynamics
 
 struct DynamicsArgs {
@@ -231,6 +244,74 @@ Json dynamics_json(const RobotDynamics& rd, const Eigen::VectorXd& q, const Eige
     doc["qdd"] = json_vector(*v.qdd);
   }
   return doc;
+}
+
+Json json_matrix(const Eigen::MatrixXd& m) {
+  Json a = Json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) a.push_back(json_vector(m.row(i).transpose()));
+  return a;
+}
+
+// The robot as pumasim reads it: every parameter the dynamics and the
+// kinematics use, whatever the file's format (a URDF's, after its
+// conversion to DH rows with a base and a tool transform).
+Json robot_json(const RobotModel& m) {
+  Json doc;
+  doc["name"] = m.name;
+  doc["source"] = m.source;
+  doc["dof"] = m.dof();
+  doc["convention"] = m.convention == DhConvention::kStandard ? "standard" : "modified";
+  doc["gravity"] = json_vector(m.gravity);
+  doc["base"] = {{"R", json_matrix(m.base_R)}, {"p", json_vector(m.base_p)}};
+  doc["tool"] = {{"R", json_matrix(m.tool_R)}, {"p", json_vector(m.tool_p)}};
+  doc["joints"] = Json::array();
+  for (const JointParams& J : m.joints) {
+    Json j;
+    j["type"] = J.prismatic() ? "prismatic" : "revolute";
+    j["a"] = J.a, j["alpha"] = J.alpha, j["d"] = J.d, j["theta"] = J.theta, j["offset"] = J.offset;
+    j["mass"] = J.mass;
+    j["com"] = json_vector(J.com);
+    j["inertia"] = json_matrix(J.inertia);
+    j["rotor_inertia"] = J.rotor_inertia;
+    j["gear_ratio"] = J.gear_ratio;
+    j["limits"] = json_vector(Eigen::Vector2d(J.q_min, J.q_max));
+    doc["joints"].push_back(std::move(j));
+  }
+  doc["poses"] = Json::object();
+  for (const NamedPose& p : m.poses) doc["poses"][p.name] = json_vector(p.q);
+  return doc;
+}
+
+int cmd_robot(const RobotArgs& a, std::ostream& out) {
+  if (a.random > 0) {
+    const DhConvention c = a.convention == "modified" ? DhConvention::kModified : DhConvention::kStandard;
+    const RobotModel m = random_chain(a.random, static_cast<std::uint64_t>(a.seed), c, a.types);
+    out << robot_file_text(m, "A random chain: pumasim robot --random " + std::to_string(a.random) + " --seed " +
+                                  std::to_string(a.seed) + " --types " + a.types + " --convention " + a.convention +
+                                  "\n(models/robot/random_chain.hpp: random DH rows, masses and inertias; for "
+                                  "tests and benchmarks)");
+    return kExitOk;
+  }
+  if (a.robot.empty()) throw UsageError("robot: expected a robot name or file, or --random N");
+  out << robot_json(load_robot(a.robot)).dump(2) << "\n";
+  return kExitOk;
+}
+
+void add_robot(CLI::App* app, RobotArgs& a) {
+  app->add_option("robot", a.robot, "a robot name (puma560) or a robot file path (TOML, or URDF: *.urdf)")
+      ->type_name("NAME|FILE");
+  app->add_option("--random", a.random, "instead: print a robot file of a random chain of N joints")
+      ->type_name("N")
+      ->check(CLI::Range(1, 1000));
+  app->add_option("--seed", a.seed, "the random chain's seed (default 1)")->check(CLI::Range(0L, 1L << 62));
+  app->add_option("--types", a.types,
+                  "the random chain's joint types, repeated along it: R revolute, P prismatic (default R)")
+      ->check([](const std::string& s) -> std::string {
+        if (s.empty() || s.find_first_not_of("RP") != std::string::npos) return "expected letters R and P";
+        return {};
+      });
+  app->add_option("--convention", a.convention, "the random chain's DH convention (default standard)")
+      ->check(CLI::IsMember({"standard", "modified"}));
 }
 
 int cmd_dynamics(const DynamicsArgs& a, std::ostream& out) {
@@ -584,6 +665,7 @@ int cmd_backends(bool json, std::ostream& out) {
 // Every command's parsed options, filled by CLI11.
 struct Parsed {
   DynamicsArgs dynamics;
+  RobotArgs robot;
   SceneArgs check;
   RunArgs run;
   StiffnessArgs stiffness;
@@ -610,6 +692,12 @@ const Command kCommands[] = {
     {"dynamics", "prints H, h, g (and tau from qdd, qdd from tau) as one JSON object", "",
      [](CLI::App* a, Parsed& p) { add_dynamics(a, p.dynamics); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_dynamics(p.dynamics, o); }},
+    {"robot", "prints a robot as pumasim reads it (JSON), or a random chain's robot file",
+     "pumasim robot FILE prints every parameter of the robot after reading it (a URDF's after its conversion): "
+     "what the dynamics and the scripts use. pumasim robot --random N [--seed S] [--types RP] prints a robot "
+     "file (TOML) of a random chain of N joints, for a scene on a long arm.",
+     [](CLI::App* a, Parsed& p) { add_robot(a, p.robot); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_robot(p.robot, o); }},
     {"backends", "lists the dynamics back-ends", "",
      [](CLI::App* a, Parsed& p) { a->add_flag("--json", p.json, "one JSON array of the entries (name, summary)"); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(p.json, o); }},

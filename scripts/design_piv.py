@@ -71,7 +71,7 @@ def resolve(binary, scene):
 
 def start_pose(scene, sc, state, robot):
     """Every joint of the robot at the start: the simulated ones, then the held ones."""
-    n, dof = sc["scene"]["joints"], len(robot.get("joint", []))
+    n, dof = sc["scene"]["joints"], robot["dof"]
     held = list(sc["scene"].get("held", []))
     q = [state.get(f"q{j + 1}") for j in range(n)]
     if None in q:
@@ -98,7 +98,7 @@ def design(sc, robot, mass_matrix, args):
     wn = 2 * math.pi * args.bandwidth
     gains = {k: [] for k in ("kp", "ki", "kv", "kvff", "kaff")}
     for j in range(n):
-        Z = robot["joint"][j]["gear_ratio"]
+        Z = robot["joints"][j]["gear_ratio"]
         J = mass_matrix[j][j] / Z ** 2
         Rt = R0[j] + R[j]
         b = K[j] * KA[j] / Rt
@@ -132,8 +132,9 @@ def main():
     try:
         sc, state, robot_file = resolve(args.pumasim, args.scene)
         check_scene(args.scene, sc)
-        with open(robot_file, "rb") as f:
-            robot = tomllib.load(f)
+        # The robot as pumasim reads it (a TOML or URDF file, its side file
+        # included): no second parser here.
+        robot = json.loads(pumasim(args.pumasim, ["robot", robot_file], robot_file))
         q = start_pose(args.scene, sc, state, robot)
         dyn_args = ["dynamics", "--robot", robot_file, "--backend", "crba", "--q=" + ",".join(repr(v) for v in q)]
         if not sc["scene"].get("rotor_inertia", True):

@@ -22,6 +22,7 @@
 #include "experiments/cli.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
+#include "models/robot/robot_file.hpp"
 #include "tests/cli_capture.hpp"
 #include "tests/scratch.hpp"
 #include "experiments/simulation/driver.hpp"
@@ -173,6 +174,27 @@ TEST(CliParsing, ACommandsHelpListsItsOptions) {
     }
   }
   expect_bad({"help", "fly"}, {"help: unknown command 'fly'; expected one of: dynamics"});
+}
+
+// pumasim robot prints the robot as read (the PUMA's gear ratio of joint 1,
+// -62.6111 in the Robotics Toolbox's mdl_puma560.m, its sign RTB's sense), and
+// --random N a robot file that reads back as an N-joint robot.
+TEST(CliRobot, PrintsTheRobotAsReadAndARandomChainsFile) {
+  const CliResult r = cli({"robot", "puma560"});
+  ASSERT_EQ(r.status, kExitOk) << r.err;
+  const auto doc = nlohmann::json::parse(r.out);
+  EXPECT_EQ(doc["dof"], 6);
+  EXPECT_DOUBLE_EQ(doc["joints"][0]["gear_ratio"].get<double>(), -62.6111);
+  const CliResult rnd = cli({"robot", "--random", "9", "--seed", "4", "--types", "RRP"});
+  ASSERT_EQ(rnd.status, kExitOk) << rnd.err;
+  const auto file = testing::scratch_root() / "cli_random9.toml";
+  std::ofstream(file) << rnd.out;
+  const RobotModel m = load_robot_file(file.string());
+  EXPECT_EQ(m.dof(), 9);
+  EXPECT_TRUE(m.joints[2].prismatic() && !m.joints[1].prismatic());
+  expect_bad({"robot"}, {"robot: expected a robot name or file, or --random N"});
+  expect_bad({"robot", "--random", "0"}, {"--random"});
+  expect_bad({"robot", "--random", "3", "--types", "RX"}, {"expected letters R and P"});
 }
 
 // --unset removes keys of the scene file before --set and the checks: the

@@ -162,3 +162,26 @@ def test_bad_arguments_are_refused():
     refused(design(scene, "--bandwidth", "0"), "--bandwidth", "expected a finite number > 0")
     refused(design(scene, "--damping", "fast"), "--damping", "expected a number")
     refused(design(scene, "--pumasim", "/nonexistent/pumasim"), "cannot run pumasim")
+
+
+def test_a_urdf_robot_gets_the_gains_of_its_toml_twin(tmp_path):
+    # paper_slow on models/robots/puma560.urdf (with its side file) instead of puma560.toml: the same
+    # arm (tests/test_urdf.cpp checks the two models' dynamics agree), so the same gains to the six
+    # digits printed. The script once read every robot file as TOML and crashed on a URDF; it now asks
+    # `pumasim robot`. The URDF's PUMA has a base transform, so its path takes the numerical inverse
+    # kinematics, started at the closed form's start pose (the same branch).
+    with open(os.path.join(SCENES, "paper_slow.toml")) as f:
+        text = f.read()
+    text = text.replace('robot = "puma560"', f'robot = "{os.path.join(ROBOTS, "puma560.urdf")}"')
+    text = re.sub(r"\narm = .*", "\nik_guess = [-0.2349, 0.6706, -3.5105]", text)
+    text = re.sub(r"\nelbow = .*", "", text)
+    scene = tmp_path / "paper_slow_urdf.toml"
+    scene.write_text(text)
+    toml_run = design(os.path.join(SCENES, "paper_slow.toml"), "--bandwidth", "15")
+    urdf_run = design(str(scene), "--bandwidth", "15")
+    assert toml_run.returncode == 0, toml_run.stderr
+    assert urdf_run.returncode == 0, urdf_run.stderr
+    want, got = gains(toml_run.stdout), gains(urdf_run.stdout)
+    assert set(got) == {"kp", "ki", "kv", "kvff", "kaff"}
+    for k in want:
+        assert got[k] == pytest.approx(want[k], rel=1e-5), k
