@@ -40,29 +40,21 @@
 #include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
 #include "tests/integrator_helpers.hpp"
+#include "tests/any_n_scenes.hpp"
 #include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
 
-std::string any_n_file(const std::string& name, const std::string& text) {
-  const std::filesystem::path p = testing::scratch_root() / name;
-  std::filesystem::create_directories(p.parent_path());
-  std::ofstream(p) << text;
-  return p.string();
-}
-
-std::string any_n_robot_file(int n, std::uint64_t seed, const std::string& types = "R") {
-  return any_n_file("any_n/random" + std::to_string(n) + "_" + std::to_string(seed) + types + ".toml",
-                    robot_file_text(random_chain(n, seed, DhConvention::kStandard, types)));
-}
+using testing::random_robot_file;
+using testing::write_scratch_file;
 
 TEST(RobotWriter, ARandomChainReadsBackBitwise) {
   for (const auto& [n, types, conv] : {std::tuple{7, "R", DhConvention::kStandard},
                                        std::tuple{12, "RRP", DhConvention::kModified},
                                        std::tuple{16, "RP", DhConvention::kStandard}}) {
     const RobotModel m = random_chain(n, 40 + n, conv, types);
-    const std::string file = any_n_file("any_n/readback" + std::to_string(n) + ".toml", robot_file_text(m));
+    const std::string file = write_scratch_file("any_n/readback" + std::to_string(n) + ".toml", robot_file_text(m));
     const RobotModel r = load_robot_file(file);
     ASSERT_EQ(r.dof(), n);
     EXPECT_EQ(r.convention, m.convention);
@@ -233,24 +225,19 @@ TEST(AnyN, TaskRatesAreTheDerivativesOfTheRulesSolution) {
 constexpr int kAnyNJoints[] = {7, 9, 12, 16};
 constexpr double kAnyNT = 0.5;  // [s]
 
-std::string any_n_numbers(const Eigen::VectorXd& v) {
-  std::string s = "[";
-  for (Eigen::Index i = 0; i < v.size(); ++i) s += (i ? ", " : "") + std::to_string(v[i]);
-  return s + "]";
-}
 
 const Scene& any_n_passive_scene(int n) {
   static std::map<int, Scene> cache;
   if (auto it = cache.find(n); it != cache.end()) return it->second;
-  const std::string robot = any_n_robot_file(n, 1000 + static_cast<std::uint64_t>(n));
+  const std::string robot = random_robot_file(n, 1000 + static_cast<std::uint64_t>(n));
   Rng rng(77 + static_cast<std::uint64_t>(n));
   const std::string scene =
       "[scene]\nname = \"random" + std::to_string(n) + "_passive\"\nrobot = \"" + robot + "\"\njoints = " +
       std::to_string(n) + "\nbackend = \"crba\"\nduration = " + std::to_string(kAnyNT) +
       "\noutput_interval = 0.05\nenergy_ledger = true\n\n[integrator]\nname = \"rk4\"\ndt = 0.001\n\n"
-      "[friction]\nmodel = \"viscous\"\nviscous = " + any_n_numbers(Eigen::VectorXd::Constant(n, 1e-4)) +
-      "\n\n[initial]\nq = " + any_n_numbers(rng.uniform_vector(n, -1, 1)) + "\n";
-  const std::string file = any_n_file("any_n/random" + std::to_string(n) + "_passive.toml", scene);
+      "[friction]\nmodel = \"viscous\"\nviscous = " + testing::toml_numbers(Eigen::VectorXd::Constant(n, 1e-4)) +
+      "\n\n[initial]\nq = " + testing::toml_numbers(rng.uniform_vector(n, -1, 1)) + "\n";
+  const std::string file = write_scratch_file("any_n/random" + std::to_string(n) + "_passive.toml", scene);
   return cache.emplace(n, load_scene(file)).first->second;
 }
 
@@ -349,43 +336,9 @@ TEST_P(AnyNIntegrators, ConvergeAndKeepTheLedgerOnPassiveChains) {
 // checked with the run's own speeds.
 TEST(AnyN, ALongArmTracksAPosePathWithinTheComputedTorqueBound) {
   for (const int n : {3, 6, 7, 12}) {
-    const std::string robot = any_n_robot_file(n, 500 + static_cast<std::uint64_t>(n));
-    const RobotModel m = load_robot_file(robot);
-    Rng rng(11);
-    const Eigen::VectorXd q_g = rng.uniform_vector(n, -1, 1);
-    Eigen::Matrix3d R;
-    Eigen::Vector3d p;
-    forward_kinematics<double>(m, q_g, R, p);
     const double kp = 400, B = 1e-5;  // the scene's kp [1/s^2] and viscous friction [N m s/rad]
-    // %.17g: the start point and orientation exactly as computed.
-    char start[200];
-    std::snprintf(start, sizeof start, "start = [%.17g, %.17g]\nheight = %.17g\n", p.x(), p.y(), p.z());
-    std::string orient17 = "[";
-    for (int i = 0; i < 3; ++i) {
-      char row[120];
-      std::snprintf(row, sizeof row, "%s[%.17g, %.17g, %.17g]", i ? ", " : "", R(i, 0), R(i, 1), R(i, 2));
-      orient17 += row;
-    }
-    orient17 += "]";
-    std::string guess = "[";
-    for (int j = 0; j < n; ++j) {
-      char v[40];
-      std::snprintf(v, sizeof v, "%s%.17g", j ? ", " : "", q_g[j]);
-      guess += v;
-    }
-    guess += "]";
-    const std::string text =
-        "[scene]\nname = \"random" + std::to_string(n) + "_tracking\"\nrobot = \"" + robot + "\"\njoints = " +
-        std::to_string(n) + "\nbackend = \"crba\"\nduration = 2.5\noutput_interval = 0.01\n\n"
-        "[integrator]\nname = \"cvode-bdf\"\nrtol = 1e-9\natol = 1e-11\n\n"
-        "[amplifier]\ngain = 10.0\noutput_resistance = 0.0\nvoltage_limit = 1e6\n\n"
-        "[motor]\ninductance = 0.0\nresistance = 0.5\ntorque_constant = 0.5\n\n"
-        "[friction]\nmodel = \"viscous\"\nviscous = " + any_n_numbers(Eigen::VectorXd::Constant(n, B)) + "\n\n"
-        "[controller]\nlaw = \"computed_torque\"\nmode = \"continuous\"\nkp = 400.0\nkd = 40.0\n\n"
-        "[reference]\nik = \"numerical\"\nik_guess = " + guess + "\n" + start + "heading = 0.0\norientation = " +
-        orient17 + "\nsegments = [ { line = 0.05 }, { arc_radius = 0.03, turn_degrees = 90.0 } ]\n"
-        "timing = \"quintic\"\ntraversal_time = 2.0\n";
-    const Scene sc = load_scene(any_n_file("any_n/random" + std::to_string(n) + "_tracking.toml", text));
+    const RobotModel m = random_chain(n, 500 + static_cast<std::uint64_t>(n));
+    const Scene sc = load_scene(testing::random_tracking_scene_file(n, B));
     Plant plant(sc.plant);
     IntegratorOptions o;
     o.rtol = 1e-9, o.atol = 1e-11;

@@ -24,6 +24,7 @@
 #include "models/plant/plant.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
+#include "tests/any_n_scenes.hpp"
 #include "tests/helpers.hpp"
 
 extern "C" {
@@ -157,6 +158,31 @@ TEST(NoAllocation, PlantRightHandSideWithNumericalInverseKinematics) {
     const long before = g_allocations.load();
     for (int k = 1; k <= 5; ++k) plant.rhs(0.37 * k, x.data(), f.data());
     EXPECT_EQ(g_allocations.load() - before, 0) << name;
+  }
+}
+
+// Long arms: a 7- and a 12-joint random chain on a Cartesian pose path, the
+// redundancy rule's inverse kinematics and rates (dynamic sizes, dual and
+// Jet2 passes, the rule's Newton solve) inside f, with the reference table
+// and without it (the exact reference at every call).
+TEST(NoAllocation, PlantRightHandSideOfARedundantArm) {
+  for (const int n : {7, 12}) {
+    for (const bool table : {true, false}) {
+      Scene sc = load_scene(testing::random_tracking_scene_file(n, 1e-5));
+      sc.plant.tabulate_reference = table;
+      Plant plant(sc.plant);
+      std::vector<double> x(plant.size()), f(plant.size());
+      plant.initial_state(x.data());
+      plant.rhs(0.0, x.data(), f.data());
+      const long before = g_allocations.load();
+      for (int k = 1; k <= 5; ++k) plant.rhs(0.37 * k, x.data(), f.data());
+      EXPECT_EQ(g_allocations.load() - before, 0) << n << (table ? " (table)" : " (exact reference)");
+      Eigen::MatrixXd J;
+      plant.jacobian_exact(0.0, x.data(), J);
+      const long before_j = g_allocations.load();
+      for (int k = 1; k <= 3; ++k) plant.jacobian_exact(0.01 * k, x.data(), J);
+      EXPECT_EQ(g_allocations.load() - before_j, 0) << n << " (exact Jacobian)";
+    }
   }
 }
 
