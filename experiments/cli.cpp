@@ -264,6 +264,7 @@ Json robot_json(const RobotModel& m) {
   doc["gravity"] = json_vector(m.gravity);
   doc["base"] = {{"R", json_matrix(m.base_R)}, {"p", json_vector(m.base_p)}};
   doc["tool"] = {{"R", json_matrix(m.tool_R)}, {"p", json_vector(m.tool_p)}};
+  doc["flange"] = m.flange;
   doc["joints"] = Json::array();
   for (const JointParams& J : m.joints) {
     Json j;
@@ -365,6 +366,7 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   for (double v : x) std::snprintf(buf, sizeof buf, " %.10g", v), o << buf;
   const RunContext robot = run_context({}, sc);  // what meta.json records of the robot file
   o << "\n# robot file: " << robot.robot_file << " (fnv1a64 " << robot.robot_fnv1a64 << ")\n";
+  o << "# flange: " << sc.plant.robot.flange << "\n";
   // (every input file with its hash is in the resolved scene's footer above)
   if (const std::string note = discontinuity_note(sc); !note.empty()) o << "# note: " << note << "\n";
   out << o.str();

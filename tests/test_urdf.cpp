@@ -489,9 +489,13 @@ TEST(UrdfClosedForm, AxisOffZUnderARotatedOrigin) {
   }
 }
 
-// Fixed links that branch after the last moving joint: the flange is where
-// they branch (link l1 here), unless the side file names one of them.
-TEST(UrdfClosedForm, FlangeWhereTheFixedLinksBranchOrNamed) {
+// Fixed links that branch after the last moving joint leave the flange
+// open: refused without a side file's flange (naming the candidates and the
+// key; once the branch point was taken silently, as a UR5's wrist_3_link
+// beside its ee_link and tool0); with one, the named link's pose, and the
+// model says which link it is and why. A chain that does not branch ends at
+// its last link.
+TEST(UrdfClosedForm, FlangeNamedWhereTheFixedLinksBranch) {
   const std::string xml =
       robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0.3") +
             link("l1", inertial(2.0, "0.4 0.1 -0.2", "0 0 0", "0.01 0.01 0.01")) +
@@ -501,12 +505,28 @@ TEST(UrdfClosedForm, FlangeWhereTheFixedLinksBranchOrNamed) {
   const Eigen::Matrix3d Rq = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   Eigen::Matrix3d R;
   Eigen::Vector3d p;
-  forward_kinematics<double>(load_robot(write_urdf("branching", xml)), q, R, p);
-  EXPECT_LT((R - Rq).norm(), kClosedForm);
-  EXPECT_LT((p - Eigen::Vector3d(0, 0, 0.3)).norm(), kClosedForm);
-  forward_kinematics<double>(load_robot(write_urdf("named", xml, "[robot]\nflange = \"flange\"\n")), q, R, p);
+  std::string msg;
+  try {
+    load_robot(write_urdf("branching", xml));
+  } catch (const ConfigError& e) {
+    msg = e.what();
+  }
+  for (const char* w : {"link 'l1'", "[robot] flange = ", "'flange'", "'camera'", "branching.urdf.toml"}) {
+    EXPECT_NE(msg.find(w), std::string::npos) << w << " in: " << msg;
+  }
+  const RobotModel named = load_robot(write_urdf("named", xml, "[robot]\nflange = \"flange\"\n"));
+  EXPECT_EQ(named.flange, "link 'flange' (the side file's flange)");
+  forward_kinematics<double>(named, q, R, p);
   EXPECT_LT((R - Rq * rpy(0.1, 0.2, 0.3)).norm(), kClosedForm);
   EXPECT_LT((p - (Eigen::Vector3d(0, 0, 0.3) + Rq * Eigen::Vector3d(0.5, 0, 0))).norm(), kClosedForm);
+  const std::string chain =
+      robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0.3") +
+            link("l1", inertial(2.0, "0.4 0.1 -0.2", "0 0 0", "0.01 0.01 0.01")) +
+            joint("tool", "fixed", "l1", "flange", "0.5 0 0", "0.1 0.2 0.3") + link("flange") +
+            joint("tip", "fixed", "flange", "tip", "0 0 0.1") + link("tip"));
+  const RobotModel last = load_robot(write_urdf("chain", chain));
+  EXPECT_NE(last.flange.find("link 'tip' (the end of the fixed links"), std::string::npos) << last.flange;
+  EXPECT_EQ(load_robot("puma560").flange, "the last DH frame (a DH robot file)");
 }
 
 // The axis (0, 0, -1) turns the other way: q on it is -q on (0, 0, 1), so

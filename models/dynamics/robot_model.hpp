@@ -88,6 +88,9 @@ struct RobotModel {
   Eigen::Vector3d base_p = Eigen::Vector3d::Zero();  // [m]
   Eigen::Matrix3d tool_R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d tool_p = Eigen::Vector3d::Zero();  // [m]
+  // What the flange is and why, for messages (`pumasim check`, a path out
+  // of reach): a URDF's link and the rule that chose it.
+  std::string flange = "the last DH frame (a DH robot file)";
 
   int dof() const { return static_cast<int>(joints.size()); }
   // The pose called `name`, or nullptr.

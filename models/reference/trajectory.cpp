@@ -205,7 +205,7 @@ void Reference::build_branch_table() {
     path_->eval(s, p, dp, ddp);
     Eigen::VectorXd q(robot_.dof());
     if (!joint_angles(p, prev, k > 0, q, ik)) {
-      throw std::runtime_error("reference: " + point_at(p, s) + " is out of reach");
+      throw std::runtime_error("reference: " + point_at(p, s) + " is out of reach of the flange, " + robot_.flange);
     }
     for (int j = 0; j < n_; ++j) {
       const JointParams& J = robot_.joints[j];
@@ -478,7 +478,7 @@ void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) cons
   if (!ok) {
     throw std::runtime_error("reference: the path point (" + std::to_string(p.x()) + ", " +
                              std::to_string(p.y()) + ", " + std::to_string(p.z()) +
-                             ") m at t = " + std::to_string(t) + " s is out of reach");
+                             ") m at t = " + std::to_string(t) + " s is out of reach of the flange, " + robot_.flange);
   }
   task_rates(robot_, n_, tracks_orientation(), out.q, rest(), out.v, a, out.qd, out.qdd, out.work.ik);
 }

@@ -934,11 +934,18 @@ SideFile read_side_file(const std::string& urdf_path, const std::vector<std::str
 
 // The flange: the side file's link (read_side_file checked that it is fixed
 // to the last body), or the end of the fixed joints after the last moving
-// joint as long as they do not branch. Its frame in the last body's frame.
-Frame flange_frame(const UrdfChain& c, const SideFile& s) {
+// joint when they do not branch. Fixed links that branch there (a UR5's
+// ee_link beside its tool0) leave the choice open: refused, naming the
+// candidates and the side file's key, so that no flange is taken silently
+// (a Cartesian path once failed as "out of reach" of a flange nobody chose).
+// Its frame in the last body's frame, and what it is and why (RobotModel::flange).
+Frame flange_frame(const UrdfChain& c, const SideFile& s, const UrdfText& t, std::string& why) {
   const Cluster& last = c.clusters.back();
   for (const auto& [link, T] : last.links) {
-    if (!s.flange.empty() && link->name == s.flange) return T;
+    if (!s.flange.empty() && link->name == s.flange) {
+      why = "link '" + link->name + "' (the side file's flange)";
+      return T;
+    }
   }
   const urdf::Link* link = last.links.front().first;
   Frame T;
@@ -946,6 +953,15 @@ Frame flange_frame(const UrdfChain& c, const SideFile& s) {
     T = T * frame_of(link->child_joints.front()->parent_to_joint_origin_transform);
     link = link->child_links.front().get();
   }
+  if (!link->child_joints.empty()) {
+    std::string names;
+    for (const auto& [l, X] : last.links) names += (names.empty() ? "'" : ", '") + l->name + "'";
+    t.fail("link", link->name,
+           "one flange: the links fixed to the last moving joint branch at this link, so name the flange in the "
+           "side file " + t.path() + ".toml: [robot] flange = \"<link>\", one of " + names,
+           std::to_string(link->child_joints.size()) + " fixed joints leaving it");
+  }
+  why = "link '" + link->name + "' (the end of the fixed links after the last moving joint; no flange in the side file)";
   return T;
 }
 
@@ -1019,7 +1035,7 @@ RobotModel build_model(const urdf::ModelInterface& m, const UrdfChain& c, const 
     J.com = b.mass > 0 ? Vec3(X.R * b.com + X.p) : Vec3::Zero();
     J.inertia = X.R * b.inertia * X.R.transpose();
   }
-  const Frame tool = D.back().inverse() * bodies.back() * flange_frame(c, s);
+  const Frame tool = D.back().inverse() * bodies.back() * flange_frame(c, s, t, model.flange);
   model.tool_R = tool.R;
   model.tool_p = tool.p;
   return model;
