@@ -33,7 +33,9 @@
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/plant/plant.hpp"
+#include "models/dynamics/jet2.hpp"
 #include "models/reference/numerical_ik.hpp"
+#include "models/reference/trajectory.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
@@ -50,6 +52,14 @@ using testing::random_robot_file;
 using testing::write_scratch_file;
 
 TEST(RobotWriter, ARandomChainReadsBackBitwise) {
+  // The PUMA's file (poses, limits) reads back as it was.
+  const RobotModel puma = load_robot("puma560");
+  const RobotModel back = load_robot_file(write_scratch_file("any_n/puma.toml", robot_file_text(puma)));
+  ASSERT_EQ(back.poses.size(), puma.poses.size());
+  for (std::size_t k = 0; k < puma.poses.size(); ++k) {
+    EXPECT_EQ(back.poses[k].name, puma.poses[k].name);
+    EXPECT_EQ(back.poses[k].q, puma.poses[k].q);
+  }
   for (const auto& [n, types, conv] : {std::tuple{7, "R", DhConvention::kStandard},
                                        std::tuple{12, "RRP", DhConvention::kModified},
                                        std::tuple{16, "RP", DhConvention::kStandard}}) {
@@ -180,10 +190,13 @@ TEST(AnyN, TaskRatesAreTheDerivativesOfTheRulesSolution) {
     const int rows = c.orientation ? 6 : 3;
     const RobotModel m = random_chain(c.n, 200 + c.n);
     Rng rng(9);
-    Eigen::VectorXd rest = rng.uniform_vector(c.n, -1, 1);
+    // The task starts at the pose q_t, some 0.5 to 1 rad from the rest pose:
+    // the rule's mu and its curvature terms (M, J''^T mu) are then sizeable.
+    const Eigen::VectorXd rest = rng.uniform_vector(c.n, -1, 1);
+    const Eigen::VectorXd q_t = rest + rng.uniform_vector(c.n, -0.6, 0.6);
     Eigen::Matrix3d R;
     Eigen::Vector3d p0;
-    forward_kinematics<double>(m, rest, R, p0);
+    forward_kinematics<double>(m, q_t, R, p0);
     const double r = 0.02, w = 1.3, t0 = 0.4;
     const auto task = [&](double t, Eigen::Vector3d& p, Eigen::Vector3d& v, Eigen::Vector3d& a) {
       const Eigen::Vector3d u(std::cos(w * t) - 1, std::sin(w * t), 0.5 * std::sin(w * t));
@@ -193,11 +206,11 @@ TEST(AnyN, TaskRatesAreTheDerivativesOfTheRulesSolution) {
     };
     IkWorkspace ws(c.n, c.n, rows);
     const bool redundant = c.n > rows;
-    Eigen::VectorXd q = rest;
+    Eigen::VectorXd q = q_t;
     const double h = 1e-3;
-    std::map<int, Eigen::VectorXd> sol;
+    std::map<int, Eigen::VectorXd> sol;  // q(t0 + i h)
     Eigen::Vector3d p, v, a;
-    for (int i : {-1, 0, 1}) {
+    for (int i : {-2, -1, 0, 1, 2}) {
       task(t0 + i * h, p, v, a);
       ASSERT_TRUE(dls_ik(m, c.n, p, c.orientation ? &R : nullptr, q, ws, redundant ? &rest : nullptr).converged)
           << c.n;
@@ -206,13 +219,90 @@ TEST(AnyN, TaskRatesAreTheDerivativesOfTheRulesSolution) {
     Eigen::VectorXd qd(c.n), qdd(c.n);
     task(t0, p, v, a);
     task_rates(m, c.n, c.orientation, sol[0], redundant ? &rest : nullptr, v, a, qd, qdd, ws);
-    const Eigen::VectorXd qd_fd = (sol[1] - sol[-1]) / (2 * h);
-    const Eigen::VectorXd qdd_fd = (sol[1] - 2 * sol[0] + sol[-1]) / (h * h);
-    EXPECT_LT((qd - qd_fd).norm(), 1e-6 * (1 + qd.norm())) << c.n << "\n" << qd.transpose() << "\n"
-                                                           << qd_fd.transpose();
-    EXPECT_LT((qdd - qdd_fd).norm(), 1e-4 * (1 + qdd.norm())) << c.n << "\n" << qdd.transpose() << "\n"
-                                                              << qdd_fd.transpose();
+    // Central differences with steps 2h and h: their errors against exact
+    // rates fall as step^2 (by about 4 when the step halves), down to rounding.
+    const auto qd_err = [&](int k) { return (qd - (sol[k] - sol[-k]) / (2 * k * h)).norm(); };
+    const auto qdd_err = [&](int k) {
+      return (qdd - (sol[k] - 2 * sol[0] + sol[-k]) / (k * k * h * h)).norm();
+    };
+    const double d1 = qd_err(2), d2 = qd_err(1), a1 = qdd_err(2), a2 = qdd_err(1);
+    EXPECT_LT(d2, 1e-4 * (1 + qd.norm())) << c.n;
+    EXPECT_LT(a2, 1e-3 * (1 + qdd.norm())) << c.n;
+    if (d2 > 1e-9 * (1 + qd.norm())) {
+      EXPECT_GT(d1 / d2, 3.0) << c.n << ": qd differences' errors " << d1 << " " << d2;
+    }
+    if (a2 > 1e-7 * (1 + qdd.norm())) {
+      EXPECT_GT(a1 / a2, 3.0) << c.n << ": qdd differences' errors " << a1 << " " << a2;
+    }
+    if (redundant) {
+      EXPECT_GT((sol[0] - rest).norm(), 0.3) << c.n;  // the rule is away from its rest pose
+    }
   }
+}
+
+// Jet2 carries value, first and second derivative exactly: along x(s) = t + s
+// (seed (t, 1, 0)), x^3 gives 3 t^2 and 6 t; sin(x)/x gives the closed forms
+// (t cos t - sin t)/t^2 and -sin t/t - 2 cos t/t^2 + 2 sin t/t^3; cos(x)^2
+// + sin(x)^2 stays 1 with zero derivatives; and a curved seed (t, v, a)
+// follows the chain rule: y(x(s)) has y' v and y'' v^2 + y' a.
+TEST(Jet2, CarriesExactFirstAndSecondDerivatives) {
+  for (const double t : {0.3, 1.7, -2.4}) {
+    const Jet2 x(t, 1.0, 0.0);
+    const Jet2 cube = x * x * x;
+    EXPECT_NEAR(cube.d1(), 3 * t * t, 1e-14 * (1 + t * t));
+    EXPECT_NEAR(cube.d2(), 6 * t, 1e-14 * (1 + std::abs(t)));
+    const Jet2 sinc = sin(x) / x;
+    EXPECT_NEAR(sinc.value(), std::sin(t) / t, 1e-15);
+    EXPECT_NEAR(sinc.d1(), (t * std::cos(t) - std::sin(t)) / (t * t), 1e-14);
+    EXPECT_NEAR(sinc.d2(), -std::sin(t) / t - 2 * std::cos(t) / (t * t) + 2 * std::sin(t) / (t * t * t), 1e-13);
+    const Jet2 one = cos(x) * cos(x) + sin(x) * sin(x);
+    EXPECT_NEAR(one.value(), 1.0, 1e-15);
+    EXPECT_NEAR(one.d1(), 0.0, 1e-15);
+    EXPECT_NEAR(one.d2(), 0.0, 1e-14);
+    const double v = 0.7, a = -1.3;
+    const Jet2 c = cos(Jet2(t, v, a));
+    EXPECT_NEAR(c.d1(), -std::sin(t) * v, 1e-15);
+    EXPECT_NEAR(c.d2(), -std::cos(t) * v * v - std::sin(t) * a, 1e-15);
+    const Jet2 q = Jet2(1.0, 0.0, 0.0) / Jet2(t, v, a);  // 1/x: -x'/x^2, 2 x'^2/x^3 - x''/x^2
+    EXPECT_NEAR(q.d1(), -v / (t * t), 1e-14);
+    EXPECT_NEAR(q.d2(), 2 * v * v / (t * t * t) - a / (t * t), 1e-13);
+  }
+}
+
+// A PlantConfig whose reference is for another joint count is refused (the
+// controllers read the reference's first n joints).
+TEST(AnyN, APlantRefusesAReferenceOfAnotherSize) {
+  Scene sc = load_scene(testing::random_tracking_scene_file(7, 1e-5));
+  Scene other = load_scene(testing::random_tracking_scene_file(12, 1e-5));
+  sc.plant.reference = other.plant.reference;
+  try {
+    Plant plant(sc.plant);
+    FAIL() << "a 12-joint reference was accepted by a 7-joint plant";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the reference is for 12 of 12 joints, the plant simulates 7 of 7"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A sample made by another reference (a joint curve's: a 3-row workspace)
+// is resized by a Cartesian pose reference's eval, which then gives what its
+// own sample gives.
+TEST(AnyN, ASampleOfAnotherReferenceIsResizedFirst) {
+  const Scene sc = load_scene(testing::random_tracking_scene_file(7, 1e-5));
+  const Reference& ref = *sc.plant.reference;
+  const JointCurve curve({0.0, 1.0}, {Eigen::VectorXd::Zero(7), Eigen::VectorXd::Constant(7, 0.1)}, 7,
+                         JointCurve::Kind::kCubic);
+  const Reference joint_ref(load_robot_file(sc.robot_spec), Eigen::VectorXd::Zero(7), curve,
+                            Timing::unit_speed(1.0));
+  ReferenceSample foreign = joint_ref.sample(), own = ref.sample();
+  ASSERT_FALSE(ref.fits(foreign));
+  ref.eval(0.8, foreign);
+  ref.eval(0.8, own);
+  EXPECT_TRUE(ref.fits(foreign));
+  EXPECT_EQ(foreign.q, own.q);
+  EXPECT_EQ(foreign.qd, own.qd);
+  EXPECT_EQ(foreign.qdd, own.qdd);
 }
 
 // ---- Every integrator on passive random chains -------------------------

@@ -64,6 +64,11 @@ PlantConfig PlantModel::checked(PlantConfig c) {
   if (c.q_held.size() == 0) c.q_held = Eigen::VectorXd::Zero(c.robot.dof());
   if (c.q_held.size() != c.robot.dof()) throw std::invalid_argument("plant: q_held needs one entry per joint");
   if (n < 1 || n > c.robot.dof()) throw std::invalid_argument("plant: joint count out of range");
+  if (c.reference && (c.reference->simulated_joints() != n || c.reference->robot_joints() != c.robot.dof())) {
+    throw std::invalid_argument("plant: the reference is for " + std::to_string(c.reference->simulated_joints()) +
+                                " of " + std::to_string(c.reference->robot_joints()) + " joints, the plant simulates " +
+                                std::to_string(n) + " of " + std::to_string(c.robot.dof()));
+  }
   const auto sized = [n](std::size_t s) { return s == static_cast<std::size_t>(n); };
   if (!sized(c.friction.size())) throw std::invalid_argument("plant: one friction block per joint");
   if (c.drive && (!sized(c.amplifier.size()) || !sized(c.motor.size()))) {

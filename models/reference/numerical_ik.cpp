@@ -88,10 +88,12 @@ void solve_rule(const RobotModel& robot, const Eigen::Vector3d& p, const Eigen::
                 Eigen::Ref<Eigen::VectorXd> q,
                 const Eigen::VectorXd& rest, IkWorkspace& ws, const DlsOptions& opt, IkSolveResult& res) {
   double err = rule_residual(robot, p, R, q, rest, ws);
-  int polished = 0;
-  while (res.iterations < opt.max_iterations && std::isfinite(err)) {
-    if (err <= opt.tolerance && (err == 0.0 || polished++ >= opt.polish)) break;
-    ++res.iterations;
+  // r's rounding grows with |q - q_r| (its terms' size): the tolerance with it.
+  const double tol = opt.tolerance * std::max(1.0, (q.head(ws.n) - rest.head(ws.n)).norm());
+  int polished = 0, iterations = 0;
+  while (iterations < opt.max_iterations && std::isfinite(err)) {
+    if (err <= tol && (err == 0.0 || polished++ >= opt.polish)) break;
+    ++iterations, ++res.iterations;
     null_space_curvature(robot, q, ws);
     factor_rule_jacobian(ws);
     ws.rhs.head(ws.m) = ws.e.head(ws.m);
@@ -111,7 +113,7 @@ void solve_rule(const RobotModel& robot, const Eigen::Vector3d& p, const Eigen::
     }
   }
   res.error = err;
-  res.converged = err <= opt.tolerance;
+  res.converged = err <= tol;
 }
 
 }  // namespace
@@ -169,7 +171,7 @@ IkSolveResult dls_ik(const RobotModel& robot, int n, const Eigen::Vector3d& p, c
     }
   }
   res.error = err;
-  res.converged = err <= opt.tolerance;
+  res.converged = res.reached = err <= opt.tolerance;
   // A redundant task: from this pose of the manifold to the rule's.
   if (res.converged && rest && n > ws.m) solve_rule(robot, p, R, q, *rest, ws, opt, res);
   return res;
@@ -201,7 +203,7 @@ void task_rates(const RobotModel& robot, int n, bool orientation, const Eigen::V
   };
   if (n > m) {
     // The rule's solution q(t) differentiated: mu by least squares at q
-    // (zero without a rest pose: the minimum-norm rates).
+    // (zero without a rest pose: the rule with its rest pose at q).
     if (rest) {
       ws.r = q.head(n) - rest->head(n);
       ws.JJt.noalias() = Jt * Jt.transpose();

@@ -37,14 +37,15 @@
 namespace pumasim {
 
 struct IkSolveResult {
-  bool converged = false;
+  bool reached = false;    // the task's error converged (damped least squares)
+  bool converged = false;  // and, for a redundant task with a rest pose, the rule's equations too
   int iterations = 0;
   double error = 0;  // the final error's norm ([m] and [rad] rows together; redundant: with the null-space rows)
 };
 
 struct DlsOptions {
-  int max_iterations = 200;
-  double tolerance = 1e-12;  // converged: error norm below this [m, rad] ...
+  int max_iterations = 200;  // each stage's: the damped least squares, then the rule's Newton solve
+  double tolerance = 1e-12;  // converged: error norm below this [m, rad] (the rule's: times max(1, |q - q_r|)) ...
   int polish = 2;            // ... then up to this many more steps while the error still falls
   double damping = 1e-2;     // initial lambda^2 [m^2]
 };
@@ -90,7 +91,9 @@ IkSolveResult dls_ik(const RobotModel& robot, int n, const Eigen::Vector3d& p, c
 //   n < m: the same in least squares (normal equations; exact when v and a
 //          are tangent to what the joints can reach, as along a reachable
 //          path);
-//   n > m, with rest: the derivatives of the rule's solution q(t):
+//   n > m, with rest: the derivatives of the rule's solution q(t)
+//          (without one: the same equations with mu = 0, M = 0, i.e. the
+//          rule with its rest pose at the current q):
 //          [J 0; I - M, -J^T] [qd; mu'] = [v_task; 0] and
 //          [J 0; I - M, -J^T] [qdd; mu''] = [a_task - Jdot qd; J''^T mu + 2 Jdot^T mu'],
 //          J'' the second derivative of J along qd (a pass on Jet2).

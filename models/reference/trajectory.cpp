@@ -381,8 +381,18 @@ bool Reference::joint_angles(const Eigen::Vector3d& p, const Eigen::VectorXd& ne
   if (ik_.method == IkMethod::kNumerical) {
     q = near;
     q.tail(robot_.dof() - n_) = q_held_.tail(robot_.dof() - n_);
-    if (!dls_ik(robot_, n_, p, n_ >= 6 ? &R_fixed_ : nullptr, q, ik, rest()).converged) return false;
-    // Revolute joints: the same pose at every 2 pi; the representative nearest `near`.
+    const IkSolveResult r = dls_ik(robot_, n_, p, n_ >= 6 ? &R_fixed_ : nullptr, q, ik, rest());
+    if (!r.reached) return false;
+    if (!r.converged) {  // reached, but the redundancy rule's Newton solve did not settle
+      throw std::runtime_error("reference: the redundancy rule (the pose nearest ik_guess) did not converge at the "
+                               "path point (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+                               std::to_string(p.z()) + ") m: residual " + std::to_string(r.error) +
+                               " (a singular pose, or ik_guess far from the path's poses)");
+    }
+    // Revolute joints: the same pose at every 2 pi; the representative nearest
+    // `near`. Not under the redundancy rule, whose condition q - q_r = J^T mu
+    // is not 2 pi-periodic (its solution from `near` is continuous already).
+    if (redundant_) return true;
     for (int j = 0; j < n_; ++j) {
       if (!robot_.joints[j].prismatic()) q[j] += 2 * M_PI * std::round((near[j] - q[j]) / (2 * M_PI));
     }
@@ -425,7 +435,7 @@ Eigen::Vector3d Reference::flange_velocity(const Eigen::VectorXd& q, const Eigen
 }
 
 IkWorkspace Reference::ik_workspace() const {
-  return IkWorkspace(robot_.dof(), n_, path_ && n_ >= 6 ? 6 : 3);
+  return IkWorkspace(robot_.dof(), n_, task_rows());
 }
 
 ReferenceSample Reference::sample() const {

@@ -132,11 +132,17 @@ class Reference {
   Interpolation interpolation() const { return interp_; }
   IkMethod ik_method() const { return ik_.method; }
   int simulated_joints() const { return n_; }
+  int robot_joints() const { return robot_.dof(); }
   // Whether a Cartesian path's task includes the orientation (n >= 6).
   bool tracks_orientation() const { return path_ && n_ >= 6; }
   // A sample of this reference's sizes, at the held pose and at rest.
   ReferenceSample sample() const;
-  bool fits(const ReferenceSample& s) const { return s.q.size() == robot_.dof() && s.work.ik.n == n_; }
+  bool fits(const ReferenceSample& s) const {
+    const IkWorkspace& w = s.work.ik;
+    return s.q.size() == robot_.dof() && w.n == n_ && w.dof == robot_.dof() && w.m == task_rows();
+  }
+  // The rows of the inverse kinematics' task: 6 with the orientation, else 3.
+  int task_rows() const { return tracks_orientation() ? 6 : 3; }
   // Allocation-free for a sample of this reference's sizes (sample()).
   // Throws std::runtime_error if the path leaves the workspace.
   // With a segment (the smooth piece between breakpoints segment - 1 and

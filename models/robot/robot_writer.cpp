@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include "models/robot/link_inertia.hpp"
 #include "models/robot/toml_writer.hpp"
 
 namespace pumasim {
@@ -43,12 +44,26 @@ std::string robot_file_text(const RobotModel& m, const std::string& header_comme
     t.insert("com", numbers({J.com.x(), J.com.y(), J.com.z()}));
     const Eigen::Matrix3d& I = J.inertia;
     t.insert("inertia", numbers({I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(1, 2), I(0, 2)}));
+    // A published set that is no rigid body's was kept by its file's excuse;
+    // the model no longer has the words, so the written file says where it came from.
+    if (const InertiaProblem why = inertia_problem(J); !why.key.empty() && why.excusable) {
+      t.insert("inconsistent_inertia", "kept as in " + (m.source.empty() ? m.name : m.source));
+    }
     t.insert("rotor_inertia", J.rotor_inertia);
     t.insert("gear_ratio", J.gear_ratio);
     if (std::isfinite(J.q_min) && std::isfinite(J.q_max)) t.insert("limits", numbers({J.q_min, J.q_max}));
     joints.push_back(std::move(t));
   }
   doc.insert("joint", std::move(joints));
+  if (!m.poses.empty()) {
+    toml::table poses;
+    for (const NamedPose& p : m.poses) {
+      toml::array q;
+      for (Eigen::Index j = 0; j < p.q.size(); ++j) q.push_back(p.q[j]);
+      poses.insert(p.name, std::move(q));
+    }
+    doc.insert("poses", std::move(poses));
+  }
   std::ostringstream out;
   std::istringstream comment(header_comment);
   for (std::string line; std::getline(comment, line);) out << "# " << line << "\n";

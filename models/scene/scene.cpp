@@ -50,9 +50,8 @@ void check_name(StrictTable& t, Scene& sc) {
   }
 }
 
-// Loads the robot file; the plant and the reference hold a pose in a 6-vector,
-// and lock held joints only on a 6-joint arm: its size is checked here, before
-// any size derived from it is used. A file path (relative to the scene's
+// Loads the robot file and sizes the held pose from it (every size of the
+// scene follows the robot: any number of joints). A file path (relative to the scene's
 // folder) is resolved to an absolute one, which the resolved scene keeps, so
 // that it loads from any working directory; a shipped robot's name stays a name.
 void load_robot_of(StrictTable& t, Scene& sc) {
