@@ -30,7 +30,7 @@ namespace {
 constexpr int kJoints = 3;  // joint_space_csv.toml's scene.joints
 
 void check_finite(const pumasim::JointCurve& c, double x) {
-  pumasim::JointCurve::Vec6 q, dq, ddq;
+  Eigen::VectorXd q(kJoints), dq(kJoints), ddq(kJoints);
   c.eval(x, q, dq, ddq);
   if (!q.allFinite() || !dq.allFinite() || !ddq.allFinite()) {
     std::fprintf(stderr, "fuzz: accepted rows, a %s spline not finite at t = %.17g\n",
@@ -51,10 +51,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   std::vector<double> knots;
-  std::vector<pumasim::JointCurve::Vec6> points;
+  std::vector<Eigen::VectorXd> points;
   for (const auto& row : rows) {
     knots.push_back(row[0]);
-    pumasim::JointCurve::Vec6 q = pumasim::JointCurve::Vec6::Zero();
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(kJoints);
     for (int j = 0; j < kJoints; ++j) q[j] = row[static_cast<std::size_t>(j + 1)];
     points.push_back(q);
   }
