@@ -37,6 +37,17 @@ void damped_step(IkWorkspace& ws, double lambda2) {
   ws.step = ws.ldlt.solve(ws.b);
 }
 
+// mu = (J J^T)^-1 J (q - q_r) (J: the task rows, first n columns, in ws.J),
+// the least-squares multiplier of q - q_r = J^T mu; leaves r = q - q_r.
+void least_squares_mu(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::VectorXd& rest, IkWorkspace& ws) {
+  const auto Jt = ws.J.topLeftCorner(ws.m, ws.n);
+  ws.JJt.noalias() = Jt * Jt.transpose();
+  ws.ldlt_m.compute(ws.JJt);
+  ws.r = q.head(ws.n) - rest.head(ws.n);
+  ws.mu.noalias() = Jt * ws.r;
+  ws.mu = ws.ldlt_m.solve(ws.mu);
+}
+
 // The redundant rule's residual at q: e (m rows) and r = (q - q_r) - J^T mu
 // with mu by least squares (r: the part of q - q_r in J's null space).
 // Leaves J, mu, r and e in ws; returns the norm of [e; r].
@@ -44,14 +55,8 @@ double rule_residual(const RobotModel& robot, const Eigen::Vector3d& p, const Ei
                      const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::VectorXd& rest, IkWorkspace& ws) {
   task_error(robot, p, R, q, ws.e);
   geometric_jacobian(robot, q, ws.n, ws.J);
-  const auto Jt = ws.J.topLeftCorner(ws.m, ws.n);
-  ws.JJt.noalias() = Jt * Jt.transpose();
-  ws.ldlt_m.compute(ws.JJt);
-  ws.r = q.head(ws.n) - rest.head(ws.n);
-  ws.b.noalias() = ws.r;
-  ws.mu.noalias() = Jt * ws.b;
-  ws.mu = ws.ldlt_m.solve(ws.mu);
-  ws.r.noalias() -= Jt.transpose() * ws.mu;
+  least_squares_mu(q, rest, ws);
+  ws.r.noalias() -= ws.J.topLeftCorner(ws.m, ws.n).transpose() * ws.mu;
   return std::sqrt(ws.e.head(ws.m).squaredNorm() + ws.r.squaredNorm());
 }
 
@@ -205,11 +210,7 @@ void task_rates(const RobotModel& robot, int n, bool orientation, const Eigen::V
     // The rule's solution q(t) differentiated: mu by least squares at q
     // (zero without a rest pose: the rule with its rest pose at q).
     if (rest) {
-      ws.r = q.head(n) - rest->head(n);
-      ws.JJt.noalias() = Jt * Jt.transpose();
-      ws.ldlt_m.compute(ws.JJt);
-      ws.mu.noalias() = Jt * ws.r;
-      ws.mu = ws.ldlt_m.solve(ws.mu);
+      least_squares_mu(q, *rest, ws);
       null_space_curvature(robot, q, ws);
     } else {
       ws.mu.setZero(), ws.M.setZero();
