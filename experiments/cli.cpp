@@ -275,11 +275,14 @@ Json robot_json(const RobotModel& m) {
     j["inertia"] = json_matrix(J.inertia);
     j["rotor_inertia"] = J.rotor_inertia;
     j["gear_ratio"] = J.gear_ratio;
+    j["damping"] = J.damping;  // joint side (a URDF's <dynamics>)
+    j["coulomb"] = J.coulomb;
     j["limits"] = json_vector(Eigen::Vector2d(J.q_min, J.q_max));
     doc["joints"].push_back(std::move(j));
   }
   doc["poses"] = Json::object();
   for (const NamedPose& p : m.poses) doc["poses"][p.name] = json_vector(p.q);
+  doc["provenance"] = m.provenance;
   return doc;
 }
 
@@ -367,6 +370,8 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
   const RunContext robot = run_context({}, sc);  // what meta.json records of the robot file
   o << "\n# robot file: " << robot.robot_file << " (fnv1a64 " << robot.robot_fnv1a64 << ")\n";
   o << "# flange: " << sc.plant.robot.flange << "\n";
+  for (const std::string& line : sc.plant.robot.provenance) o << "# robot: " << line << "\n";
+  for (const std::string& line : sc.sources) o << "# source: " << line << "\n";
   // (every input file with its hash is in the resolved scene's footer above)
   if (const std::string note = discontinuity_note(sc); !note.empty()) o << "# note: " << note << "\n";
   out << o.str();

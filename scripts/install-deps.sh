@@ -11,6 +11,7 @@ PACKAGES=(
   libboost-dev                         # Boost 1.74 headers: Odeint
   libtomlplusplus-dev                  # toml++: robot and scene files
   liburdfdom-dev                       # urdfdom 3.0: URDF robot files
+  libtinyxml-dev                       # TinyXML 2.6.2 (urdfdom's parser): a URDF's <transmission> elements
   nlohmann-json3-dev                   # nlohmann-json: the JSON the programs write
   libcli11-dev                         # CLI11: the pumasim command line
   libgtest-dev libbenchmark-dev        # GoogleTest, Google Benchmark

@@ -56,6 +56,39 @@ TEST(FrictionRegistry, EveryLawOpposesTheMotion) {
   });
 }
 
+// The sigmoid law (Gaz et al., IEEE RA-L 4(4), 2019) is its exp form
+// phi1/(1+exp(-phi2 (w+phi3))) - phi1/(1+exp(-phi2 phi3)) + B w, 0 at rest,
+// its slope there phi1 phi2/4 sech^2(phi2 phi3/2) + B; and a joint-side set
+// behind a gear Z (either sign) acts on the joint as the motor-side set
+// (phi1/|Z|, phi2/|Z|, Z phi3): Z tau_m(Z qd) = tau_joint(qd).
+TEST(FrictionRegistry, SigmoidIsGazEtAlsLawOnEitherSide) {
+  FrictionParams f;
+  f.model = friction_model<SigmoidFriction>();
+  f.sigmoid_level = 0.55, f.sigmoid_slope = 40.0, f.sigmoid_offset = 0.03, f.viscous = 0.002;
+  const auto exp_form = [](const FrictionParams& p, double w) {
+    return p.sigmoid_level / (1 + std::exp(-p.sigmoid_slope * (w + p.sigmoid_offset))) -
+           p.sigmoid_level / (1 + std::exp(-p.sigmoid_slope * p.sigmoid_offset)) + p.viscous * w;
+  };
+  EXPECT_EQ(friction_torque(f, 0.0, 0.0, SlipMode::kStuck), 0.0);
+  for (double w : {-2.0, -0.1, -0.01, 0.004, 0.05, 1.5, 30.0}) {
+    EXPECT_NEAR(friction_torque(f, w, 0.0, SlipMode::kStuck), exp_form(f, w), 1e-15) << w;
+  }
+  const double h = 1e-6, sech = 1 / std::cosh(0.5 * 40.0 * 0.03);
+  EXPECT_NEAR((friction_torque(f, h, 0.0, SlipMode::kStuck) - friction_torque(f, -h, 0.0, SlipMode::kStuck)) / (2 * h),
+              0.55 * 40.0 / 4 * sech * sech + 0.002, 1e-8);
+  for (double Z : {100.0, -50.0}) {
+    FrictionParams m = f;
+    m.viscous = 0.0;
+    FrictionParams joint = m;
+    m.sigmoid_level = joint.sigmoid_level / std::abs(Z);
+    m.sigmoid_slope = joint.sigmoid_slope / std::abs(Z);
+    m.sigmoid_offset = Z * joint.sigmoid_offset;
+    for (double qd : {-1.0, -0.02, 0.01, 0.7}) {
+      EXPECT_NEAR(Z * friction_torque(m, Z * qd, 0.0, SlipMode::kStuck), exp_form(joint, qd), 1e-14) << Z << " " << qd;
+    }
+  }
+}
+
 // u = sat(Kp e + Ki z - Kv Z qd + Kvff Z qd_ref + Kaff Z qdd_ref + offset), by hand.
 TEST(PivLaw, IsTheCardsFormulaAndSaturates) {
   PivParams P;

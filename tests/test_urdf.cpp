@@ -665,12 +665,20 @@ TEST(UrdfRefused, BadValues) {
   expect_urdf_refused("negative_mass", robot(link("base") + joint("j1", "revolute", "base", "l1") +
                                         link("l1", inertial(-1.0, "0 0 0", "0 0 0", "0.01 0.01 0.01"))),
                  {"link 'l1'", "a mass >= 0"});
-  expect_urdf_refused("damping",
-                 robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
-                                            "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>"
-                                            "<dynamics damping=\"0.5\"/>") +
-                       link("l1", kInertial)),
-                 {"joint 'j1'", "damping", "[friction]"});
+  // <dynamics> is read as the scene's friction defaults (UrdfPublished), or
+  // refused when the side file says so.
+  const std::string damped = robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
+                                                        "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>"
+                                                        "<dynamics damping=\"0.5\"/>") +
+                                   link("l1", kInertial));
+  expect_urdf_refused("damping", damped, {"joint 'j1'", "damping=\"0.5\"", "refuse_dynamics = true"},
+                      "[robot]\nrefuse_dynamics = true\n");
+  expect_urdf_refused("negative_damping",
+                      robot(link("base") + joint("j1", "revolute", "base", "l1", "0 0 0", "0 0 0", "0 0 1",
+                                                 "<limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>"
+                                                 "<dynamics damping=\"-0.5\"/>") +
+                            link("l1", kInertial)),
+                      {"joint 'j1'", "damping >= 0"});
   expect_urdf_refused("no_joint", robot(link("base")), {"at least one revolute"});
   expect_urdf_refused("not_urdf", "<robot><link/></robot>", {"URDF error", "urdfdom"});
   // Principal moments 0.1, 0.1, 0.3: no rigid body's, unless the side file says why.
@@ -1014,6 +1022,200 @@ TEST(UrdfShipped, ANameFindsAUrdfWithoutRobotFile) {
   } else {
     ::unsetenv("PUMASIM_ROBOTS_DIR");
   }
+}
+
+
+// ---------------------------------------------------------------- as published
+
+// A revolute joint with <dynamics> after the limit.
+std::string damped_joint(const std::string& name, const std::string& parent, const std::string& child,
+                         const std::string& xyz, const std::string& dynamics) {
+  return joint(name, "revolute", parent, child, xyz, "0 0 0", "0 0 1",
+               "<limit lower=\"-3\" upper=\"3\" effort=\"0\" velocity=\"0\"/><dynamics " + dynamics + "/>");
+}
+
+// A planar 2R arm about z with <dynamics> and <transmission>s (ros_control's
+// form on j1, the older one on j2, and one coupling both: not read).
+std::string planar_published() {
+  return robot(link("base") + damped_joint("j1", "base", "l1", "0 0 0", "damping=\"0.8\" friction=\"1.5\"") +
+               link("l1", inertial(2.0, "0.3 0 0", "0 0 0", "0.01 0.02 0.03")) +
+               damped_joint("j2", "l1", "l2", "0.6 0 0", "damping=\"0.3\" friction=\"0.4\"") +
+               link("l2", inertial(1.0, "0.2 0 0", "0 0 0", "0.004 0.005 0.006")) +
+               "<transmission name=\"t1\">\n  <type>transmission_interface/SimpleTransmission</type>\n"
+               "  <joint name=\"j1\"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>\n"
+               "  <actuator name=\"m1\"><mechanicalReduction>50</mechanicalReduction>"
+               "<motorInertia>2e-4</motorInertia></actuator>\n</transmission>\n"
+               "<transmission name=\"t2\" type=\"pr2_mechanism_model/SimpleTransmission\">\n"
+               "  <joint name=\"j2\"/><actuator name=\"m2\"/><mechanicalReduction>-20</mechanicalReduction>\n"
+               "</transmission>\n"
+               "<transmission name=\"wrist\">\n  <joint name=\"j1\"/><joint name=\"j2\"/>\n"
+               "  <actuator name=\"a\"/><actuator name=\"b\"/>\n</transmission>\n");
+}
+
+bool has_line(const std::vector<std::string>& lines, const std::vector<std::string>& fragments) {
+  return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
+    return std::all_of(fragments.begin(), fragments.end(), [&](const std::string& f) { return l.find(f) != std::string::npos; });
+  });
+}
+
+TEST(UrdfPublished, DynamicsAndTransmissionsFillTheJoints) {
+  const RobotModel m = load_robot(write_urdf("published", planar_published()));
+  ASSERT_EQ(m.dof(), 2);
+  EXPECT_EQ(m.joints[0].damping, 0.8);
+  EXPECT_EQ(m.joints[0].coulomb, 1.5);
+  EXPECT_EQ(m.joints[1].damping, 0.3);
+  EXPECT_EQ(m.joints[1].coulomb, 0.4);
+  EXPECT_EQ(m.joints[0].gear_ratio, 50.0);
+  EXPECT_EQ(m.joints[0].rotor_inertia, 2e-4);
+  EXPECT_EQ(m.joints[1].gear_ratio, -20.0);
+  EXPECT_EQ(m.joints[1].rotor_inertia, 0.0);
+  for (const auto& line : m.provenance) std::cerr << line << "\n";
+  EXPECT_TRUE(has_line(m.provenance, {"'j1'", "gear_ratio 50", "<transmission 't1'>", "mechanicalReduction",
+                                      "rotor_inertia 0.0002", "motorInertia", "damping 0.8", "<dynamics>"}));
+  EXPECT_TRUE(has_line(m.provenance, {"'j2'", "gear_ratio -20", "<transmission 't2'>", "rotor_inertia 0 kg m^2 (none given)"}));
+  EXPECT_TRUE(has_line(m.provenance, {"transmission 'wrist'", "joints j1, j2", "not read"}));
+  // The side file wins over a transmission (it gives both values).
+  const RobotModel side = load_robot(write_urdf("published_side", planar_published(),
+                                                "[joint.j2]\nrotor_inertia = 1e-5\ngear_ratio = 10.0\n"));
+  EXPECT_EQ(side.joints[1].gear_ratio, 10.0);
+  EXPECT_EQ(side.joints[1].rotor_inertia, 1e-5);
+  EXPECT_EQ(side.joints[0].gear_ratio, 50.0);
+  EXPECT_TRUE(has_line(side.provenance, {"'j2'", "gear_ratio 10 ([joint.j2] of the side file)"}));
+  // A transmission's value that is no number, and two on one joint.
+  std::string bad = planar_published();
+  bad.replace(bad.find("<motorInertia>2e-4"), 18, "<motorInertia>heavy");
+  expect_urdf_refused("bad_inertia", bad, {"transmission 't1'", "<motorInertia>", "a finite number", "'heavy'"});
+  std::string twice = planar_published();
+  twice.replace(twice.find("<joint name=\"j2\"/><actuator name=\"m2\"/>"), 20, "<joint name=\"j1\"/>");
+  expect_urdf_refused("twice", twice, {"transmission 't2'", "one transmission on joint 'j1'", "'t1'"});
+}
+
+// The joint-side damping D and Coulomb level F of <dynamics> are the scene's
+// [friction] defaults on the motor side, B = D / Z^2 and Fs = Fk = F / |Z|
+// (a motor-side law acts on the joint as Z tau_f at motor speed Z qd), so
+// the viscous part is the joint torque -D qd: the passive arm's accelerations
+// with and without it differ by H^-1 (-D qd) (H without rotor inertia).
+TEST(UrdfPublished, JointFrictionIsTheScenesDefaultOnTheMotorSide) {
+  const std::string urdf = write_urdf("published_scene", planar_published(), "[robot]\ngravity = [0.0, 0.0, -9.81]\n");
+  const std::string scene = std::string(PUMASIM_SCENES_DIR) + "/planar2_passive.toml";
+  const std::string robot_key = "scene.robot=\"" + urdf + "\"";
+  const Scene viscous = load_scene(scene, {robot_key}, {"friction.viscous"});
+  EXPECT_DOUBLE_EQ(viscous.plant.friction[0].viscous, 0.8 / 2500.0);
+  EXPECT_DOUBLE_EQ(viscous.plant.friction[1].viscous, 0.3 / 400.0);
+  EXPECT_TRUE(has_line(viscous.sources, {"friction.viscous", "the robot file's joint damping", "/ Z^2"}));
+  EXPECT_TRUE(has_line(viscous.sources, {"friction.static_torque", "not used", "\"viscous\""}));
+  const Scene hybrid = load_scene(scene, {robot_key, "friction.model=\"hybrid\""}, {"friction.viscous"});
+  EXPECT_DOUBLE_EQ(hybrid.plant.friction[0].static_torque, 1.5 / 50.0);
+  EXPECT_DOUBLE_EQ(hybrid.plant.friction[0].kinetic_torque, 1.5 / 50.0);
+  EXPECT_DOUBLE_EQ(hybrid.plant.friction[1].kinetic_torque, 0.4 / 20.0);
+  // The scene wins, key by key.
+  const Scene given = load_scene(scene, {robot_key, "friction.model=\"hybrid\"", "friction.kinetic_torque=[0.01, 0.02]"});
+  EXPECT_EQ(given.plant.friction[1].kinetic_torque, 0.02);
+  EXPECT_DOUBLE_EQ(given.plant.friction[1].static_torque, 0.4 / 20.0);
+  EXPECT_EQ(given.plant.friction[1].viscous, 0.01);
+  EXPECT_TRUE(has_line(given.sources, {"friction.kinetic_torque", "the scene file"}));
+  // A scene without [friction] on such a robot chooses a law or says none.
+  try {
+    load_scene(scene, {robot_key}, {"friction"});
+    ADD_FAILURE() << "accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("[friction] section"), std::string::npos) << e.what();
+  }
+  // The physics: f with and without the robot's damping.
+  const Scene off = load_scene(scene, {robot_key, "friction.model=\"none\"", "scene.rotor_inertia=false"},
+                               {"friction.viscous"});
+  const Scene on = load_scene(scene, {robot_key, "scene.rotor_inertia=false"}, {"friction.viscous"});
+  Plant p_on(on.plant), p_off(off.plant);
+  std::vector<double> x(static_cast<std::size_t>(p_on.size())), f_on(x.size()), f_off(x.size());
+  p_on.initial_state(x.data());
+  x[2] = 1.0, x[3] = -0.7;  // qd [rad/s]
+  p_on.rhs(0.0, x.data(), f_on.data());
+  p_off.rhs(0.0, x.data(), f_off.data());
+  const RobotModel rigid = without_rotor_inertia(load_robot(urdf));
+  Eigen::MatrixXd H(2, 2);
+  make_backend("crba", rigid)->mass_matrix(Eigen::Vector2d(x[0], x[1]), H);
+  const Eigen::Vector2d dqdd(f_on[2] - f_off[2], f_on[3] - f_off[3]);
+  const Eigen::Vector2d want = H.ldlt().solve(Eigen::Vector2d(-0.8 * 1.0, -0.3 * -0.7));
+  EXPECT_LT((dqdd - want).norm(), 1e-12 * want.norm()) << dqdd.transpose() << " vs " << want.transpose();
+}
+
+// A hand with a mimic gripper and two flange candidates (tcp, camera) on a
+// one-joint arm. As a tree it is refused, naming the tip key and the leaves;
+// with `tip = "hand"` and `flange = "tcp"` alone it loads: the fingers off
+// the chain are held at 0 (within their limits, the mimic finger at its
+// leader's 1 x 0 + 0) and merged into the arm's body, the chain's damping
+// and friction read. Closed form of H about z: sum Izz + m (x^2 + y^2) with
+// l1 0.01 + 2 (0.3^2), the hand 0.002 + 0.6 (0.5^2) and each finger
+// 1e-5 + 0.1 (0.5^2 + s^2), the fingers at y = +-s.
+std::string gripper() {
+  const std::string finger_limit = "<limit lower=\"0\" upper=\"0.04\" effort=\"0\" velocity=\"0\"/>";
+  return robot(link("base") + damped_joint("j1", "base", "l1", "0 0 0", "damping=\"0.05\" friction=\"0.1\"") +
+               link("l1", inertial(2.0, "0.3 0 0", "0 0 0", "0.01 0.01 0.01")) +
+               joint("wrist", "fixed", "l1", "hand", "0.5 0 0") +
+               link("hand", inertial(0.6, "0 0 0.05", "0 0 0", "0.001 0.001 0.002")) +
+               joint("finger_joint1", "prismatic", "hand", "left", "0 0 0.1", "0 0 0", "0 1 0",
+                     finger_limit + "<dynamics damping=\"0.2\"/>") +
+               link("left", inertial(0.1, "0 0 0.02", "0 0 0", "1e-5 1e-5 1e-5")) +
+               joint("finger_joint2", "prismatic", "hand", "right", "0 0 0.1", "0 0 0", "0 -1 0",
+                     finger_limit + "<mimic joint=\"finger_joint1\" multiplier=\"1\" offset=\"0\"/>") +
+               link("right", inertial(0.1, "0 0 0.02", "0 0 0", "1e-5 1e-5 1e-5")) +
+               joint("tcp_joint", "fixed", "hand", "tcp", "0 0 0.2") + link("tcp") +
+               joint("camera_joint", "fixed", "hand", "camera", "0.05 0 0.1") + link("camera"));
+}
+
+double gripper_H(double s) { return 0.01 + 2 * 0.09 + 0.002 + 0.6 * 0.25 + 2 * (1e-5 + 0.1 * (0.25 + s * s)); }
+
+TEST(UrdfPublished, AGripperOnATipWithTwoFlanges) {
+  expect_urdf_refused("gripper_tree", gripper(),
+                      {"(a tree)", "[robot] tip = \"<link>\"", "camera, left, right, tcp", "gripper_tree.urdf.toml"});
+  const RobotModel m = load_robot(write_urdf("gripper", gripper(), "[robot]\ntip = \"hand\"\nflange = \"tcp\"\n"));
+  ASSERT_EQ(m.dof(), 1);
+  EXPECT_NEAR(m.joints[0].mass, 2.8, kClosedForm);
+  EXPECT_EQ(m.joints[0].damping, 0.05);
+  EXPECT_EQ(m.joints[0].coulomb, 0.1);
+  EXPECT_EQ(m.flange, "link 'tcp' (the side file's flange)");
+  EXPECT_TRUE(has_line(m.provenance, {"'finger_joint1'", "held at 0 m", "within its limits"}));
+  EXPECT_TRUE(has_line(m.provenance, {"'finger_joint2'", "mimics 'finger_joint1'"}));
+  auto b = make_backend("crba", m);
+  Eigen::MatrixXd H(1, 1);
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(1, 0.7);
+  b->mass_matrix(q, H);
+  EXPECT_NEAR(H(0, 0), gripper_H(0.0), kClosedForm);
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  forward_kinematics<double>(m, q, R, p);
+  EXPECT_LT((p - Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(0.5, 0, 0.2)).norm(), kClosedForm);
+  // Held apart: the mimic finger follows its leader to -0.02 m along -y, and
+  // without a flange line the flange is the tip.
+  const RobotModel open = load_robot(write_urdf("gripper_open", gripper(), "[robot]\ntip = \"hand\"\n[held]\nfinger_joint1 = 0.02\n"));
+  make_backend("crba", open)->mass_matrix(q, H);
+  EXPECT_NEAR(H(0, 0), gripper_H(0.02), kClosedForm);
+  EXPECT_NEAR(open.joints[0].com.norm(), load_robot(write_urdf("gripper_closed", gripper(), "[robot]\ntip = \"hand\"\n")).joints[0].com.norm(), 0.1);
+  EXPECT_EQ(open.flange, "link 'hand' (the side file's tip; no flange in the side file)");
+  EXPECT_TRUE(has_line(open.provenance, {"'finger_joint1'", "held at 0.02 m", "[held]"}));
+}
+
+TEST(UrdfPublished, TipAndHeldRefusals) {
+  const auto refused = [&](const std::string& name, const std::string& xml, const std::string& side,
+                           const std::vector<std::string>& fragments) {
+    const std::string path = write_urdf(name, xml, side);
+    try {
+      load_robot(path);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const ConfigError& e) {
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << f << " in: " << e.what();
+    }
+  };
+  refused("tip_unknown", gripper(), "[robot]\ntip = \"paw\"\n", {"robot.tip", "'paw'", "camera, left, right, tcp"});
+  refused("held_on_chain", gripper(), "[robot]\ntip = \"hand\"\n[held]\nj1 = 0.1\n",
+          {"held.j1", "a moving joint off the chain", "finger_joint1, finger_joint2"});
+  refused("held_out_of_range", gripper(), "[robot]\ntip = \"hand\"\n[held]\nfinger_joint1 = 0.5\n",
+          {"held.finger_joint1", "within joint 'finger_joint1''s limits [0, 0.04]"});
+  refused("flange_off_body", gripper(), "[robot]\ntip = \"hand\"\nflange = \"base\"\n", {"robot.flange", "'base'", "tcp"});
+  // A joint off the chain that mimics one on it would move with it: it needs a held value.
+  std::string follower = gripper();
+  follower.replace(follower.find("<mimic joint=\"finger_joint1\""), 28, "<mimic joint=\"j1\"");
+  refused("mimic_of_chain", follower, "[robot]\ntip = \"hand\"\n", {"joint 'finger_joint2'", "[held]", "mimics joint 'j1' of the chain"});
 }
 
 }  // namespace

@@ -54,6 +54,11 @@ struct JointParams {
   // Z = motor angle / joint variable: [-] revolute, [rad/m] prismatic (a ball
   // screw); the link-side armature Z^2 Im is in [kg m^2] or [kg].
   double gear_ratio = 1.0;
+  // Joint-side friction a robot file gives (a URDF's <dynamics damping
+  // friction>): defaults for a scene's [friction], which moves them to the
+  // motor side (models/scene). The dynamics algorithms never read them.
+  double damping = 0.0;  // viscous [N m s/rad] revolute, [N s/m] prismatic, joint side
+  double coulomb = 0.0;  // Coulomb level [N m] revolute, [N] prismatic, joint side
   // Joint range (link side): [rad] revolute, [m] prismatic.
   double q_min = -3.141592653589793;
   double q_max = 3.141592653589793;
@@ -91,6 +96,11 @@ struct RobotModel {
   // What the flange is and why, for messages (`pumasim check`, a path out
   // of reach): a URDF's link and the rule that chose it.
   std::string flange = "the last DH frame (a DH robot file)";
+  // Where the values a robot file's format has no key for came from, one
+  // line each, for `pumasim check` and `pumasim robot` (a URDF's drive
+  // values: its side file, a <transmission> or none; its <dynamics>; the
+  // links merged off the chain and the joint values they are held at).
+  std::vector<std::string> provenance;
 
   int dof() const { return static_cast<int>(joints.size()); }
   // The pose called `name`, or nullptr.

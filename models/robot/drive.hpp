@@ -30,7 +30,7 @@ struct MotorParams {
 // registry): none, viscous B w_m, the paper's rule (sec. 4: at "zero" speed
 // |w_m| <= zero_speed the friction balances the applied torque up to the static
 // level), exact hybrid stick/slip with events, Karnopp (the paper's rule with a
-// finite band), and smooth tanh.
+// finite band), smooth tanh, and the Panda's identified sigmoid (Gaz et al. 2019).
 // Which friction law a joint follows: the law's place in the plant's list
 // (FrictionLaws, models/plant/friction/registry.hpp; friction_model<Law>()
 // names one). The first law, and the default, is none: no friction torque
@@ -48,6 +48,10 @@ struct FrictionParams {
   double kinetic_torque = 0.0;  // Fk [N m] (paper: 0.124)
   double zero_speed = 1e-6;     // [rad/s]: "zero" for the paper's rule, band for Karnopp's
   double speed_scale = 1e-2;    // [rad/s]: tanh's scale
+  // The sigmoid law (models/plant/friction/sigmoid.hpp; Gaz et al. 2019's phi1, phi2, phi3, motor side):
+  double sigmoid_level = 0.0;   // phi1 [N m]
+  double sigmoid_slope = 0.0;   // phi2 [s/rad]
+  double sigmoid_offset = 0.0;  // phi3 [rad/s]
 };
 
 // Slip state of a joint under the hybrid model.

@@ -23,6 +23,7 @@
 #include "models/robot/link_inertia.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/robot/strict_toml.hpp"
+#include "models/robot/urdf_transmission.hpp"
 
 namespace pumasim {
 namespace {
@@ -588,23 +589,16 @@ urdf::ModelInterfaceSharedPtr parse_urdf(const UrdfText& t, std::vector<std::str
   return model;
 }
 
-// Every joint one of a serial chain's kinds, each link the child of one joint
-// at most (two: a closed loop), no mimic joint, no damping or friction.
+// Every joint one of a serial chain's kinds and each link the child of one
+// joint at most (two: a closed loop). Mimic joints and <dynamics> are
+// checked once the chain is known (check_chain_joints): off the chain, a
+// mimic joint is held and its friction has no effect.
 void check_joints(const urdf::ModelInterface& m, const UrdfText& t) {
   std::map<std::string, std::string> parent_joint;  // child link -> joint
   for (const auto& [name, j] : m.joints_) {
     if (j->type == urdf::Joint::FLOATING || j->type == urdf::Joint::PLANAR || j->type == urdf::Joint::UNKNOWN) {
       t.fail("joint", name, "a revolute, continuous, prismatic or fixed joint (pumasim simulates fixed-base serial chains)",
              j->type == urdf::Joint::FLOATING ? "type=\"floating\"" : j->type == urdf::Joint::PLANAR ? "type=\"planar\"" : "an unknown type");
-    }
-    if (j->mimic) {
-      t.fail("joint", name, "a joint with its own variable (pumasim has no coupled joints)",
-             "<mimic joint=\"" + j->mimic->joint_name + "\">");
-    }
-    if (j->dynamics && (j->dynamics->damping != 0.0 || j->dynamics->friction != 0.0)) {
-      t.fail("joint", name, "no <dynamics> damping or friction (pumasim's friction belongs to the scene's drive, "
-             "[friction]; remove it here)",
-             "damping=\"" + num(j->dynamics->damping) + "\" friction=\"" + num(j->dynamics->friction) + "\"");
     }
     if (!finite(j->parent_to_joint_origin_transform)) t.fail("joint", name, "a finite <origin>", "a non-finite number");
     const auto [it, first] = parent_joint.emplace(j->child_link_name, name);
@@ -615,8 +609,152 @@ void check_joints(const urdf::ModelInterface& m, const UrdfText& t) {
   }
 }
 
+// ---------------------------------------------------------------- side file
+
+struct SideFile {
+  std::string path;  // empty: none
+  toml::table doc;   // as parsed, read twice: peek_side_file, read_side_file
+  Vec3 gravity{0.0, 0.0, -9.81};
+  std::string flange;
+  std::string tip;               // [robot] tip: the chain is the path from the root link to it
+  bool refuse_dynamics = false;  // [robot] refuse_dynamics: a <dynamics> damping or friction is an error
+  std::map<std::string, std::pair<double, double>> drive;  // joint -> (rotor inertia, gear ratio)
+  std::map<std::string, std::string> excuse;                // joint -> inconsistent_inertia
+  std::map<std::string, double> held;                       // [held]: a moving joint off the chain -> its value
+  std::vector<NamedPose> poses;
+};
+
+[[noreturn]] void side_fail(const SideFile& s, const std::string& table, const std::string& key,
+                            const std::string& expected, const std::string& got) {
+  StrictTable root(s.doc, s.path, "");
+  if (table.empty()) root.fail(key, expected, got);
+  root.table(table).fail(key, expected, got);
+}
+
+// What the chain's walk needs of the side file (tip, refuse_dynamics,
+// [held]), read with their types checked; read_side_file reads the rest and
+// refuses unknown keys once the chain is known.
+SideFile peek_side_file(const std::string& urdf_path) {
+  SideFile s;
+  std::error_code ec;
+  if (!std::filesystem::exists(urdf_side_file(urdf_path), ec)) return s;
+  s.path = urdf_side_file(urdf_path);
+  s.doc = parse_toml_file(s.path);
+  StrictTable root(s.doc, s.path, "");
+  if (auto robot = root.optional_table("robot")) {
+    s.tip = robot->string_or("tip", "");
+    s.refuse_dynamics = robot->boolean_or("refuse_dynamics", false);
+  }
+  if (auto held = root.optional_table("held")) {
+    for (const std::string& name : held->keys()) s.held[name] = held->number(name);
+  }
+  return s;
+}
+
+std::string listed(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// The links no joint leaves (the tips a chain may end at), sorted.
+std::vector<std::string> leaf_links(const urdf::ModelInterface& m) {
+  std::vector<std::string> out;
+  for (const auto& [name, l] : m.links_) {
+    if (l->child_joints.empty()) out.push_back(name);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- the chain
+
+// Which links the chain runs through: with the side file's tip, the path
+// from the root link to it; without, every link (a serial chain, or refused
+// as a tree).
+struct ChainPath {
+  const urdf::Link* tip = nullptr;
+  std::set<const urdf::Link*> links;
+  bool on(const urdf::Link* l) const { return !tip || links.count(l) > 0; }
+};
+
+ChainPath chain_path(const urdf::ModelInterface& m, const SideFile& s) {
+  ChainPath p;
+  if (s.tip.empty()) return p;
+  const auto it = m.links_.find(s.tip);
+  if (it == m.links_.end()) {
+    side_fail(s, "robot", "tip", "a link of the URDF (its leaves: " + listed(leaf_links(m)) + ")", "'" + s.tip + "'");
+  }
+  p.tip = it->second.get();
+  for (const urdf::Link* l = p.tip; l; l = l->getParent().get()) p.links.insert(l);
+  return p;
+}
+
+// The joint's unit axis, or ConfigError for a zero or non-finite one.
+Vec3 unit_axis(const urdf::Joint& j, const UrdfText& t) {
+  const Vec3 axis(j.axis.x, j.axis.y, j.axis.z);
+  // Scaled by its largest component before the norm: (1e200, 1e200, 0)'s
+  // squared norm overflows, and normalized() then returned (0, 0, 0).
+  const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
+  if (!axis.allFinite() || !(largest > 0) || largest * (axis / largest).norm() < 1e-12) {
+    t.fail("joint", j.name, "a non-zero <axis xyz>", vec_str(axis));
+  }
+  return (axis / largest).normalized();
+}
+
+// A moving joint's motion at value q: a turn about its axis, or a slide along it.
+Frame motion(const urdf::Joint& j, double q, const UrdfText& t) {
+  const Vec3 u = unit_axis(j, t);
+  if (j.type == urdf::Joint::PRISMATIC) return {Mat3::Identity(), q * u};
+  return {Eigen::AngleAxisd(q, u).toRotationMatrix(), Vec3::Zero()};
+}
+
+// A moving joint off the chain, held: its value and why. The side file's
+// [held] value; else a mimic joint's multiplier x its leader's held value +
+// offset; else 0, or the limit nearest 0 when 0 is outside its limits.
+struct Held {
+  double q = 0.0;
+  std::string why;
+};
+
+Held held_value(const urdf::ModelInterface& m, const urdf::Joint& j, const SideFile& s, const ChainPath& p,
+                const UrdfText& t, int depth = 0) {
+  const bool limited = j.type != urdf::Joint::CONTINUOUS && j.limits;
+  const double lo = limited ? j.limits->lower : -HUGE_VAL, hi = limited ? j.limits->upper : HUGE_VAL;
+  if (!(lo <= hi)) t.fail("joint", j.name, "<limit> with lower <= upper", "lower=\"" + num(lo) + "\" upper=\"" + num(hi) + "\"");
+  if (const auto it = s.held.find(j.name); it != s.held.end()) {
+    if (!(it->second >= lo && it->second <= hi)) {
+      side_fail(s, "held", j.name, "a value within joint '" + j.name + "''s limits [" + num(lo) + ", " + num(hi) + "]",
+                num(it->second));
+    }
+    return {it->second, "the side file's [held]"};
+  }
+  if (j.mimic) {
+    const auto leader = m.joints_.find(j.mimic->joint_name);
+    if (leader == m.joints_.end() || leader->second->type == urdf::Joint::FIXED) {
+      t.fail("joint", j.name, "a <mimic joint> naming a moving joint of the URDF", "'" + j.mimic->joint_name + "'");
+    }
+    const urdf::Joint& L = *leader->second;
+    const std::string side = s.path.empty() ? urdf_side_file(t.path()) : s.path;
+    if (p.on(m.links_.at(L.child_link_name).get())) {
+      t.fail("joint", j.name,
+             "a value for it in [held] of " + side + ": it mimics joint '" + L.name +
+                 "' of the chain, whose motion a mass merged at a fixed pose cannot follow",
+             "none");
+    }
+    if (depth > 16) t.fail("joint", j.name, "mimic joints that lead back to a joint of their own (no cycle)", "a cycle");
+    const Held h = held_value(m, L, s, p, t, depth + 1);
+    const double q = j.mimic->multiplier * h.q + j.mimic->offset;
+    if (!std::isfinite(q)) t.fail("joint", j.name, "a finite <mimic multiplier offset>", "a non-finite value");
+    return {q, "mimics '" + L.name + "' (" + h.why + "): " + num(j.mimic->multiplier) + " x " + num(h.q) + " + " +
+                   num(j.mimic->offset)};
+  }
+  const double q = std::clamp(0.0, lo, hi);
+  return {q, q == 0.0 ? "0, within its limits (no value in [held])" : "its limit nearest 0 (no value in [held])"};
+}
+
 // One rigid body: the links joined by fixed joints to the child link of a
-// moving joint (or to the root: the ground), each with its frame in the
+// moving joint (or to the root: the ground), and the links off the chain
+// behind them (held: ChainPath, held_value), each with its frame in the
 // body's frame (the first link's), and the moving joint that leaves it.
 struct Cluster {
   std::vector<std::pair<const urdf::Link*, Frame>> links;
@@ -625,7 +763,8 @@ struct Cluster {
   std::string next_from;
 };
 
-Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const UrdfText& t) {
+Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const ChainPath& path, const SideFile& s,
+               const UrdfText& t, std::vector<std::string>& merged) {
   Cluster c;
   std::vector<std::pair<const urdf::Link*, Frame>> todo{{&first, Frame{}}};
   while (!todo.empty()) {
@@ -634,12 +773,24 @@ Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const Urd
     c.links.push_back({link, T});
     for (const auto& j : link->child_joints) {
       const Frame Tj = T * frame_of(j->parent_to_joint_origin_transform);
+      const urdf::Link* child = m.links_.at(j->child_link_name).get();
       if (j->type == urdf::Joint::FIXED) {
-        todo.push_back({m.links_.at(j->child_link_name).get(), Tj});
+        todo.push_back({child, Tj});
+        continue;
+      }
+      if (!path.on(child)) {
+        const Held h = held_value(m, *j, s, path, t);
+        todo.push_back({child, Tj * motion(*j, h.q, t)});
+        merged.push_back("joint '" + j->name + "' (off the chain) held at " + num(h.q) +
+                         (j->type == urdf::Joint::PRISMATIC ? " m" : " rad") + " (" + h.why + "): link '" +
+                         child->name + "' and the links after it merged into the body of link '" + first.name + "'");
         continue;
       }
       if (c.next) {
-        t.fail("joint", j->name, "a serial chain: one moving joint leaving each rigid body",
+        t.fail("joint", j->name,
+               "a serial chain: one moving joint leaving each rigid body; for a tree, the chain's tip in the side "
+               "file " + urdf_side_file(t.path()) + ": [robot] tip = \"<link>\", one of its leaves " +
+                   listed(leaf_links(m)) + " (the links off the chain are then merged as fixed masses)",
                "joints '" + c.next->name + "' (from link '" + c.next_from + "') and '" + j->name + "' (from link '" +
                    link->name + "') both leaving the body of link '" + first.name + "' (a tree)");
       }
@@ -652,18 +803,20 @@ Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const Urd
 }
 
 // The chain from the root: clusters[0] is the ground, clusters[k] the body
-// moved by joints[k - 1].
+// moved by joints[k - 1]; merged: the joints held off the chain, as
+// provenance lines.
 struct UrdfChain {
   std::vector<Cluster> clusters;
   std::vector<const urdf::Joint*> joints;
+  std::vector<std::string> merged;
 };
 
-UrdfChain walk(const urdf::ModelInterface& m, const UrdfText& t) {
+UrdfChain walk(const urdf::ModelInterface& m, const ChainPath& path, const SideFile& s, const UrdfText& t) {
   UrdfChain c;
   const urdf::Link* link = m.getRoot().get();
   std::size_t visited = 0;
   for (;;) {
-    c.clusters.push_back(gather(m, *link, t));
+    c.clusters.push_back(gather(m, *link, path, s, t, c.merged));
     visited += c.clusters.back().links.size();
     const urdf::Joint* next = c.clusters.back().next;
     if (!next) break;
@@ -675,7 +828,8 @@ UrdfChain walk(const urdf::ModelInterface& m, const UrdfText& t) {
   }
   if (c.joints.empty()) {
     throw ConfigError(t.path() + ": robot '" + m.getName() +
-                      "': expected at least one revolute, continuous or prismatic joint, got none");
+                      "': expected at least one revolute, continuous or prismatic joint" +
+                      (path.tip ? " between the root link and the tip '" + path.tip->name + "'" : "") + ", got none");
   }
   if (visited != m.links_.size()) {
     std::set<std::string> seen;
@@ -689,6 +843,29 @@ UrdfChain walk(const urdf::ModelInterface& m, const UrdfText& t) {
     }
   }
   return c;
+}
+
+// The chain's joints: none a mimic joint (off the chain one is held), and
+// <dynamics> damping and friction finite and >= 0, or none when the side
+// file refuses them.
+void check_chain_joints(const UrdfChain& c, const SideFile& s, const UrdfText& t) {
+  for (const urdf::Joint* j : c.joints) {
+    if (j->mimic) {
+      t.fail("joint", j->name,
+             "a joint of the chain with its own variable (pumasim has no coupled joints; a mimic joint off the "
+             "chain, past the side file's [robot] tip, is held)",
+             "<mimic joint=\"" + j->mimic->joint_name + "\">");
+    }
+    if (!j->dynamics || (j->dynamics->damping == 0.0 && j->dynamics->friction == 0.0)) continue;
+    const std::string got = "damping=\"" + num(j->dynamics->damping) + "\" friction=\"" + num(j->dynamics->friction) + "\"";
+    if (s.refuse_dynamics) {
+      t.fail("joint", j->name, "no <dynamics> damping or friction ([robot] refuse_dynamics = true in " + s.path + ")", got);
+    }
+    if (!(j->dynamics->damping >= 0.0 && j->dynamics->friction >= 0.0) || !std::isfinite(j->dynamics->damping) ||
+        !std::isfinite(j->dynamics->friction)) {
+      t.fail("joint", j->name, "<dynamics> with finite damping >= 0 and friction >= 0", got);
+    }
+  }
 }
 
 // Mass, centre of mass and inertia about it of a cluster's links, in the
@@ -850,30 +1027,13 @@ void read_joint(const urdf::Joint& j, const UrdfText& t, JointParams& J) {
 void place_axes(const UrdfChain& c, const UrdfText& t, std::vector<AxisLine>& L, std::vector<Frame>& bodies) {
   bodies.assign(1, Frame{});
   for (std::size_t k = 0; k < c.joints.size(); ++k) {
-    const urdf::Joint& j = *c.joints[k];
-    const Vec3 axis(j.axis.x, j.axis.y, j.axis.z);
-    // Scaled by its largest component before the norm: (1e200, 1e200, 0)'s
-    // squared norm overflows, and normalized() then returned (0, 0, 0).
-    const double largest = axis.allFinite() ? axis.cwiseAbs().maxCoeff() : 0.0;
-    if (!axis.allFinite() || !(largest > 0) || largest * (axis / largest).norm() < 1e-12) {
-      t.fail("joint", j.name, "a non-zero <axis xyz>", vec_str(axis));
-    }
     const Frame F = bodies.back() * c.clusters[k].next_origin;  // joint frame = child link frame at q = 0
-    L.push_back({F.p, F.R * (axis / largest).normalized()});
+    L.push_back({F.p, F.R * unit_axis(*c.joints[k], t)});
     bodies.push_back(F);
   }
 }
 
-// ---------------------------------------------------------------- side file
-
-struct SideFile {
-  std::string path;  // empty: none
-  Vec3 gravity{0.0, 0.0, -9.81};
-  std::string flange;
-  std::map<std::string, std::pair<double, double>> drive;  // joint -> (rotor inertia, gear ratio)
-  std::map<std::string, std::string> excuse;                // joint -> inconsistent_inertia
-  std::vector<NamedPose> poses;
-};
+// ---------------------------------------------------------------- side file, the rest
 
 void read_side_joint(StrictTable& jt, const std::string& name, SideFile& s) {
   const double rotor = jt.number("rotor_inertia", Bounds::non_negative());
@@ -884,41 +1044,46 @@ void read_side_joint(StrictTable& jt, const std::string& name, SideFile& s) {
   jt.finish();
 }
 
-std::string listed(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-// The side file, checked against the URDF's moving joints and the links
-// fixed to the last one (flange candidates).
-SideFile read_side_file(const std::string& urdf_path, const std::vector<std::string>& joints,
-                        const std::vector<std::string>& flanges) {
-  SideFile s;
-  std::error_code ec;
-  if (!std::filesystem::exists(urdf_side_file(urdf_path), ec)) return s;
-  s.path = urdf_side_file(urdf_path);
-  const toml::table doc = parse_toml_file(s.path);
-  StrictTable root(doc, s.path, "");
+// The whole side file, strictly, once the chain is known: [joint.NAME]
+// tables name the chain's moving joints, [held] the moving joints off it,
+// the flange a link of the last body (fixed to it, or merged into it).
+void read_side_file(SideFile& s, const std::string& urdf_path, const std::vector<std::string>& joints,
+                    const std::vector<std::string>& off_chain, const std::vector<std::string>& flanges) {
+  if (s.path.empty()) return;
+  StrictTable root(s.doc, s.path, "");
   if (auto robot = root.optional_table("robot")) {
     if (auto g = robot->optional_numbers("gravity", 3)) s.gravity = Vec3((*g)[0], (*g)[1], (*g)[2]);
     s.flange = robot->string_or("flange", "");
     if (!s.flange.empty() && std::find(flanges.begin(), flanges.end(), s.flange) == flanges.end()) {
-      robot->fail("flange", "a link fixed to the last moving joint's link of " + urdf_path + " (" + listed(flanges) + ")",
-                  "'" + s.flange + "'");
+      robot->fail("flange", "a link of the last body of " + urdf_path + " (fixed to its last moving joint's link, or "
+                  "merged into it past the tip: " + listed(flanges) + ")", "'" + s.flange + "'");
     }
+    robot->string_or("tip", "");               // read by peek_side_file
+    robot->boolean_or("refuse_dynamics", false);
     robot->finish();
   }
   if (auto table = root.optional_table("joint")) {
     for (const std::string& name : table->keys()) {
       if (std::find(joints.begin(), joints.end(), name) == joints.end()) {
-        table->fail(name, "a table named after a moving joint of " + urdf_path + " (" + listed(joints) + ")",
+        table->fail(name, "a table named after a moving joint of the chain of " + urdf_path + " (" + listed(joints) + ")",
                     "'" + name + "'");
       }
       StrictTable jt = table->table(name);
       read_side_joint(jt, name, s);
     }
     table->finish();
+  }
+  if (auto held = root.optional_table("held")) {
+    for (const std::string& name : held->keys()) {
+      if (std::find(off_chain.begin(), off_chain.end(), name) == off_chain.end()) {
+        held->fail(name, "a moving joint off the chain of " + urdf_path + " (" +
+                             (off_chain.empty() ? std::string("none: the chain has no [robot] tip, or every moving joint is on it")
+                                                : listed(off_chain)) + ")",
+                   "'" + name + "'");
+      }
+      held->number(name);
+    }
+    held->finish();
   }
   if (auto poses = root.optional_table("poses")) {
     const int n = static_cast<int>(joints.size());
@@ -929,7 +1094,6 @@ SideFile read_side_file(const std::string& urdf_path, const std::vector<std::str
     poses->finish();
   }
   root.finish();
-  return s;
 }
 
 // The flange: the side file's link (read_side_file checked that it is fixed
@@ -945,6 +1109,14 @@ Frame flange_frame(const UrdfChain& c, const SideFile& s, const UrdfText& t, std
     if (!s.flange.empty() && link->name == s.flange) {
       why = "link '" + link->name + "' (the side file's flange)";
       return T;
+    }
+  }
+  if (s.flange.empty() && !s.tip.empty()) {
+    for (const auto& [link, T] : last.links) {
+      if (link->name == s.tip) {
+        why = "link '" + link->name + "' (the side file's tip; no flange in the side file)";
+        return T;
+      }
     }
   }
   const urdf::Link* link = last.links.front().first;
@@ -1003,6 +1175,33 @@ void check_joints_have_inertia(const RobotModel& model, const UrdfChain& c, cons
   }
 }
 
+// Joint k's drive and friction values and where each came from (a
+// provenance line): the gear ratio and rotor inertia from the side file's
+// [joint.NAME] (which gives both), else from a <transmission> on the joint,
+// else a direct drive (1) without rotor inertia; damping and friction from
+// its <dynamics> (check_chain_joints checked them).
+std::string drive_values(const urdf::Joint& j, int k, const SideFile& s, const UrdfTransmissions& tr, JointParams& J) {
+  std::string gear_from = "the default: a direct drive", rotor_from = "none given";
+  if (const auto it = s.drive.find(j.name); it != s.drive.end()) {
+    J.rotor_inertia = it->second.first;
+    J.gear_ratio = it->second.second;
+    gear_from = rotor_from = "[joint." + j.name + "] of the side file";
+  } else if (const auto tt = tr.by_joint.find(j.name); tt != tr.by_joint.end()) {
+    const std::string where = "<transmission '" + tt->second.name + "'> (line " + std::to_string(tt->second.line) + ")";
+    if (tt->second.gear_ratio) J.gear_ratio = *tt->second.gear_ratio, gear_from = where + " mechanicalReduction";
+    if (tt->second.rotor_inertia) J.rotor_inertia = *tt->second.rotor_inertia, rotor_from = where + " motorInertia";
+  }
+  if (j.dynamics) {
+    J.damping = j.dynamics->damping;
+    J.coulomb = j.dynamics->friction;
+  }
+  const bool slide = j.type == urdf::Joint::PRISMATIC;
+  return "joint '" + j.name + "' (q" + std::to_string(k + 1) + "): gear_ratio " + num(J.gear_ratio) + " (" + gear_from +
+         "), rotor_inertia " + num(J.rotor_inertia) + " kg m^2 (" + rotor_from + "); damping " + num(J.damping) +
+         (slide ? " N s/m" : " N m s/rad") + ", friction " + num(J.coulomb) + (slide ? " N" : " N m") +
+         (j.dynamics ? " (<dynamics>, joint side)" : " (no <dynamics>)");
+}
+
 // The model: joints with their limits and drives, the DH form of their axes,
 // each body's inertia moved into its DH frame, the flange as the tool.
 RobotModel build_model(const urdf::ModelInterface& m, const UrdfChain& c, const SideFile& s, const UrdfText& t) {
@@ -1013,12 +1212,15 @@ RobotModel build_model(const urdf::ModelInterface& m, const UrdfChain& c, const 
   model.gravity = s.gravity;
   model.poses = s.poses;
   model.joints.resize(c.joints.size());
+  const UrdfTransmissions tr = read_urdf_transmissions(t.path(), t.text());
   for (std::size_t k = 0; k < c.joints.size(); ++k) {
     read_joint(*c.joints[k], t, model.joints[k]);
-    if (const auto it = s.drive.find(c.joints[k]->name); it != s.drive.end()) {
-      model.joints[k].rotor_inertia = it->second.first;
-      model.joints[k].gear_ratio = it->second.second;
-    }
+    model.provenance.push_back(drive_values(*c.joints[k], static_cast<int>(k), s, tr, model.joints[k]));
+  }
+  for (const std::string& line : c.merged) model.provenance.push_back(line);
+  for (const std::string& coupled : tr.coupled) {
+    model.provenance.push_back("transmission " + coupled + " not read: it couples joints or actuators, and pumasim "
+                               "drives each joint by its own motor (a gear ratio per joint)");
   }
   std::vector<AxisLine> L;
   std::vector<Frame> bodies;
@@ -1058,11 +1260,19 @@ RobotModel load_urdf_file(const std::string& path) {
   const UrdfModel m(parse_urdf(t, errors));
   refuse_logged_errors(errors, t);
   check_joints(*m, t);
-  const UrdfChain chain = walk(*m, t);
-  std::vector<std::string> names, flanges;
+  SideFile side = peek_side_file(path);
+  const ChainPath on_path = chain_path(*m, side);
+  const UrdfChain chain = walk(*m, on_path, side, t);
+  check_chain_joints(chain, side, t);
+  std::vector<std::string> names, off_chain, flanges;
   for (const urdf::Joint* j : chain.joints) names.push_back(j->name);
+  for (const auto& [name, j] : (*m).joints_) {
+    if (j->type != urdf::Joint::FIXED && std::find(names.begin(), names.end(), name) == names.end()) {
+      off_chain.push_back(name);
+    }
+  }
   for (const auto& l : chain.clusters.back().links) flanges.push_back(l.first->name);
-  const SideFile side = read_side_file(path, names, flanges);
+  read_side_file(side, path, names, off_chain, flanges);
   RobotModel model = build_model(*m, chain, side, t);
   check_bodies(model, chain, side, t);
   check_joints_have_inertia(model, chain, t);

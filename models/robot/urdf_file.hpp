@@ -6,29 +6,50 @@
 // along the URDF axis, so q_j is the URDF joint variable (an axis (0, 0, -1)
 // turns the other way), and its x axis on the common normal to joint j+1's
 // axis (parallel axes: the normal through the previous frame's origin). The
-// URDF root link's frame is the base frame (gravity, Cartesian quantities);
-// the flange is the chain's last link. Fixed joints merge their child links
-// into the parent body (mass, centre of mass, inertia by the parallel-axis
-// theorem); links fixed to the root are ground and carry no dynamics. A link
-// without <inertial> has no mass.
+// URDF root link's frame is the base frame (gravity, Cartesian quantities).
+// Fixed joints merge their child links into the parent body (mass, centre of
+// mass, inertia by the parallel-axis theorem); links fixed to the root are
+// ground and carry no dynamics. A link without <inertial> has no mass.
+//
+// A tree (a hand with gripper fingers, sensor branches) is simulated along
+// one chain: the side file's `tip` names a link, and the chain is the path
+// from the root to it. Every link off that path, and every link past the
+// tip, merges into its nearest ancestor on the path as fixed mass, its
+// moving joints held at a stated value: the side file's [held] value, else
+// a mimic joint's multiplier x its leader's held value + offset, else 0 (or
+// the limit nearest 0). Each is a provenance line (RobotModel::provenance).
+// The flange is the side file's `flange` (any link of the last body, merged
+// ones included), else the tip, else the end of the fixed links after the
+// last moving joint when they do not branch.
+//
+// Read as published: a chain joint's <dynamics damping friction> (joint-side
+// viscous and Coulomb friction, JointParams::damping and coulomb: the
+// defaults of a scene's [friction], moved to the motor side there), unless
+// the side file says `refuse_dynamics = true`; a <transmission>'s
+// mechanicalReduction and motorInertia (urdf_transmission.hpp) as the gear
+// ratio and rotor inertia, which the side file's [joint.NAME] overrides.
 //
 // Refused, each with a ConfigError naming the file, the line of the joint or
-// link and what was expected: a tree (two moving joints leaving one rigid
-// body), a closed loop (a link that is the child of two joints), links not
-// connected to the root, floating and planar joints, mimic joints, joint
-// damping or friction (friction belongs to the scene's drive), a zero axis,
-// revolute or prismatic limits without lower < upper, non-finite numbers, a
-// negative mass, and a body whose mass and inertia are no rigid body's
-// (link_inertia.hpp) unless the side file says why. Ignored: visual and
-// collision geometry, materials, calibration, safety controllers, transmissions,
-// and the limits' effort and velocity.
+// link and what was expected: a tree without a tip (two moving joints
+// leaving one rigid body: the message names the leaves a tip may be), a
+// closed loop (a link that is the child of two joints), links not connected
+// to the root, floating and planar joints, a mimic joint on the chain, an
+// off-chain mimic joint whose leader is on the chain (its mass would move
+// with it) without a [held] value, negative damping or friction, a zero
+// axis, revolute or prismatic limits without lower < upper, non-finite
+// numbers, a negative mass, and a body whose mass and inertia are no rigid
+// body's (link_inertia.hpp) unless the side file says why. Ignored: visual
+// and collision geometry, materials, calibration, safety controllers,
+// transmissions that couple several joints (listed in the provenance), and
+// the limits' effort and velocity.
 //
 // What URDF has no place for comes from an optional TOML side file next to it,
 // the same path with ".toml" appended (puma560.urdf -> puma560.urdf.toml),
 // read strictly (format in models/robots/README.md): per moving joint its
-// rotor inertia and gear ratio (default: none and 1, a direct drive) and an
-// inconsistent_inertia excuse; gravity in the root link's frame (default
-// [0, 0, -9.81], z up as in ROS); the flange link; named poses.
+// rotor inertia and gear ratio (default: a <transmission>'s, else none and
+// 1, a direct drive) and an inconsistent_inertia excuse; gravity in the root
+// link's frame (default [0, 0, -9.81], z up as in ROS); the tip, the flange
+// link, refuse_dynamics; [held] joint values; named poses.
 //
 // Before urdfdom (and TinyXML 2.6.2, the XML parser it is built with on
 // Debian 12) sees the text, one linear pass over it refuses, naming the file

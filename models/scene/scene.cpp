@@ -211,6 +211,7 @@ bool dissipative(const PlantConfig& pc) { return keys_of(pc).viscous; }
 bool coulomb(const PlantConfig& pc) { return keys_of(pc).levels; }
 bool banded(const PlantConfig& pc) { return keys_of(pc).zero_speed; }
 bool smooth(const PlantConfig& pc) { return keys_of(pc).speed_scale; }
+bool sigmoid(const PlantConfig& pc) { return keys_of(pc).sigmoid; }
 
 // The law's default band, before zero_speed is read (when it is).
 void default_band(StrictTable&, PlantConfig& pc) {
@@ -228,26 +229,111 @@ const std::string& friction_model_names() {
   return names;
 }
 
+// The robot file's joint friction (a URDF's <dynamics damping friction>) on
+// the simulated joints: is there any, and is there a Coulomb level.
+bool robot_damping(const PlantConfig& pc) {
+  for (int j = 0; j < pc.n; ++j) {
+    if (pc.robot.joints[static_cast<std::size_t>(j)].damping > 0) return true;
+  }
+  return false;
+}
+bool robot_coulomb(const PlantConfig& pc) {
+  for (int j = 0; j < pc.n; ++j) {
+    if (pc.robot.joints[static_cast<std::size_t>(j)].coulomb > 0) return true;
+  }
+  return false;
+}
+
+// static_torque and kinetic_torque are required by the Coulomb laws unless
+// the robot file gives the level they default to.
+void need_level(StrictTable& t, const PlantConfig& pc, const char* key) {
+  if (t.has(key) || robot_coulomb(pc)) return;
+  throw ConfigError(t.where() + "missing required key '" + key +
+                    "' (the robot file gives no Coulomb friction, <dynamics friction>, to take it from)");
+}
+void need_static(StrictTable& t, PlantConfig& pc) { need_level(t, pc, "static_torque"); }
+void need_kinetic(StrictTable& t, PlantConfig& pc) { need_level(t, pc, "kinetic_torque"); }
+
 // Keys that mean nothing for the model are unknown keys.
 const std::vector<Entry<PlantConfig>> kFrictionEntries = {
     {"model", scene_io::shared_choice(friction_model_choices(), PUMASIM_AT(s.friction[j].model)),
      friction_model_names(), Need::kRequired, {}, default_band},
     {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
-     "B [N m s/rad] (every model but none)", Need::kOptional, {dissipative, "model"}},
+     "B [N m s/rad] (every model but none; default: the robot file's damping / Z^2, else 0)", Need::kOptional,
+     {dissipative, "model"}},
     {"static_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
-     "Fs [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, {coulomb, "model"}},
+     "Fs [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|)", Need::kOptional,
+     {coulomb, "model"}, need_static},
     {"kinetic_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh)", Need::kRequired, {coulomb, "model"}},
+     "Fk [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|)", Need::kOptional,
+     {coulomb, "model"}, need_kinetic},
     {"zero_speed", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].zero_speed)),
      "[rad/s] \"zero\" speed (paper), band (karnopp)", Need::kOptional, {banded, "model"}},
     {"speed_scale", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
      "[rad/s] tanh(w / speed_scale) (tanh)", Need::kOptional, {smooth, "model"}},
+    {"sigmoid_level", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
+     "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)", Need::kRequired, {sigmoid, "model"}},
+    {"sigmoid_slope", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_slope)),
+     "phi2 [s/rad] (sigmoid: the slope, motor side)", Need::kRequired, {sigmoid, "model"}},
+    {"sigmoid_offset", scene_io::per_joint(kAny, PUMASIM_AT(s.friction[j].sigmoid_offset)),
+     "phi3 [rad/s] (sigmoid: the speed offset, motor side)", Need::kRequired, {sigmoid, "model"}},
 };
 
-// Without [friction]: the model "none" on every joint.
-void read_friction(StrictTable& root, PlantConfig& pc) {
+// The robot file's joint friction as the motor-side defaults of [friction]
+// (the laws act on the motor shaft, drive.hpp: a joint torque Z tau_f at
+// motor speed Z qd): B = damping / Z^2, Fs = Fk = friction / |Z| (URDF's
+// friction is one Coulomb level, so static and kinetic are equal).
+void robot_friction_defaults(PlantConfig& pc) {
+  for (int j = 0; j < pc.n; ++j) {
+    const JointParams& J = pc.robot.joints[static_cast<std::size_t>(j)];
+    FrictionParams& f = pc.friction[static_cast<std::size_t>(j)];
+    f.viscous = J.damping / (J.gear_ratio * J.gear_ratio);
+    f.static_torque = f.kinetic_torque = J.coulomb / std::abs(J.gear_ratio);
+  }
+}
+
+// Where each friction value came from, for `pumasim check` (Scene::sources).
+void friction_sources(StrictTable& t, const PlantConfig& pc, std::vector<std::string>& out) {
+  const bool damping = robot_damping(pc), level = robot_coulomb(pc);
+  if (!damping && !level) return;
+  const auto line = [&](const char* key, bool applies, bool robot, const char* what) {
+    if (!applies) {
+      if (robot) {
+        out.push_back(std::string("friction.") + key + ": not used by friction.model = \"" + to_string(pc.friction[0].model) +
+                      "\" (the robot file's joint " + what + " is left out)");
+      }
+      return;
+    }
+    out.push_back(std::string("friction.") + key + ": " +
+                  (t.has(key) ? "the scene file (it wins over the robot file's joint " + std::string(what) + ")"
+                   : robot    ? "the robot file's joint " + std::string(what) +
+                                 (std::string(key) == "viscous" ? " / Z^2 (motor side)" : " / |Z| (motor side)")
+                              : std::string("the default, 0")));
+  };
+  line("viscous", dissipative(pc), damping, "damping (<dynamics damping>)");
+  line("static_torque", coulomb(pc), level, "friction (<dynamics friction>)");
+  line("kinetic_torque", coulomb(pc), level, "friction (<dynamics friction>)");
+}
+
+// Without [friction]: the model "none" on every joint, unless the robot file
+// gives joint friction: a law must then be chosen (or "none" said).
+void read_friction(StrictTable& root, Scene& sc) {
+  PlantConfig& pc = sc.plant;
   pc.friction.assign(pc.n, FrictionParams{});
-  if (auto t = root.optional_table("friction")) read_entries(*t, kFrictionEntries, pc, pc.n);
+  auto t = root.optional_table("friction");
+  if (!t) {
+    if (robot_damping(pc) || robot_coulomb(pc)) {
+      root.fail("friction",
+                "a [friction] section saying which law uses the robot file's joint friction (<dynamics damping "
+                "friction>): model = \"viscous\" (damping only), \"hybrid\", \"karnopp\", \"tanh\" or \"paper\" "
+                "(damping and friction), or \"none\" to leave it out",
+                "none");
+    }
+    return;
+  }
+  robot_friction_defaults(pc);
+  read_entries(*t, kFrictionEntries, pc, pc.n);
+  friction_sources(*t, pc, sc.sources);
 }
 toml::table write_friction(const PlantConfig& pc) { return write_entries(kFrictionEntries, pc, pc.n); }
 
@@ -865,7 +951,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   read_scene(root, sc);
   read_integrator(root, sc.integrator);
   read_drive(root, pc);
-  read_friction(root, pc);
+  read_friction(root, sc);
   read_controller(root, pc);
   read_reference(root, sc);
   if (!pc.reference) read_initial(root, pc);

@@ -93,6 +93,9 @@ struct Scene {
   // file, every CSV), by content: read through read_input_file, so a reader
   // of a new kind of file is here with no other edit.
   std::vector<InputFile> inputs;
+  // Where values the scene file does not give came from (the robot file's
+  // joint friction as [friction]'s defaults), one line each, for `pumasim check`.
+  std::vector<std::string> sources;
 };
 
 // What reference.timing = "time-optimal" plans with: the path's reference at

@@ -12,6 +12,7 @@ struct FrictionKeys {
   bool zero_speed = false;   // zero_speed: the "zero" speed or band [rad/s]
   bool speed_scale = false;  // speed_scale: tanh(w / speed_scale) [rad/s]
   double default_zero_speed = 1e-6;  // [rad/s], when zero_speed is read
+  bool sigmoid = false;      // sigmoid_level, sigmoid_slope, sigmoid_offset [N m, s/rad, rad/s] (sigmoid.hpp)
 };
 
 }  // namespace pumasim

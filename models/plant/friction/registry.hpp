@@ -22,6 +22,7 @@
 
 #include "models/plant/friction/hybrid.hpp"
 #include "models/plant/friction/none.hpp"
+#include "models/plant/friction/sigmoid.hpp"
 #include "models/plant/friction/stick_band.hpp"
 #include "models/plant/friction/tanh.hpp"
 #include "models/plant/friction/viscous.hpp"
@@ -56,7 +57,8 @@ struct FrictionLawList {
 };
 
 using FrictionLaws =
-    FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction, TanhFriction>;
+    FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction, TanhFriction,
+                     SigmoidFriction>;
 
 template <class Law>
 constexpr FrictionModel friction_model() {
