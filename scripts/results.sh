@@ -40,7 +40,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
-all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper bench report)
+all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper panda bench report)
 named_only=(fuzz)
 stages=()
 while [ $# -gt 0 ]; do
@@ -106,6 +106,7 @@ stage_buildspread() {
   /usr/bin/python3 experiments/build_spread.py --native "$PUMASIM_BIN/pumasim-native" --portable "$PUMASIM"
 }
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
+stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --out results/panda/authors_code_difference.md; }
 stage_bench() { scripts/bench_dynamics.sh --out results; }
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
