@@ -8,33 +8,67 @@
 // every call as in an integration; its counter ratio_to_fd is its time over
 // fd/<scene>'s, which runs first. rhs-exact-reference/<scene>: the same
 // with the inverse kinematics at every call (PlantConfig::tabulate_reference
-// off), as before the reference was tabulated.
+// off), as before the reference was tabulated. The scenes: the PUMA's two
+// headline scenes (6 and 3 joints), the Panda tracking a Cartesian path (7
+// joints, redundant: the reference's inverse kinematics follows the
+// redundancy rule), and random12, a random 12-joint chain
+// (random_chain(12, 12)) as planar2_passive's passive arm with viscous
+// friction (no reference: no rhs-exact-reference row).
 //
 //   bench_plant --benchmark_out=results/bench/plant.json --benchmark_out_format=json
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "models/plant/plant.hpp"
+#include "models/robot/random_chain.hpp"
+#include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time
 
 namespace {
 
-const char* const kScenes[] = {"paper_slow_6dof_hybrid", "paper_slow"};
+struct BenchScene {
+  const char* name;
+  bool reference;  // a reference to evaluate (the rhs-exact-reference row)
+};
+const BenchScene kScenes[] = {
+    {"paper_slow_6dof_hybrid", true}, {"paper_slow", true}, {"panda_tracking", true}, {"random12", false}};
+constexpr int kSceneCount = sizeof kScenes / sizeof kScenes[0];
 
 std::string scene_file(const std::string& name) { return std::string(PUMASIM_SCENES_DIR) + "/" + name + ".toml"; }
 
-double fd_ns[2] = {0, 0};  // per scene, from the fd benchmark
+// random12: its robot file written once under /tmp, removed at exit.
+struct RandomRobotFile {
+  std::string path = "/tmp/pumasim_bench_random12_" + std::to_string(::getpid()) + ".toml";
+  RandomRobotFile() {
+    std::ofstream(path) << pumasim::robot_file_text(pumasim::random_chain(12, 12), "bench_plant: random_chain(12, 12)");
+  }
+  ~RandomRobotFile() { std::remove(path.c_str()); }
+};
+
+pumasim::Scene load(int k) {
+  if (std::string(kScenes[k].name) != "random12") return pumasim::load_scene(scene_file(kScenes[k].name));
+  static const RandomRobotFile robot;
+  return pumasim::load_scene(scene_file("planar2_passive"),
+                             {"scene.name=\"random12\"", "scene.robot=\"" + robot.path + "\"", "scene.joints=12",
+                              "friction.viscous=0.01", "initial.q=[0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3]"});
+}
+
+double fd_ns[kSceneCount] = {};  // per scene, from the fd benchmark
 
 double per_call_ns(benchmark::State& state, std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double, std::nano>(d).count() / static_cast<double>(state.iterations());
 }
 
 void fd(benchmark::State& state, int k) {
-  const pumasim::Scene sc = pumasim::load_scene(scene_file(kScenes[k]));
+  const pumasim::Scene sc = load(k);
   pumasim::Plant plant(sc.plant);
   std::vector<double> x(plant.size());
   plant.initial_state(x.data());
@@ -54,7 +88,7 @@ void fd(benchmark::State& state, int k) {
 }
 
 void rhs(benchmark::State& state, int k, bool table) {
-  pumasim::Scene sc = pumasim::load_scene(scene_file(kScenes[k]));
+  pumasim::Scene sc = load(k);
   sc.plant.tabulate_reference = table;
   pumasim::Plant plant(sc.plant);
   std::vector<double> x(plant.size()), f(plant.size());
@@ -75,12 +109,14 @@ void rhs(benchmark::State& state, int k, bool table) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int k = 0; k < 2; ++k) {
-    benchmark::RegisterBenchmark((std::string("fd/") + kScenes[k]).c_str(), fd, k)->Unit(benchmark::kNanosecond);
-    benchmark::RegisterBenchmark((std::string("rhs/") + kScenes[k]).c_str(), rhs, k, true)
-        ->Unit(benchmark::kNanosecond);
-    benchmark::RegisterBenchmark((std::string("rhs-exact-reference/") + kScenes[k]).c_str(), rhs, k, false)
-        ->Unit(benchmark::kNanosecond);
+  for (int k = 0; k < kSceneCount; ++k) {
+    const std::string name = kScenes[k].name;
+    benchmark::RegisterBenchmark(("fd/" + name).c_str(), fd, k)->Unit(benchmark::kNanosecond);
+    benchmark::RegisterBenchmark(("rhs/" + name).c_str(), rhs, k, true)->Unit(benchmark::kNanosecond);
+    if (kScenes[k].reference) {
+      benchmark::RegisterBenchmark(("rhs-exact-reference/" + name).c_str(), rhs, k, false)
+          ->Unit(benchmark::kNanosecond);
+    }
   }
   benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);
   benchmark::AddCustomContext("pumasim_flags", pumasim::build_info::kFlags);

@@ -789,8 +789,8 @@ Cluster gather(const urdf::ModelInterface& m, const urdf::Link& first, const Cha
       if (c.next) {
         t.fail("joint", j->name,
                "a serial chain: one moving joint leaving each rigid body; for a tree, the chain's tip in the side "
-               "file " + urdf_side_file(t.path()) + ": [robot] tip = \"<link>\", one of its leaves " +
-                   listed(leaf_links(m)) + " (the links off the chain are then merged as fixed masses)",
+               "file " + urdf_side_file(t.path()) + ": [robot] tip = \"<link>\", the chain's last link (the URDF's leaves: " +
+                   listed(leaf_links(m)) + "; the links off the chain are then merged as fixed masses)",
                "joints '" + c.next->name + "' (from link '" + c.next_from + "') and '" + j->name + "' (from link '" +
                    link->name + "') both leaving the body of link '" + first.name + "' (a tree)");
       }
