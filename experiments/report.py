@@ -545,7 +545,7 @@ def main():
     summaries = []
     for path in sorted(glob.glob(os.path.join(res, "*", "*_summary.json"))):
         summaries.append((pumasim_io.read_json(path), os.path.dirname(path)))
-    groups = [("Work-precision: the paper's scenes and the Stanford arm", True),
+    groups = [("Work-precision: the paper's scenes, the Stanford arm and the Panda", True),
               ("Stiff and extreme scenes: stiffness, events, sampling, saturation, long-time energy", False)]
     for title, paper in groups:
         chosen = [(s, d) for s, d in summaries if (os.path.basename(d) == "work_precision") == paper]
