@@ -7,9 +7,10 @@ repository, commit, files and how they were computed).
 
     /usr/bin/python3 experiments/panda_vs_authors.py [PUMASIM] [--out results/panda/authors_code_difference.md]
 
-Prints, per configuration, the largest |difference| in H(q), g(q), C(q, qd) qd
-and the friction torque, and the largest |value| for scale, from `pumasim
-dynamics --robot panda --backend crba`.
+Prints, per configuration, the largest |difference| in H(q), g(q) and
+C(q, qd) qd, and the largest |value| for scale, from `pumasim dynamics --robot
+panda --backend crba`. (The friction law is the same set in both:
+tests/test_reference_values.cpp checks it against the authors' code to 1e-15.)
 """
 import argparse
 import json

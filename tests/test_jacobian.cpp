@@ -257,6 +257,7 @@ TEST(PlantJacobian, MultiTangentEqualsPerColumnInEveryKindOfScene) {
       {"energy_long_time", {}},                                        // the ledger (more than 24 states)
       {"stanford_tracking", {}},                                       // a prismatic joint
       {"paper_slow_reduced", {}},                                      // no current states
+      {"panda_tracking", {}},  // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.scene);

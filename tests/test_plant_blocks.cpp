@@ -39,7 +39,8 @@ TEST(FrictionRegistry, EveryLawHasAUniqueNameThatReadsBack) {
 // Every law but none opposes the motion (torque has the sign of the speed)
 // away from "zero" speed, and none gives 0.
 TEST(FrictionRegistry, EveryLawOpposesTheMotion) {
-  const FrictionParams base{friction_model<NoFriction>(), 0.01, 0.146, 0.124, 1e-6, 1e-2};
+  FrictionParams base{friction_model<NoFriction>(), 0.01, 0.146, 0.124, 1e-6, 1e-2};
+  base.sigmoid_level = 0.6, base.sigmoid_slope = 10.0, base.sigmoid_offset = -0.046;  // a negative phi3, as joint 3's
   FrictionLaws::for_each([&](auto law) {
     using L = decltype(law);
     FrictionParams f = base;

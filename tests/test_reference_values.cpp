@@ -5,6 +5,7 @@
 
 #include "models/dynamics/backend.hpp"
 #include "models/plant/friction/registry.hpp"
+#include "models/scene/scene.hpp"
 #include "models/robot/robot_file.hpp"
 #include "tests/helpers.hpp"
 
@@ -189,10 +190,11 @@ TEST(PublishedValues, PandaGroupedParametersAreTheSupplementsTableIII) {
 //   get_GravityVector.m, commit 24d85ce4) with its 12 coefficients taken
 //   from pi(p^), formed from Tables VIII/IX by get_Panda_coefficients_expanded.m
 //   (as shipped, the expression holds the least-squares set pi^_R-E instead);
-// - H and C qd: a Newton-Euler code written from [SUPP] Tables VIII/IX, whose
-//   g equals the expression above to 5e-14 at 1,000 random q, whose H passes
-//   the kinetic-energy identity to 5e-15 and whose C qd is the Christoffel
-//   form of its H to 2e-9.
+// - H and C qd: tests/reference/panda_ne/, a Newton-Euler code written from
+//   [SUPP] Tables VIII/IX apart from pumasim (its print_reference.cpp prints
+//   these literals), whose g equals the expression above to 5e-14 at 1,000
+//   random q, whose H passes the kinetic-energy identity to 5e-15 and whose
+//   C qd is the Christoffel form of its H to 2e-9.
 // tau = H qdd + C qd + g (+ friction), g the torque that holds the arm,
 // gravity 9.80665 m/s^2 along -z. Rounding: a few hundred operations on O(1)
 // to O(30) numbers.
@@ -264,6 +266,19 @@ TEST(PublishedValues, PandaFrictionIsTheAuthorsCode) {
       {{0.5, -0.40000000000000002, 0.29999999999999999, 0.59999999999999998, -0.69999999999999996, 0.20000000000000001, -0.90000000000000002}, {0.21307575866028433, -0.45865366487392434, 0.34841702781338241, 0.53970435829186558, -0.46223678116757555, 0.16503548977370563, -0.28757661874827167}},
       {{-0.80000000000000004, 0.29999999999999999, 0.90000000000000002, -0.20000000000000001, 0.40000000000000002, -0.59999999999999998, 1.1000000000000001}, {-0.28968778060101957, 0.34198493487610598, 0.39369218183943305, -0.33850638939937638, 0.35053060284405574, -0.12447372789171411, 0.27725365417512532}},
   };
+  // The shipped Panda scenes carry the same numbers.
+  for (const char* scene : {"panda_passive", "panda_tracking", "panda_piv"}) {
+    const Scene sc = load_scene(std::string(PUMASIM_SCENES_DIR) + "/" + scene + ".toml");
+    ASSERT_EQ(sc.plant.friction.size(), 7u) << scene;
+    for (int j = 0; j < 7; ++j) {
+      const FrictionParams& f = sc.plant.friction[static_cast<std::size_t>(j)];
+      EXPECT_EQ(f.model, friction_model<SigmoidFriction>()) << scene;
+      EXPECT_EQ(f.sigmoid_level, phi1[j]) << scene << " joint " << j + 1;
+      EXPECT_EQ(f.sigmoid_slope, phi2[j]) << scene << " joint " << j + 1;
+      EXPECT_EQ(f.sigmoid_offset, phi3[j]) << scene << " joint " << j + 1;
+      EXPECT_EQ(f.viscous, 0.0) << scene;
+    }
+  }
   for (const Case& c : cases) {
     for (int j = 0; j < 7; ++j) {
       FrictionParams f;

@@ -1138,6 +1138,16 @@ TEST(UrdfPublished, JointFrictionIsTheScenesDefaultOnTheMotorSide) {
   const Eigen::Vector2d dqdd(f_on[2] - f_off[2], f_on[3] - f_off[3]);
   const Eigen::Vector2d want = H.ldlt().solve(Eigen::Vector2d(-0.8 * 1.0, -0.3 * -0.7));
   EXPECT_LT((dqdd - want).norm(), 1e-12 * want.norm()) << dqdd.transpose() << " vs " << want.transpose();
+  // The Coulomb level too: tanh at a tiny speed scale is Fk sign(w_m) at these speeds, so the
+  // joint torque is -D qd - F sign(qd), F the URDF's friction.
+  const Scene coulomb = load_scene(scene, {robot_key, "scene.rotor_inertia=false", "friction.model=\"tanh\"",
+                                           "friction.speed_scale=1e-9"}, {"friction.viscous"});
+  Plant p_c(coulomb.plant);
+  std::vector<double> f_c(x.size());
+  p_c.rhs(0.0, x.data(), f_c.data());
+  const Eigen::Vector2d dc(f_c[2] - f_off[2], f_c[3] - f_off[3]);
+  const Eigen::Vector2d want_c = H.ldlt().solve(Eigen::Vector2d(-0.8 * 1.0 - 1.5, -0.3 * -0.7 + 0.4));
+  EXPECT_LT((dc - want_c).norm(), 1e-12 * want_c.norm()) << dc.transpose() << " vs " << want_c.transpose();
 }
 
 // A hand with a mimic gripper and two flange candidates (tcp, camera) on a
@@ -1215,6 +1225,43 @@ TEST(UrdfPublished, TipAndHeldRefusals) {
   std::string follower = gripper();
   follower.replace(follower.find("<mimic joint=\"finger_joint1\""), 28, "<mimic joint=\"j1\"");
   refused("mimic_of_chain", follower, "[robot]\ntip = \"hand\"\n", {"joint 'finger_joint2'", "[held]", "mimics joint 'j1' of the chain"});
+  // A mimic joint's value must be within its own limits: 2 x 0.03 m is past 0.04 m.
+  std::string doubled = gripper();
+  doubled.replace(doubled.find("multiplier=\"1\""), 14, "multiplier=\"2\"");
+  refused("mimic_out_of_range", doubled, "[robot]\ntip = \"hand\"\n[held]\nfinger_joint1 = 0.03\n",
+          {"joint 'finger_joint2'", "within its limits [0, 0.04]", "2 x 0.03 + 0 = 0.06"});
+  // A misspelt key is named before the walk, not reported as a tree.
+  refused("tip_misspelt", gripper(), "[robot]\ntipp = \"hand\"\n", {"tipp"});
+  std::string nosuch = gripper();
+  nosuch.replace(nosuch.find("</robot>"), 8,
+                 "<transmission name=\"tx\"><joint name=\"nosuch\"/><actuator name=\"a\"><mechanicalReduction>5"
+                 "</mechanicalReduction></actuator></transmission>\n</robot>");
+  refused("transmission_nosuch", nosuch, "[robot]\ntip = \"hand\"\n", {"transmission 'tx'", "'nosuch'"});
+  std::string finger = gripper();
+  finger.replace(finger.find("</robot>"), 8,
+                 "<transmission name=\"tf\"><joint name=\"finger_joint1\"/><actuator name=\"a\"><mechanicalReduction>5"
+                 "</mechanicalReduction></actuator></transmission>\n</robot>");
+  const RobotModel m = load_robot(write_urdf("transmission_off_chain", finger, "[robot]\ntip = \"hand\"\n"));
+  EXPECT_TRUE(has_line(m.provenance, {"transmission 'tf' not read", "'finger_joint1' is off the chain"}));
+}
+
+// A revolute joint off the chain, under an origin with a roll of pi/2, held
+// at 0.5 rad: its link's centre of mass is origin * Rz(0.5) (the joint turns
+// in its own frame, after the origin), at (0.5, 0, 0) + Rx(pi/2) Rz(0.5)
+// (0.1, 0, 0) = (0.5 + 0.1 cos 0.5, 0, 0.1 sin 0.5) in link l1's frame.
+TEST(UrdfPublished, AHeldRevoluteBranchTurnsInItsOwnFrame) {
+  const std::string xml =
+      robot(link("base") + joint("j1", "revolute", "base", "l1") +
+            link("l1", inertial(2.0, "0.3 0 0", "0 0 0", "0.01 0.01 0.01")) +
+            joint("tilt", "revolute", "l1", "sensor", "0.5 0 0", "1.5707963267948966 0 0") +
+            link("sensor", inertial(0.5, "0.1 0 0", "0 0 0", "0.001 0.001 0.001")));
+  const RobotModel m = load_robot(write_urdf("held_revolute", xml, "[robot]\ntip = \"l1\"\n[held]\ntilt = 0.5\n"));
+  ASSERT_EQ(m.dof(), 1);
+  const Eigen::Vector3d sensor(0.5 + 0.1 * std::cos(0.5), 0.0, 0.1 * std::sin(0.5));
+  const Eigen::Vector3d com = (2.0 * Eigen::Vector3d(0.3, 0, 0) + 0.5 * sensor) / 2.5;
+  EXPECT_NEAR(m.joints[0].mass, 2.5, kClosedForm);
+  EXPECT_LT((m.joints[0].com - com).norm(), kClosedForm) << m.joints[0].com.transpose();
+  EXPECT_TRUE(has_line(m.provenance, {"'tilt'", "held at 0.5 rad", "[held]"}));
 }
 
 }  // namespace

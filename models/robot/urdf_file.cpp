@@ -641,7 +641,10 @@ SideFile peek_side_file(const std::string& urdf_path) {
   s.path = urdf_side_file(urdf_path);
   s.doc = parse_toml_file(s.path);
   StrictTable root(s.doc, s.path, "");
+  // An unknown key before the walk: a misspelt tip is named as such, not as a tree.
+  root.expect_only({"robot", "joint", "held", "poses"});
   if (auto robot = root.optional_table("robot")) {
+    robot->expect_only({"gravity", "flange", "tip", "refuse_dynamics"});
     s.tip = robot->string_or("tip", "");
     s.refuse_dynamics = robot->boolean_or("refuse_dynamics", false);
   }
@@ -745,6 +748,12 @@ Held held_value(const urdf::ModelInterface& m, const urdf::Joint& j, const SideF
     const Held h = held_value(m, L, s, p, t, depth + 1);
     const double q = j.mimic->multiplier * h.q + j.mimic->offset;
     if (!std::isfinite(q)) t.fail("joint", j.name, "a finite <mimic multiplier offset>", "a non-finite value");
+    if (!(q >= lo && q <= hi)) {
+      t.fail("joint", j.name,
+             "a mimic value within its limits [" + num(lo) + ", " + num(hi) + "], or a value for it in [held] of " + side,
+             num(j.mimic->multiplier) + " x " + num(h.q) + " + " + num(j.mimic->offset) + " = " + num(q) +
+                 " (it mimics '" + L.name + "')");
+    }
     return {q, "mimics '" + L.name + "' (" + h.why + "): " + num(j.mimic->multiplier) + " x " + num(h.q) + " + " +
                    num(j.mimic->offset)};
   }
@@ -1218,6 +1227,16 @@ RobotModel build_model(const urdf::ModelInterface& m, const UrdfChain& c, const 
     model.provenance.push_back(drive_values(*c.joints[k], static_cast<int>(k), s, tr, model.joints[k]));
   }
   for (const std::string& line : c.merged) model.provenance.push_back(line);
+  for (const auto& [joint, one] : tr.by_joint) {
+    const auto it = m.joints_.find(joint);
+    if (it == m.joints_.end()) {
+      throw ConfigError(t.path() + ":" + std::to_string(one.line) + ": transmission '" + one.name +
+                        "': expected a <joint name> of the URDF, got '" + joint + "'");
+    }
+    if (std::find(c.joints.begin(), c.joints.end(), it->second.get()) == c.joints.end()) {
+      model.provenance.push_back("transmission '" + one.name + "' not read: its joint '" + joint + "' is off the chain");
+    }
+  }
   for (const std::string& coupled : tr.coupled) {
     model.provenance.push_back("transmission " + coupled + " not read: it couples joints or actuators, and pumasim "
                                "drives each joint by its own motor (a gear ratio per joint)");

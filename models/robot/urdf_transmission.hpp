@@ -21,7 +21,11 @@
 // <mechanicalReduction> may also stand directly in <transmission> (the older
 // form). A transmission with one joint and one actuator is a simple
 // reduction; one that couples several joints or actuators (a differential
-// wrist) has no gear ratio per joint, and is listed as not read.
+// wrist) has no gear ratio per joint, and is listed as not read, as is one on
+// a joint off the chain (urdf_file.cpp); one naming no joint of the URDF is
+// refused. Only <transmission> elements directly inside <robot> are read:
+// ROS 2's <ros2_control> blocks (their <transmission> with
+// <mechanical_reduction>) are not, and give no gear ratio.
 #pragma once
 
 #include <map>

@@ -10,6 +10,7 @@
 #include "core/invariant.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
+#include "models/robot/urdf_file.hpp"
 #include "models/reference/time_optimal.hpp"
 #include "models/robot/toml_writer.hpp"
 #include "models/scene/entries.hpp"
@@ -248,8 +249,8 @@ bool robot_coulomb(const PlantConfig& pc) {
 // the robot file gives the level they default to.
 void need_level(StrictTable& t, const PlantConfig& pc, const char* key) {
   if (t.has(key) || robot_coulomb(pc)) return;
-  throw ConfigError(t.where() + "missing required key '" + key +
-                    "' (the robot file gives no Coulomb friction, <dynamics friction>, to take it from)");
+  throw ConfigError(t.where() + "missing required key '" + key + "'" +
+                    (is_urdf_path(pc.robot.source) ? " (the URDF gives no <dynamics friction> to take it from)" : ""));
 }
 void need_static(StrictTable& t, PlantConfig& pc) { need_level(t, pc, "static_torque"); }
 void need_kinetic(StrictTable& t, PlantConfig& pc) { need_level(t, pc, "kinetic_torque"); }
@@ -862,6 +863,11 @@ void read_reference(StrictTable& root, Scene& sc) {
   if (r.timing == "time-optimal") {
     if (!sc.plant.drive) {
       rt->fail("timing", "a drive ([amplifier], [motor]) whose limits the time-optimal timing uses", "no drive");
+    }
+    if (sc.plant.friction[0].model == friction_model<SigmoidFriction>()) {
+      // The planner (models/reference/time_optimal.cpp) takes friction as Fk sign(w) + B w.
+      rt->fail("timing", "a friction law the time-optimal planner models, Fk sign(w_m) + B w_m (not \"sigmoid\": "
+               "its level differs with the direction; use another timing)", "friction.model = \"sigmoid\"");
     }
     read_planning(plan, sc.file, r, sc.plant.n);
   }
