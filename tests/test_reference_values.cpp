@@ -145,9 +145,13 @@ TEST(ClosedForm, PlanarTwoLinkArm) {
 // file by the grouping of the authors' get_Panda_coefficients_expanded.m
 // ([REPO] matlab/parameters_retrieval/, commit 24d85ce4; Khalil and Dombre's
 // rules for a fixed base), are [SUPP] Table III's column pi(p^), printed
-// with 4 decimals: within half a unit of the last one. Row 39 is one of the
-// four where [SUPP] disagrees with itself: Tables VIII/IX give 0.0679, the
-// table prints 0.0824 (the file ships Tables VIII/IX as printed).
+// with 4 decimals: within half a unit of the last one. The constants are the
+// DH lengths' products (0.10666225 = 0.316^2 + 0.0825^2, 0.632 = 2 x 0.316,
+// 0.768 = 2 x 0.384, 0.03168 = 0.384 x 0.0825, 0.007744 = 0.088^2, ...).
+// Rows 8 and 24 are not printed; rows 17, 21, 25 and 39 are the four where
+// [SUPP] disagrees with itself (links 5 and 6): for row 39, c5y m5 - c6z m6,
+// Tables VIII/IX give 0.0679 and the table prints 0.0824 (the file ships
+// Tables VIII/IX as printed).
 TEST(PublishedValues, PandaGroupedParametersAreTheSupplementsTableIII) {
   const RobotModel panda = load_robot("panda");
   ASSERT_EQ(panda.dof(), 7);
@@ -155,10 +159,38 @@ TEST(PublishedValues, PandaGroupedParametersAreTheSupplementsTableIII) {
   const auto c = [&](int i, int k) { return panda.joints[static_cast<std::size_t>(i - 1)].com[k]; };
   const auto I = [&](int i, int r, int k) { return panda.joints[static_cast<std::size_t>(i - 1)].inertia(r, k); };
   const double m5_7 = m(5) + m(6) + m(7), m4_7 = m(4) + m5_7, m3_7 = m(3) + m4_7;
-  const double x = 0, y = 1, z = 2;
+  const int x = 0, y = 1, z = 2;
+  const auto mc2 = [&](int i, int k) { return m(i) * c(i, k) * c(i, k); };  // m_i c_ik^2
   struct Row { int row; double value, printed; };
   const Row rows[] = {
       {1, I(2, y, y) + m(2) * (c(2, x) * c(2, x) + c(2, z) * c(2, z)) + I(1, z, z) + m(1) * (c(1, x) * c(1, x) + c(1, y) * c(1, y)), 0.0373},
+      {2, I(2, x, x) - I(2, y, y) + I(3, y, y) + 0.10666225 * m4_7 - mc2(2, x) + 0.099856 * m(3) +
+              0.632 * c(3, z) * m(3) + mc2(3, x) + mc2(2, y) + mc2(3, z), 0.9896},
+      {3, I(2, x, y) - c(2, x) * c(2, y) * m(2), -0.0040},
+      {4, I(2, x, z) - c(2, x) * c(2, z) * m(2), 0.0103},
+      {5, I(2, y, z) - c(2, y) * c(2, z) * m(2), 0.0008},
+      {6, I(3, y, y) + I(2, z, z) + 0.10666225 * m4_7 + mc2(2, x) + 0.099856 * m(3) + 0.632 * c(3, z) * m(3) +
+              mc2(3, x) + mc2(2, y) + mc2(3, z), 1.0358},
+      {7, I(3, x, x) - I(3, y, y) + I(4, y, y) - 0.00680625 * m(4) - mc2(3, x) + mc2(4, x) + mc2(3, y) + mc2(4, z),
+       0.0116},
+      {9, I(3, x, z) - c(3, x) * c(3, z) * m(3), -0.0055},
+      {10, I(3, y, z) - c(3, y) * c(3, z) * m(3), -0.0044},
+      {11, I(4, y, y) + I(3, z, z) + 0.00680625 * m(4) + 0.0136125 * m5_7 + mc2(3, x) + mc2(4, x) + mc2(3, y) +
+               mc2(4, z), 0.1245},
+      {12, I(4, x, x) - I(4, y, y) + I(5, y, y) + 0.14064975 * m5_7 - mc2(4, x) + 0.768 * c(5, z) * m(5) +
+               mc2(5, x) + mc2(4, y) + mc2(5, z), 0.5408},
+      {13, I(4, x, y) + 0.03168 * m5_7 + 0.0825 * c(5, z) * m(5) - c(4, x) * c(4, y) * m(4), 0.1388},
+      {14, I(4, x, z) - c(4, x) * c(4, z) * m(4), 0.0039},
+      {15, I(4, y, z) - c(4, y) * c(4, z) * m(4), -0.0016},
+      {16, I(5, y, y) + I(4, z, z) + 0.15426225 * m5_7 + mc2(4, x) + 0.768 * c(5, z) * m(5) + mc2(5, x) +
+               mc2(4, y) + mc2(5, z), 0.6325},
+      {18, I(5, x, y) - c(5, x) * c(5, y) * m(5), -0.0015},
+      {19, I(5, x, z) - c(5, x) * c(5, z) * m(5), -0.0046},
+      {20, I(5, y, z) - c(5, y) * c(5, z) * m(5), 0.0022},
+      {22, I(6, x, x) - I(6, y, y) + I(7, y, y) - 0.007744 * m(7) - mc2(6, x) + mc2(7, x) + mc2(6, y) + mc2(7, z),
+       -0.0009},
+      {23, I(6, x, y) + 0.088 * c(7, z) * m(7) - c(6, x) * c(6, y) * m(6), 0.0055},
+      {26, I(7, y, y) + I(6, z, z) + 0.007744 * m(7) + mc2(6, x) + mc2(7, x) + mc2(6, y) + mc2(7, z), 0.0304},
       {27, I(7, x, x) - I(7, y, y) + m(7) * (c(7, y) * c(7, y) - c(7, x) * c(7, x)), 0.0024},
       {28, I(7, x, y) - m(7) * c(7, x) * c(7, y), -0.0004},
       {29, I(7, x, z) - m(7) * c(7, x) * c(7, z), -0.0017},
