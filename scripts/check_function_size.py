@@ -1,27 +1,34 @@
 #!/usr/bin/python3
-"""Fails (exit 1) when a Python function is longer than a limit (issue 14).
+"""Fails (exit 1) when a Python or C++ function is longer than a limit (issues 14, 33).
 
-Every def (functions, methods, nested functions; async too) in the repository's
-*.py files counts, from its first line (decorators included) to its last; files
-under build/ (and build-*/), .git/, __pycache__/ and any folder named
-generated/ are skipped. Prints each function over the limit as
-path:line name (lines), longest first.
+Python: every def (functions, methods, nested functions; async too) in the
+repository's *.py files counts, from its first line (decorators included) to
+its last. C++ (--language cpp): every function body at namespace or class
+scope in *.cpp, *.hpp and *.h files, from the first line of its head to its
+closing brace, found lexically (scripts/cpp_functions.py: lambdas inside a
+body are part of it). Files under build/ (and build-*/), .git/, __pycache__/
+and any folder named generated/ (the SymPy-generated kernels) are skipped.
+Prints each function over the limit as path:line name (lines), longest first.
 
-  /usr/bin/python3 scripts/check_function_size.py [--limit N] [PATH ...]
+  /usr/bin/python3 scripts/check_function_size.py [--language python|cpp] [--limit N] [PATH ...]
 
-The paths (files or folders) default to the repository's root; the limit to 80.
+The paths (files or folders) default to the repository's root; the limit to
+80 lines in either language.
 """
 import argparse
 import ast
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cpp_functions  # noqa: E402
+
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 SKIP_DIRS = {".git", "build", "generated", "__pycache__"}
 
 
-def python_files(paths):
-    """The *.py files under paths (files or folders), sorted, skipping SKIP_DIRS."""
+def source_files(paths, suffixes):
+    """The files with one of `suffixes` under paths (files or folders), sorted, skipping SKIP_DIRS."""
     found = []
     for path in paths:
         if os.path.isfile(path):
@@ -29,8 +36,14 @@ def python_files(paths):
             continue
         for folder, dirs, files in os.walk(path):
             dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build-")]
-            found += [os.path.join(folder, f) for f in files if f.endswith(".py")]
+            found += [os.path.join(folder, f) for f in files if f.endswith(suffixes)]
     return sorted(found)
+
+
+def cpp_function_lengths(path):
+    """(line, name, length in lines) of every C++ function body in the file at path."""
+    with open(path, encoding="utf-8") as f:
+        return cpp_functions.functions(f.read())
 
 
 def function_lengths(path):
@@ -47,13 +60,16 @@ def function_lengths(path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--language", choices=["python", "cpp"], default="python")
     ap.add_argument("--limit", type=int, default=80, help="longest allowed function, in lines")
     ap.add_argument("paths", nargs="*", default=[ROOT], help="files or folders (default: the repository)")
     args = ap.parse_args()
-    files = python_files(args.paths)
+    cpp = args.language == "cpp"
+    files = source_files(args.paths, (".cpp", ".hpp", ".h") if cpp else (".py",))
+    lengths = cpp_function_lengths if cpp else function_lengths
     too_long = []
     for path in files:
-        for line, name, length in function_lengths(path):
+        for line, name, length in lengths(path):
             if length > args.limit:
                 too_long.append((length, os.path.relpath(path, ROOT), line, name))
     for length, path, line, name in sorted(too_long, key=lambda t: (-t[0], t[1], t[2])):
@@ -61,7 +77,7 @@ def main():
     if too_long:
         print(f"check_function_size: {len(too_long)} function(s) over {args.limit} lines", file=sys.stderr)
         return 1
-    print(f"check_function_size: no function over {args.limit} lines in {len(files)} files")
+    print(f"check_function_size: no {args.language} function over {args.limit} lines in {len(files)} files")
     return 0
 
 

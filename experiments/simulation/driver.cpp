@@ -214,18 +214,73 @@ bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool t
   return true;
 }
 
+// The cost breakdown of the run (models/plant/profile.hpp; a build with
+// PUMASIM_PROFILE only): reset at its start, written at its end into the
+// file named by PUMASIM_PROFILE_OUT (scripts/cost_breakdown.py reads it).
+void start_profile() {
 #ifdef PUMASIM_PROFILE
-// The cost breakdown of the run (models/plant/profile.hpp), into the file
-// named by PUMASIM_PROFILE_OUT (scripts/cost_breakdown.py reads it).
+  profile::reset();
+#endif
+}
 void write_profile() {
+#ifdef PUMASIM_PROFILE
   const char* path = std::getenv("PUMASIM_PROFILE_OUT");
   if (!path) return;
   if (std::FILE* f = std::fopen(path, "w")) {
     profile::write(f);
     std::fclose(f);
   }
-}
 #endif
+}
+
+// The outputs inside the step that ended at t, from the method's dense
+// output (k_out: the next output's index, output k at min(k dt_out, t_end));
+// one at the step's end waits until the events there are applied.
+void dense_outputs(Integrator& integrator, const Observer& observe, double t, double t_end, double output_interval,
+                   long& k_out, std::vector<double>& xo) {
+  for (double to = std::min(k_out * output_interval, t_end); before(to, t, t_end);
+       to = std::min(k_out * output_interval, t_end)) {
+    PUMASIM_PROFILE_CONTEXT(kOutput);
+    integrator.dense_state(to, xo.data());
+    if (observe) observe(to, xo.data());
+    ++k_out;
+  }
+}
+
+// The progress hooks at a step where the loop read the clock (wall seconds
+// so far): the report and the poll when due; true when the run is cancelled.
+bool wall_clock_hooks(const ProgressHook& progress, const RunProgress& where, double& next_report,
+                      double& next_poll) {
+  if (progress.report && where.wall >= next_report) {
+    progress.report(where);
+    next_report = where.wall + progress.period;
+  }
+  if (progress.poll && where.wall >= next_poll) {
+    progress.poll();
+    next_poll = where.wall + progress.poll_period;
+  }
+  return progress.cancel && progress.cancel->load(std::memory_order_relaxed);
+}
+
+// A run ended as a reported failure of the kind given (RunResult::failure_kind).
+void fail(RunResult& res, std::string why, const char* kind) {
+  res.ok = false;
+  res.failure = std::move(why);
+  res.failure_kind = kind;
+}
+
+// The integrator's failure message, with the chattering diagnosis when the
+// step collapsed at a friction law's switching surface.
+std::string integrator_failure(const Outcome& o, const ChatterCount& chatter, PlantSystem& sys, Integrator& integrator,
+                               double t, double t_end) {
+  std::string why = o.message;
+  if (const std::string c = chatter.diagnosis(sys, t, integrator.state(), integrator.time() - integrator.step_start(),
+                                              t_end, integrator.stats().rejected_steps);
+      !c.empty()) {
+    why += "; " + c;
+  }
+  return why;
+}
 
 }  // namespace
 
@@ -265,13 +320,10 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
 RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
                     const Observer& observe, long max_steps, Stops stops, double max_wall,
                     const ProgressHook& progress, const Observer& on_step) {
-#ifdef PUMASIM_PROFILE
-  profile::reset();
-#endif
+  start_profile();
   const auto start = Clock::now();
   StepClock clock(start);
-  double next_report = progress.delay;  // [s] of wall-clock time
-  double next_poll = 0;                 // [s] of wall-clock time
+  double next_report = progress.delay, next_poll = 0;  // [s] of wall-clock time: the next report, poll
   PlantSystem sys(plant);
   const std::vector<BoundedComponent> bounded = bounded_components(sys);
   ChatterCount chatter(sys);
@@ -294,59 +346,32 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
     const Outcome o = integrator.step_toward(stop);
     t = integrator.time();
     if (o.status == Outcome::kFailed) {
-      res.ok = false;
-      res.failure = o.message;
-      if (const std::string c = chatter.diagnosis(sys, t, integrator.state(), integrator.time() - integrator.step_start(),
-                                                  t_end, integrator.stats().rejected_steps);
-          !c.empty()) {
-        res.failure += "; " + c;
-      }
-      res.failure_kind = "integrator";
+      fail(res, integrator_failure(o, chatter, sys, integrator, t, t_end), "integrator");
       break;
     }
     chatter.step(integrator.state());
     if (const int i = unstable_component(bounded, integrator.state()); i >= 0) {
-      res.ok = false;
-      res.failure = unstable_failure(sys, i, t, integrator.state());
-      res.failure_kind = "unstable";
+      fail(res, unstable_failure(sys, i, t, integrator.state()), "unstable");
       break;
     }
     if (on_step) on_step(t, integrator.state());
-    // Outputs inside the step, from the method's dense output; one at the
-    // step's end waits until the events there are applied.
-    for (double to = output_time(); before(to, t, t_end); to = output_time()) {
-      PUMASIM_PROFILE_CONTEXT(kOutput);
-      integrator.dense_state(to, xo.data());
-      if (observe) observe(to, xo.data());
-      ++k_out;
-    }
+    dense_outputs(integrator, observe, t, t_end, output_interval, k_out, xo);
     // The state is copied only where the plant may change it (an event) or
     // an output at this instant reads it, not after every step.
     const double* xs = integrator.state();
     double wall = -1;  // [s], when the clock is read at this step
     if (clock.tick()) {
       wall = clock.elapsed();
-      if (progress.report && wall >= next_report) {
-        progress.report(RunProgress{t, integrator.stats().steps, integrator.time() - integrator.step_start(), wall});
-        next_report = wall + progress.period;
-      }
-      if (progress.poll && wall >= next_poll) {
-        progress.poll();
-        next_poll = wall + progress.poll_period;
-      }
-      if (progress.cancel && progress.cancel->load(std::memory_order_relaxed)) {
-        res.ok = false;
-        res.failure = interrupted_failure(integrator, t, wall);
-        res.failure_kind = "interrupted";
+      const RunProgress where{t, integrator.stats().steps, integrator.time() - integrator.step_start(), wall};
+      if (wall_clock_hooks(progress, where, next_report, next_poll)) {
+        fail(res, interrupted_failure(integrator, t, wall), "interrupted");
         break;
       }
     }
     if (max_steps > 0 || wall > 0) {
       if (std::string why = budget_failure(integrator, sys, t, t_end, xs, max_steps, max_wall, wall, chatter);
           !why.empty()) {
-        res.ok = false;
-        res.failure = std::move(why);
-        res.failure_kind = "budget";
+        fail(res, std::move(why), "budget");
         break;
       }
     }
@@ -369,9 +394,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double o
   }
   res.t_final = t;
   res.wall_time = seconds(Clock::now() - start);
-#ifdef PUMASIM_PROFILE
   write_profile();
-#endif
   return res;
 }
 
