@@ -10,8 +10,11 @@ namespace pumasim {
 Plant::Plant(PlantConfig config) : Plant(std::make_shared<const PlantModel>(std::move(config))) {}
 
 Plant::Plant(std::shared_ptr<const PlantModel> model)
-    : m_(std::move(model)), ctx_(m_->make_context()), wd_(m_->make_workspace<double>()), stick_slip_(*m_) {
-  const auto m = static_cast<std::size_t>(m_->size());
+    : model_(std::move(model)),
+      context_(model_->make_context()),
+      evaluator_(model_->make_workspace<double>()),
+      stick_slip_(*model_) {
+  const auto m = static_cast<std::size_t>(model_->size());
   f_.resize(m);
   for (auto& v : ft_) v.resize(m);
 }
@@ -19,8 +22,8 @@ Plant::Plant(std::shared_ptr<const PlantModel> model)
 Plant::~Plant() = default;
 
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
-  m_->rhs(ctx_, *wd_, t, x, fi);                       // the whole f
-  m_->rhs(ctx_, *wd_, t, x, fe, FrictionPart::kNone);  // f without friction
+  model_->rhs(context_, *evaluator_, t, x, fi);                       // the whole f
+  model_->rhs(context_, *evaluator_, t, x, fe, FrictionPart::kNone);  // f without friction
   const StateLayout& L = layout();
   for (int k = 0; k < L.size; ++k) fi[k] -= fe[k];  // the friction's part
   if (L.i >= 0) {
@@ -34,8 +37,8 @@ void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
 void Plant::jacobian(FrictionPart part, double t, const double* x, Eigen::MatrixXd& J) {
   PUMASIM_PROFILE_CONTEXT(kJacobian);
   const int m = size();
-  if (!wt_) {
-    wt_ = m_->make_workspace<Tangent>();
+  if (!tangent_evaluator_) {
+    tangent_evaluator_ = model_->make_workspace<Tangent>();
     tx_.resize(static_cast<std::size_t>(m));
     tf_.resize(static_cast<std::size_t>(m));
   }
@@ -43,7 +46,7 @@ void Plant::jacobian(FrictionPart part, double t, const double* x, Eigen::Matrix
   constexpr int N = kJacobianTangents;
   for (int first = 0; first < m; first += N) {  // states first..first+N-1 in one pass
     for (int i = 0; i < m; ++i) tx_[i].seed(x[i], i - first);
-    m_->eval(ctx_, *wt_, part, t, tx_.data(), tf_.data());
+    model_->eval(context_, *tangent_evaluator_, part, t, tx_.data(), tf_.data());
     const int last = std::min(m, first + N);
     for (int k = first; k < last; ++k) {
       for (int r = 0; r < m; ++r) J(r, k) = tf_[r].deriv(k - first);
@@ -53,22 +56,22 @@ void Plant::jacobian(FrictionPart part, double t, const double* x, Eigen::Matrix
 
 void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
   const int m = size();
-  if (!wj_) {
-    wj_ = m_->make_workspace<Dual>();
+  if (!dual_evaluator_) {
+    dual_evaluator_ = model_->make_workspace<Dual>();
     jx_.resize(static_cast<std::size_t>(m));
     jf_.resize(static_cast<std::size_t>(m));
   }
   J.resize(m, m);
   for (int k = 0; k < m; ++k) {
     for (int i = 0; i < m; ++i) jx_[i] = Dual(x[i], i == k ? 1.0 : 0.0);
-    m_->eval(ctx_, *wj_, FrictionPart::kAll, t, jx_.data(), jf_.data());
+    model_->eval(context_, *dual_evaluator_, FrictionPart::kAll, t, jx_.data(), jf_.data());
     for (int r = 0; r < m; ++r) J(r, k) = jf_[r].deriv();
   }
 }
 
 int Plant::time_derivative(double t, const double* x, double* dfdt) {
   const int m = size();
-  if (!m_->depends_on_time()) {
+  if (!model_->depends_on_time()) {
     std::fill(dfdt, dfdt + m, 0.0);
     return 0;
   }
@@ -89,7 +92,7 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
     explicit Continued(PlantWorkspace<double>& w) : w_(w) { w_.extend_piece = true; }
     ~Continued() { w_.extend_piece = false; }
     PlantWorkspace<double>& w_;
-  } continued(*wd_);
+  } continued(*evaluator_);
   rhs(t, x, dfdt);
   rhs(t + d, x, ft_[0].data());
   rhs(t + 2 * d, x, ft_[1].data());
@@ -99,18 +102,18 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
 
 void Plant::on_time_event(double t, double* x) {
   PUMASIM_PROFILE_CONTEXT(kEvents);
-  if (!m_->time_event(ctx_, *wd_, t, x)) return;  // no controller: nothing happens at a time event
-  stick_slip_.settle(ctx_, *wd_, t, x);
-  stick_slip_.record(ctx_, *wd_, t);
+  if (!model_->time_event(context_, *evaluator_, t, x)) return;  // no controller: nothing happens at a time event
+  stick_slip_.settle(context_, *evaluator_, t, x);
+  stick_slip_.record(context_, *evaluator_, t);
 }
 
 void Plant::initial_state(double* x) {
   stick_slip_.clear_log();
-  m_->start_state(ctx_, *wd_, x);
+  model_->start_state(context_, *evaluator_, x);
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
-  m_->input_currents(ctx_, *wd_, x);
-  stick_slip_.settle(ctx_, *wd_, 0.0, x);  // hybrid joints start stuck unless already pushed past Fs
-  stick_slip_.start_log(ctx_, *wd_, 0.0);  // the modes at t = 0, one entry per joint with events
+  model_->input_currents(context_, *evaluator_, x);
+  stick_slip_.settle(context_, *evaluator_, 0.0, x);  // hybrid joints start stuck unless already pushed past Fs
+  stick_slip_.start_log(context_, *evaluator_, 0.0);  // the modes at t = 0, one entry per joint with events
 }
 
 Eigen::Vector3d Plant::tool_position(const double* x) const {

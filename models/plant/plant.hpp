@@ -29,13 +29,13 @@ class Plant {
   Plant(const Plant&) = delete;
   Plant& operator=(const Plant&) = delete;
 
-  const PlantModel& model() const { return *m_; }
-  const std::shared_ptr<const PlantModel>& shared_model() const { return m_; }
-  const PlantContext& context() const { return ctx_; }
+  const PlantModel& model() const { return *model_; }
+  const std::shared_ptr<const PlantModel>& shared_model() const { return model_; }
+  const PlantContext& context() const { return context_; }
 
-  const StateLayout& layout() const { return m_->layout(); }
-  const PlantConfig& config() const { return m_->config(); }
-  int size() const { return m_->size(); }
+  const StateLayout& layout() const { return model_->layout(); }
+  const PlantConfig& config() const { return model_->config(); }
+  int size() const { return model_->size(); }
   // A typical magnitude of state component i, in its unit (the integrators'
   // absolute tolerance is atol times this).
   double tolerance_scale(int i) const { return layout().scale[static_cast<std::size_t>(i)]; }
@@ -50,7 +50,7 @@ class Plant {
   void initial_state(double* x);
 
   // f(t, x). Allocation-free.
-  void rhs(double t, const double* x, double* xdot) { m_->rhs(ctx_, *wd_, t, x, xdot); }
+  void rhs(double t, const double* x, double* xdot) { model_->rhs(context_, *evaluator_, t, x, xdot); }
   // IMEX split f = fe + fi: fi holds the stiff parts, the armature current
   // equation and the friction torques' effect on qdd (f minus f without
   // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
@@ -59,7 +59,7 @@ class Plant {
   // The constant diagonal linear part of f (OdeSystem::linear_diagonal): the
   // armature's -(R0 + R_j)/La_j on each current state, 0 elsewhere (and 0
   // everywhere without current states).
-  void linear_diagonal(double* lambda) const { m_->linear_diagonal(lambda); }
+  void linear_diagonal(double* lambda) const { model_->linear_diagonal(lambda); }
   // df/dx exactly; differences are OdeSystem::jacobian's
   // (integrators/registry.cpp). One pass of f per kJacobianTangents states on
   // the multi-tangent dual number (DualN), the dynamics' tangents analytical
@@ -82,17 +82,17 @@ class Plant {
   // Time events: controller samples, set-point updates, the reference's
   // breakpoints and an open-loop input's rows. The next event time
   // strictly after t (+inf if none); at such a time, update the discrete state.
-  double next_time_event(double t) const { return m_->next_time_event(t); }
+  double next_time_event(double t) const { return model_->next_time_event(t); }
   // May release stuck hybrid-friction joints (settle_modes), hence x non-const.
   void on_time_event(double t, double* x);
 
   // Root functions (hybrid friction, one per joint) and the mode switches:
   // friction/stick_slip.hpp.
   int num_roots() const { return stick_slip_.num_roots(); }
-  void roots(double t, const double* x, double* g) { stick_slip_.roots(ctx_, *wd_, t, x, g); }
-  void on_root(int joint, double t, double* x) { stick_slip_.on_root(ctx_, *wd_, joint, t, x); }
-  void settle_modes(double t, double* x) { stick_slip_.settle(ctx_, *wd_, t, x); }
-  SlipMode slip_mode(int joint) const { return ctx_.modes[static_cast<std::size_t>(joint)]; }
+  void roots(double t, const double* x, double* g) { stick_slip_.roots(context_, *evaluator_, t, x, g); }
+  void on_root(int joint, double t, double* x) { stick_slip_.on_root(context_, *evaluator_, joint, t, x); }
+  void settle_modes(double t, double* x) { stick_slip_.settle(context_, *evaluator_, t, x); }
+  SlipMode slip_mode(int joint) const { return context_.modes[static_cast<std::size_t>(joint)]; }
   // The hybrid model's mode changes so far, the modes at t = 0 first (one per
   // joint with events), then each net change after a discrete update
   // (on_root, on_time_event). Empty without events.
@@ -112,11 +112,11 @@ class Plant {
   // time-stepping, whose step solved the friction law (a stuck joint's speed 0).
   void classify_modes(double t, const double* x, double stick_speed, SlipMode* mode, double* applied,
                       bool always_applied = false, bool speed_only = false) {
-    stick_slip_.classify(ctx_, *wd_, t, x, stick_speed, mode, applied, always_applied, speed_only);
+    stick_slip_.classify(context_, *evaluator_, t, x, stick_speed, mode, applied, always_applied, speed_only);
   }
   // Joint j's law has Coulomb levels (Fs or Fk > 0): stick and slip mean something.
-  bool joint_has_modes(int j) const { return m_->joint_has_modes(j); }
-  bool has_mode_events() const { return m_->has_mode_events(); }
+  bool joint_has_modes(int j) const { return model_->joint_has_modes(j); }
+  bool has_mode_events() const { return model_->has_mode_events(); }
   // The last coupled stick solve's report (settle_modes, on_root).
   const StickResult& last_stick_solve() const { return stick_slip_.last_solve(); }
   using StickStats = StickSlip::Stats;
@@ -131,13 +131,15 @@ class Plant {
   // left out (B w_m stays) and no stuck-joint constraint; the other laws'
   // torques (tanh, viscous) whole. The paper's and Karnopp's zero-speed bands
   // play no part there. Allocation-free.
-  void rhs_smooth(double t, const double* x, double* xdot) { m_->rhs(ctx_, *wd_, t, x, xdot, FrictionPart::kSmooth); }
+  void rhs_smooth(double t, const double* x, double* xdot) {
+    model_->rhs(context_, *evaluator_, t, x, xdot, FrictionPart::kSmooth);
+  }
   // d f_smooth / dx, exactly (dual numbers).
   void jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J) { jacobian(FrictionPart::kSmooth, t, x, J); }
-  int set_valued_joints() const { return m_->set_valued_joints(); }
-  int set_valued_joint(int c) const { return m_->set_valued_joint(c); }
+  int set_valued_joints() const { return model_->set_valued_joints(); }
+  int set_valued_joint(int c) const { return model_->set_valued_joint(c); }
   // B_c at x, column-major (size() x set_valued_joints()).
-  void set_valued_directions(const double* x, double* B) { stick_slip_.set_valued_directions(*wd_, x, B); }
+  void set_valued_directions(const double* x, double* B) { stick_slip_.set_valued_directions(*evaluator_, x, B); }
   // The coupled solve itself (friction/stick_solve.hpp).
   StickResult solve_stick(const StickProblem& p, double* r, int* mode) { return stick_slip_.solve(p, r, mode); }
 
@@ -145,35 +147,37 @@ class Plant {
   // included) and magnetic (1/2 La i^2). With the ledger, the balance
   //   (mechanical + magnetic)(t) - (mechanical + magnetic)(0) = e_in - e_copper - e_friction
   // holds exactly for the ODE; its residual measures the integration error.
-  double mechanical_energy(const double* x, double* kinetic = nullptr) { return m_->mechanical_energy(*wd_, x, kinetic); }
-  double magnetic_energy(const double* x) const { return m_->magnetic_energy(x); }
+  double mechanical_energy(const double* x, double* kinetic = nullptr) {
+    return model_->mechanical_energy(*evaluator_, x, kinetic);
+  }
+  double magnetic_energy(const double* x) const { return model_->magnetic_energy(x); }
 
   // Flange position for the state x (held joints included) [m].
   Eigen::Vector3d tool_position(const double* x) const;
   // Flange frame for the state x: orientation R (base frame) and position p [m].
-  void tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const { m_->tool_pose(x, R, p); }
+  void tool_pose(const double* x, Eigen::Matrix3d& R, Eigen::Vector3d& p) const { model_->tool_pose(x, R, p); }
   // The reference the controller currently uses (held set-point or at t).
-  const ReferenceSample& reference_at(double t) { return m_->reference(ctx_, *wd_, t); }
+  const ReferenceSample& reference_at(double t) { return model_->reference(context_, *evaluator_, t); }
   // Controller output, amplifier output voltage and motor current of every
   // simulated joint at (t, x), with the current discrete state (held outputs
   // and set-points: call it at the instant, not after the run).
   void drive_signals(double t, const double* x, DriveSignals* out) {
-    m_->drive_signals(ctx_, *wd_, t, x, f_.data(), out);
+    model_->drive_signals(context_, *evaluator_, t, x, f_.data(), out);
   }
   // True when the drive signals depend on a discrete state besides (t, x): a
   // sampled controller's held output, or a held set-point.
-  bool holds_drive_state() const { return m_->holds_drive_state(); }
+  bool holds_drive_state() const { return model_->holds_drive_state(); }
 
  private:
   using Tangent = PlantModel::Tangent;
   void jacobian(FrictionPart part, double t, const double* x, Eigen::MatrixXd& J);
 
-  std::shared_ptr<const PlantModel> m_;
-  PlantContext ctx_;
+  std::shared_ptr<const PlantModel> model_;
+  PlantContext context_;
   // The evaluators: double made with the plant, the dual ones at their first use.
-  std::unique_ptr<PlantWorkspace<double>> wd_;
-  std::unique_ptr<PlantWorkspace<Dual>> wj_;
-  std::unique_ptr<PlantWorkspace<Tangent>> wt_;
+  std::unique_ptr<PlantWorkspace<double>> evaluator_;
+  std::unique_ptr<PlantWorkspace<Dual>> dual_evaluator_;
+  std::unique_ptr<PlantWorkspace<Tangent>> tangent_evaluator_;
   StickSlip stick_slip_;
   std::vector<double> f_;             // f for drive_signals
   std::vector<double> ft_[2];         // time_derivative scratch
