@@ -737,7 +737,7 @@ Held held_value(const urdf::ModelInterface& m, const urdf::Joint& j, const SideF
       t.fail("joint", j.name, "a <mimic joint> naming a moving joint of the URDF", "'" + j.mimic->joint_name + "'");
     }
     const urdf::Joint& L = *leader->second;
-    const std::string side = s.path.empty() ? urdf_side_file(t.path()) : s.path;
+    const std::string side = urdf_side_file(t.path());
     if (p.on(m.links_.at(L.child_link_name).get())) {
       t.fail("joint", j.name,
              "a value for it in [held] of " + side + ": it mimics joint '" + L.name +

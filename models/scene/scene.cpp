@@ -230,20 +230,17 @@ const std::string& friction_model_names() {
   return names;
 }
 
-// The robot file's joint friction (a URDF's <dynamics damping friction>) on
-// the simulated joints: is there any, and is there a Coulomb level.
-bool robot_damping(const PlantConfig& pc) {
+// Whether the robot file gives joint friction of a kind (a URDF's <dynamics
+// damping> or <dynamics friction>: JointParams::damping, coulomb) on a
+// simulated joint.
+bool robot_gives(const PlantConfig& pc, double JointParams::*value) {
   for (int j = 0; j < pc.n; ++j) {
-    if (pc.robot.joints[static_cast<std::size_t>(j)].damping > 0) return true;
+    if (pc.robot.joints[static_cast<std::size_t>(j)].*value > 0) return true;
   }
   return false;
 }
-bool robot_coulomb(const PlantConfig& pc) {
-  for (int j = 0; j < pc.n; ++j) {
-    if (pc.robot.joints[static_cast<std::size_t>(j)].coulomb > 0) return true;
-  }
-  return false;
-}
+bool robot_damping(const PlantConfig& pc) { return robot_gives(pc, &JointParams::damping); }
+bool robot_coulomb(const PlantConfig& pc) { return robot_gives(pc, &JointParams::coulomb); }
 
 // static_torque and kinetic_torque are required by the Coulomb laws unless
 // the robot file gives the level they default to.
