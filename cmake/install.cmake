@@ -8,7 +8,7 @@
 # against an installed copy). Included by the top-level CMakeLists.txt after
 # the layers are defined. Layout under the prefix:
 #
-#   include/pumasim/models/..., integrators/..., experiments/simulation/...
+#   include/pumasim/models/..., integrators/..., simulation/...
 #                              the repository's own include paths, kept
 #   lib/libpumasim_*.a         the layers (static, as built here)
 #   lib/cmake/pumasim/         pumasim-config.cmake, -config-version.cmake, -targets*.cmake
@@ -66,7 +66,7 @@ install(TARGETS ${_pumasim_targets} EXPORT pumasim-targets
 # the integrators' .cpp files; DESIGN.md keeps SUNDIALS behind one wall) and
 # the test set, which is not part of the package.
 foreach(_dir core models/dynamics models/robot models/reference models/plant models/scene integrators
-             experiments/simulation)
+             simulation)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${_dir}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/pumasim/${_dir}
     FILES_MATCHING PATTERN "*.hpp"
     PATTERN "testset" EXCLUDE

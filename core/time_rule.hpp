@@ -4,7 +4,7 @@
 // stop computed apart from the time reached (k * period or k * output
 // interval against a sum of fixed steps, whose rounding grows with the number
 // of steps) lands within it; a step shorter than it would drag a step-size
-// controller down to an underflow. The driver (experiments/simulation: end of
+// controller down to an underflow. The driver (simulation: end of
 // run, outputs, events due) and the odeint steppers (a stop reached) decide
 // with it; CVODE and ARKODE stop exactly at their stop time. The models use
 // its width where they place a time among their own breakpoints: an

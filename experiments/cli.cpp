@@ -1,7 +1,7 @@
 // The `pumasim` command line. CLI11 parses it: one subcommand per command,
 // typed options checked as they are read, the help generated. Each command's
 // function takes its parsed options and calls the libraries below (a scene's
-// run lives in experiments/simulation/scene_run). Errors end as one line on
+// run lives in simulation/scene_run). Errors end as one line on
 // `err` and exit status 2 (bad input) or 1 (internal); CLI11 never exits.
 #include "experiments/cli.hpp"
 
@@ -23,9 +23,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "experiments/simulation/run_folder.hpp"
-#include "experiments/simulation/run_request.hpp"
-#include "experiments/simulation/scene_run.hpp"
+#include "simulation/run_folder.hpp"
+#include "simulation/run.hpp"
+#include "simulation/scene_run.hpp"
 #include "experiments/stiffness.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
@@ -46,6 +46,14 @@ class UsageError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// The command line's words for the options the library names neutrally
+// (core/option_words.hpp): "--max-steps" for max_steps.
+std::string command_line_words(std::string_view name) {
+  std::string word = "--" + std::string(name);
+  std::replace(word.begin(), word.end(), '_', '-');
+  return word;
+}
 
 // ---------------------------------------------------------------- values
 
@@ -169,16 +177,16 @@ struct SceneArgs {
   std::vector<std::string> unsets;  // --unset section.key, repeatable
 };
 
-void add_scene(CLI::App* app, SceneArgs& a) {
-  app->add_option("scene", a.file, "a scene file, e.g. experiments/scenes/paper_slow.toml")
+void add_scene(CLI::App* app, std::string& file, std::vector<std::string>& sets, std::vector<std::string>& unsets) {
+  app->add_option("scene", file, "a scene file, e.g. experiments/scenes/paper_slow.toml")
       ->required()
       ->type_name("SCENE.toml");
-  app->add_option("--set", a.sets,
+  app->add_option("--set", sets,
                   "overrides a scene value (TOML syntax), e.g. --set motor.inductance=1e-5; repeatable")
       ->type_name("SECTION.KEY=VALUE")
       ->take_all()
       ->allow_extra_args(false);  // one value per --set: the scene file may follow
-  app->add_option("--unset", a.unsets,
+  app->add_option("--unset", unsets,
                   "removes a key (or a table) of the scene file before the --set values and the checks, e.g. "
                   "--unset friction.static_torque when --set friction.model=\"viscous\" switches the law; "
                   "repeatable")
@@ -186,6 +194,8 @@ void add_scene(CLI::App* app, SceneArgs& a) {
       ->take_all()
       ->allow_extra_args(false);
 }
+
+void add_scene(CLI::App* app, SceneArgs& a) { add_scene(app, a.file, a.sets, a.unsets); }
 
 // The scene, loaded and checked: its integrator exists (`check` says so with
 // the file, line and key, as `run` would otherwise fail without them).
@@ -380,43 +390,25 @@ int cmd_check(const SceneArgs& a, std::ostream& out) {
 
 // ---------------------------------------------------------------- run
 
+// CLI11 binds `pumasim run`'s options into the front door's request
+// (simulation/run.hpp); quiet is the command line's own.
 struct RunArgs {
-  SceneArgs scene;
-  std::optional<std::string> integrator, backend, out, jacobian;
-  std::optional<double> rtol, atol, dt, t_end, max_steps, max_wall;
-  bool force = false, late_events = false, stop_at_outputs = false, quiet = false;
-  bool keep_history = false;
-  std::vector<std::string> argv;  // the program and its arguments, for meta.json
+  RunRequest request;
+  bool quiet = false;
 };
-
-// The command line's changes to the scene, and how the run is driven
-// (experiments/simulation/run_request: the checks and their messages).
-RunControls run_controls(Scene& sc, const RunArgs& a) {
-  RunRequest r;
-  r.integrator = a.integrator;
-  r.backend = a.backend;
-  r.dt = a.dt;
-  r.rtol = a.rtol;
-  r.atol = a.atol;
-  r.t_end = a.t_end;
-  r.max_steps = a.max_steps;
-  r.max_wall = a.max_wall;
-  r.jacobian = a.jacobian;
-  r.late_events = a.late_events;
-  r.keep_history = a.keep_history;
-  r.stop_at_outputs = a.stop_at_outputs;
-  return pumasim::run_controls(sc, r);
-}
 
 // Where the run is, on one line of stderr rewritten in place (simulated time,
 // steps, the current step size, wall-clock time): from the driver's step
 // loop, first after a second, then every 0.25 s of wall-clock time; only on a
 // terminal and without --quiet. `width` keeps the length of the last line, to
 // clear it.
-ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::size_t& width) {
+// plan: the run's plan once made (RunSinks::planned), read at each report.
+ProgressHook progress_line(std::ostream& err, const RunPlan* const& plan, bool quiet, std::size_t& width) {
   if (quiet || !isatty(STDERR_FILENO)) return {};
   ProgressHook hook;
-  hook.report = [&err, &width, name = sc.name, duration = sc.duration](const RunProgress& p) {
+  hook.report = [&err, &width, &plan](const RunProgress& p) {
+    const std::string& name = plan->scene.name;
+    const double duration = plan->scene.duration;
     char line[320];
     int len = std::snprintf(line, sizeof line,
                             "\rpumasim run %s: t = %.6g / %.6g s (%.0f%%), %ld steps, h = %.3g s, %.1f s elapsed",
@@ -437,56 +429,61 @@ ProgressHook progress_line(std::ostream& err, const Scene& sc, bool quiet, std::
 }
 
 int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
-  Scene sc = load_checked_scene(a.scene);
-  const RunContext context = run_context(a.argv, sc);  // the start time, the robot file's hash as loaded
-  const RunControls rc = run_controls(sc, a);
-  for (const std::string& w : run_start_warnings(sc, rc)) err << "pumasim run: warning: " << w << "\n";
-  if (rc.adaptive && !a.quiet) {
+  const RunOptions& o = a.request.options;
+  std::size_t progress_width = 0;
+  const RunPlan* plan = nullptr;  // the run's, once made
+  RunSinks sinks;
+  sinks.words = command_line_words;
+  sinks.warning = [&err](const std::string& w) { err << "pumasim run: warning: " << w << "\n"; };
+  sinks.planned = [&](const RunPlan& p) {
+    plan = &p;
+    if (!p.controls.adaptive || a.quiet) return;
     char tol[160];
     std::snprintf(tol, sizeof tol, "pumasim run: %s at rtol %.3g, atol %.3g (times each state's scale%s)\n",
-                  sc.integrator.name.c_str(), rc.options.rtol, rc.options.atol,
-                  a.rtol && !a.atol ? "; 1e-3 x --rtol, as --atol was not given" : "");
+                  p.scene.integrator.name.c_str(), p.controls.options.rtol, p.controls.options.atol,
+                  o.rtol && !o.atol ? "; 1e-3 x --rtol, as --atol was not given" : "");
     err << tol;
-  }
-  // Outside the committed results/: runs/ is the user's scratch space (ignored by git).
-  const fs::path dir = a.out ? fs::path(*a.out) : "runs" / fs::path(sc.name);
-  std::size_t progress_width = 0;
-  const ProgressHook progress = progress_line(err, sc, a.quiet, progress_width);
+  };
+  sinks.progress = progress_line(err, plan, a.quiet, progress_width);
   const auto clear_progress = [&] {
     if (progress_width > 0) err << "\r" << std::string(progress_width, ' ') << "\r" << std::flush;
   };
-  // Checks the run's size and the folder before the run, runs, writes the folder.
-  CompletedRun done;
+  RunRecord rec;
   try {
-    done = run_scene(sc, rc, dir, a.force, progress, &context);
+    rec = run(a.request, sinks);
   } catch (const RunFolderError&) {
     clear_progress();
     throw;
   }
   clear_progress();
-  out << done.stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
-  if (!a.quiet) err << "results: " << dir.string() << "/\n";
-  if (!done.run.result.ok) err << "pumasim run: " << done.run.result.failure << "\n";
-  return done.run.result.ok ? kExitOk : kExitInternal;
+  out << rec.stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
+  if (!a.quiet) err << "results: " << rec.plan.folder->string() << "/\n";
+  if (!rec.run.result.ok) err << "pumasim run: " << rec.run.result.failure << "\n";
+  return rec.run.result.ok ? kExitOk : kExitInternal;
 }
 
 void add_run(CLI::App* app, RunArgs& a) {
-  add_scene(app, a.scene);
-  add_text(app, "--integrator", a.integrator, "the integrator (pumasim integrators; default: the scene's)", "NAME")
+  RunRequest& r = a.request;
+  RunOptions& o = r.options;
+  r.default_out = true;  // without --out: runs/<scene name>
+  add_scene(app, r.file, r.sets, r.unsets);
+  add_text(app, "--integrator", o.integrator, "the integrator (pumasim integrators; default: the scene's)", "NAME")
       ->check(registry_name([](const std::string& s) { find_integrator(s); }));
-  add_text(app, "--backend", a.backend, "the dynamics back-end (pumasim backends; default: the scene's)", "NAME")
+  add_text(app, "--backend", o.backend, "the dynamics back-end (pumasim backends; default: the scene's)", "NAME")
       ->check(registry_name([](const std::string& s) { find_backend(s); }));
-  add_number(app, "--dt", a.dt, kPositive, "fixed-step methods: the step [s] (default: the scene's integrator.dt, "
+  add_number(app, "--dt", o.dt, kPositive, "fixed-step methods: the step [s] (default: the scene's integrator.dt, "
              "else 5e-4)", "SECONDS");
-  add_number(app, "--rtol", a.rtol, kRtol, "adaptive methods: the relative tolerance (default: the scene's "
+  add_number(app, "--rtol", o.rtol, kRtol, "adaptive methods: the relative tolerance (default: the scene's "
              "integrator.rtol, else 1e-6)");
-  add_number(app, "--atol", a.atol, kPositive,
+  add_number(app, "--atol", o.atol, kPositive,
              "adaptive methods: the absolute tolerance per unit of each state's typical magnitude (default: "
              "1e-3 x --rtol when --rtol is given, else the scene's integrator.atol, else 1e-8)");
-  add_number(app, "--t-end", a.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
-  add_text(app, "--out", a.out, "the run folder (default runs/<scene name>/)", "DIR");
-  app->add_flag("--force", a.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");
-  app->add_option("--jacobian", a.jacobian,
+  add_number(app, "--t-end", o.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
+  app->add_option_function<std::string>("--out", [&r](const std::string& s) { r.out = s; },
+                                        "the run folder (default runs/<scene name>/)")
+      ->type_name("DIR");
+  app->add_flag("--force", r.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");
+  app->add_option("--jacobian", o.jacobian,
                   "cvode-*, arkode-dirk: the plant's exact Jacobian (default) or the integrator's difference "
                   "quotients")
       ->check(CLI::Validator(
@@ -494,19 +491,19 @@ void add_run(CLI::App* app, RunArgs& a) {
             return s == "exact" || s == "differences" ? "" : "expected exact or differences, got '" + s + "'";
           },
           "exact|differences", "jacobian"));
-  add_number(app, "--max-steps", a.max_steps, kStepBudget, "steps in all before the run ends as a failure "
+  add_number(app, "--max-steps", o.max_steps, kStepBudget, "steps in all before the run ends as a failure "
              "(default 10000000)", "N");
-  add_number(app, "--max-wall", a.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
+  add_number(app, "--max-wall", o.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
              "(default 600)", "SECONDS");
   app->add_flag("--quiet,-q", a.quiet, "no progress line and no 'results: DIR/' line on stderr (errors and a "
                 "failed run's reason still are)");
-  auto* late = app->add_flag("--late-events", a.late_events,
+  auto* late = app->add_flag("--late-events", o.late_events,
                              "do not stop at controller samples and set-point updates; apply them late, at the "
                              "next output (shows what stepping over them does)");
-  app->add_flag("--keep-history", a.keep_history,
+  app->add_flag("--keep-history", o.keep_history,
                 "fixed-step multistep methods: carry the history across controller samples and other events "
                 "instead of restarting it (the paper's simulation loop, by our reading)");
-  app->add_flag("--stop-at-outputs", a.stop_at_outputs,
+  app->add_flag("--stop-at-outputs", o.stop_at_outputs,
                 "also stop the integrator at every output time (the output grid then caps the step: for "
                 "comparison only)")
       ->excludes(late);
@@ -875,21 +872,21 @@ int run_cli(const std::vector<std::string>& args, std::ostream& out, std::ostrea
       throw UsageError("unknown command '" + args[0] + "'; expected one of: " + command_names());
     }
     Parsed parsed;
-    parsed.run.argv.assign(1, program);
-    parsed.run.argv.insert(parsed.run.argv.end(), args.begin(), args.end());
+    parsed.run.request.argv.assign(1, program);
+    parsed.run.request.argv.insert(parsed.run.request.argv.end(), args.begin(), args.end());
     const auto app = make_app(parsed);
     const Command* c = parse(*app, args, out);
     return c ? c->run(parsed, *app, out, err) : kExitOk;
   } catch (const UsageError& e) {
     err << "pumasim: " << e.what() << "\n";
   } catch (const ConfigError& e) {
-    err << "pumasim: " << e.what() << "\n";
+    err << "pumasim: " << phrased(e.what(), command_line_words) << "\n";
   } catch (const std::invalid_argument& e) {
-    err << "pumasim: " << e.what() << "\n";
+    err << "pumasim: " << phrased(e.what(), command_line_words) << "\n";
   } catch (const RunFolderError& e) {
-    err << "pumasim: " << e.what() << "\n";
+    err << "pumasim: " << phrased(e.what(), command_line_words) << "\n";
   } catch (const std::exception& e) {
-    err << "pumasim: internal error: " << e.what() << "\n";
+    err << "pumasim: internal error: " << phrased(e.what(), command_line_words) << "\n";
     return kExitInternal;
   }
   return kExitBadInput;

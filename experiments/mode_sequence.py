@@ -1,7 +1,7 @@
 """Friction mode sequences (stick, slip+, slip-) of runs and their comparison
 with a reference run's.
 
-A run folder's events.csv (experiments/simulation/mode_log.hpp) lists, per
+A run folder's events.csv (simulation/mode_log.hpp) lists, per
 joint, the mode at t = 0 and every change after: the hybrid model's own events,
 or, for the laws without modes, the integrator's accepted steps classified
 (stuck at |w_m| <= 1e-3 rad/s motor side where the law's stick branch holds,
@@ -31,11 +31,11 @@ import io
 import math
 import os
 
-MIN_DURATION = 1e-3   # [s], as kMinModeDuration in experiments/simulation/mode_log.hpp
+MIN_DURATION = 1e-3   # [s], as kMinModeDuration in simulation/mode_log.hpp
 TORQUE_MARGIN = 0.01  # relative to Fs: a decision closer than this to the static level is marginal
 EVENTS = "events.csv"
 # The hybrid model's run classified by speed alone, as the laws without modes
-# and time-stepping are (experiments/simulation/scene_run.hpp): their yardstick.
+# and time-stepping are (simulation/scene_run.hpp): their yardstick.
 EVENTS_SPEED = "events_speed.csv"
 MODES = ("stick", "slip+", "slip-")
 

@@ -4,7 +4,7 @@ one place the Python scripts (experiments/*.py, scripts/*.py) do it.
     import pumasim_io                      # from experiments/ (the script's own folder)
     sys.path.insert(0, os.path.join(ROOT, "experiments"))   # first, from scripts/ or tests/
 
-Run folders (experiments/simulation/run_folder.cpp writes them): a folder
+Run folders (simulation/run_folder.cpp writes them): a folder
 holding trajectory.csv, stats.json, meta.json, scene.resolved.toml and the
 marker file .pumasim-run, which starts with a '#' comment line saying it is a
 pumasim run folder and then lists the files pumasim (or scripts/plot_run.py)

@@ -10,7 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "experiments/simulation/driver.hpp"
+#include "simulation/run.hpp"
 #include "core/time_rule.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
@@ -24,16 +24,23 @@ struct Run {
   std::vector<double> final_state;
 };
 
-Run run_scene(const Scene& sc, const std::string& integrator, const IntegratorOptions& o, double t_end,
-              double interval, const std::function<void(Plant&, double, const double*)>& at) {
-  Plant plant(sc.plant);
-  auto integ = make_integrator(integrator, o);
+// A run of the scene through the front door (simulation/run.hpp), with
+// `integrator` at its scene settings or at step dt, over [0, t_end], `at`
+// seeing each output with the run's plant.
+Run run_scene(const Scene& sc, const std::string& integrator, std::optional<double> dt, double t_end,
+              double interval, const OutputSink& at) {
+  RunRequest request;
+  request.scene = &sc;
+  request.options = {.integrator = integrator, .dt = dt, .t_end = t_end, .output_interval = interval,
+                     .max_steps = 20'000'000, .max_wall = 0};
   Run r;
-  const RunResult res = run_plant(plant, *integ, t_end, interval, [&](double t, const double* x) {
+  RunSinks sinks;
+  sinks.output = [&](Plant& plant, double t, const double* x) {
     if (at) at(plant, t, x);
     r.final_state.assign(x, x + plant.size());
-  }, 20'000'000);
-  r.ok = res.ok && !before(res.t_final, t_end, t_end);  // core/time_rule.hpp
+  };
+  const RunRecord rec = run(request, sinks);
+  r.ok = rec.run.result.ok && !before(rec.run.result.t_final, t_end, t_end);  // core/time_rule.hpp
   return r;
 }
 
@@ -89,9 +96,7 @@ StiffnessSample spectrum_sample(const Plant& p, double t, const Eigen::MatrixXd&
 // Stable at dt: the run over [0, t_end] succeeds and ends within 10 %
 // (relative, per state, floor 1) of the reference run's final state.
 bool stable_at(const Scene& sc, const char* name, double dt, double t_end, const Run& ref) {
-  IntegratorOptions o;
-  o.dt = dt;
-  const Run r = run_scene(sc, name, o, t_end, t_end, nullptr);
+  const Run r = run_scene(sc, name, dt, t_end, t_end, nullptr);
   if (!r.ok || r.final_state.size() != ref.final_state.size()) return false;
   for (std::size_t i = 0; i < r.final_state.size(); ++i) {
     const double d = std::abs(r.final_state[i] - ref.final_state[i]);
@@ -125,10 +130,8 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
   if (samples < 1) throw std::invalid_argument("stiffness: expected at least one sample");
   StiffnessReport rep;
   std::vector<std::complex<double>> all;
-  IntegratorOptions ref_opt;
-  ref_opt.dt = sc.integrator.dt, ref_opt.rtol = sc.integrator.rtol, ref_opt.atol = sc.integrator.atol;
   Eigen::MatrixXd J;
-  const Run ref = run_scene(sc, sc.integrator.name, ref_opt, t_end, t_end / samples,
+  const Run ref = run_scene(sc, sc.integrator.name, std::nullopt, t_end, t_end / samples,
                             [&](Plant& p, double t, const double* x) {
                               p.jacobian_exact(t, x, J);
                               rep.samples.push_back(spectrum_sample(p, t, J, all));

@@ -2,7 +2,7 @@
 // plant as f(t, x) and its Jacobian for any ODE solver (scipy's solve_ivp),
 // and `pumasim run` with its statistics, numpy arrays in and out. Thin: every
 // computation and every check is a library call that the command line makes
-// too (models/robot/dynamics_query, experiments/simulation/run_request), and
+// too (models/robot/dynamics_query, simulation/run), and
 // bad input raises ValueError with the message the command line prints after
 // "pumasim: "; the module itself converts the arguments ("arguments" below:
 // a wrong type is a TypeError naming the argument).
@@ -23,9 +23,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "experiments/simulation/driver.hpp"
-#include "experiments/simulation/run_folder.hpp"
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run_folder.hpp"
+#include "simulation/run.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
@@ -193,19 +193,19 @@ class TomlLiteral {
   void append(const std::string& s) {
     out_ += s;
     if (out_.size() > kMaxOverride) {
-      throw std::invalid_argument("--set " + key_ + ": expected a value of at most " + std::to_string(kMaxOverride) +
+      throw std::invalid_argument("overrides " + key_ + ": expected a value of at most " + std::to_string(kMaxOverride) +
                                   " characters of TOML (the longest command-line argument), got more");
     }
   }
 
   void value(const py::handle& v, int depth) {
     if (depth > kMaxNesting) {
-      throw std::invalid_argument("--set " + key_ + ": expected lists and tables nested at most " +
+      throw std::invalid_argument("overrides " + key_ + ": expected lists and tables nested at most " +
                                   std::to_string(kMaxNesting) + " deep, got deeper (a list that holds itself?)");
     }
     const py::module_ np = py::module_::import("numpy");
     if (is_bool(v)) return append(v.cast<bool>() ? "true" : "false");
-    if (py::isinstance<py::str>(v)) return append(toml_string(utf8(v, "--set " + key_)));
+    if (py::isinstance<py::str>(v)) return append(toml_string(utf8(v, "overrides " + key_)));
     if (py::isinstance(v, np.attr("ndarray"))) return value(v.attr("tolist")(), depth);
     if (PyIndex_Check(v.ptr()) && !PyFloat_Check(v.ptr())) {  // int, numpy's integers
       PyObject* i = PyNumber_Index(v.ptr());
@@ -214,17 +214,17 @@ class TomlLiteral {
       Py_XDECREF(i);
       if (PyErr_Occurred()) {
         py::error_already_set e;
-        throw py::type_error("--set " + key_ + ": expected an integer, got a " + type_name(v) + " (" +
+        throw py::type_error("overrides " + key_ + ": expected an integer, got a " + type_name(v) + " (" +
                              std::string(py::str(e.value())) + ")");
       }
       if (overflow != 0) {
-        throw std::invalid_argument("--set " + key_ + ": expected an integer within +-2^63 (a TOML integer), "
+        throw std::invalid_argument("overrides " + key_ + ": expected an integer within +-2^63 (a TOML integer), "
                                     "got a larger one");
       }
       return append(std::to_string(n));
     }
     if (PyFloat_Check(v.ptr()) || py::hasattr(v, "__float__")) {
-      const double x = number_arg(v, "--set " + key_);
+      const double x = number_arg(v, "overrides " + key_);
       if (std::isnan(x)) return append("nan");
       if (std::isinf(x)) return append(x > 0 ? "inf" : "-inf");
       char buf[32];
@@ -236,8 +236,8 @@ class TomlLiteral {
       append("{");
       bool first = true;
       for (const auto& kv : v.cast<py::dict>()) {
-        if (!py::isinstance<py::str>(kv.first)) wrong_type("--set " + key_, "str keys in a table", kv.first);
-        const std::string k = utf8(kv.first, "--set " + key_);
+        if (!py::isinstance<py::str>(kv.first)) wrong_type("overrides " + key_, "str keys in a table", kv.first);
+        const std::string k = utf8(kv.first, "overrides " + key_);
         const bool bare = !k.empty() && k.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
                                                             "0123456789_-") == std::string::npos;
         append(std::string(first ? "" : ", ") + (bare ? k : toml_string(k)) + " = ");
@@ -256,7 +256,7 @@ class TomlLiteral {
       }
       return append("]");
     }
-    wrong_type("--set " + key_, "a bool, a number, a string, a dict or a list of these", v);
+    wrong_type("overrides " + key_, "a bool, a number, a string, a dict or a list of these", v);
   }
 
   const std::string& key_;
@@ -616,29 +616,48 @@ struct PyRun {
   std::string failure;
 };
 
-PyRun run(const py::object& scene_in, const RunRequest& request, const py::object& out, bool force) {
-  std::optional<std::filesystem::path> dir;
-  if (!out.is_none()) dir = path_arg(out, "out");
+// The Python module's words for the options the library names neutrally
+// (core/option_words.hpp): its keywords, "force=True" for a flag, and the
+// list a scene's overrides are given in.
+std::string python_words(std::string_view name) {
+  if (name == "set") return "overrides";
+  for (const char* flag : {"force", "late_events", "stop_at_outputs", "keep_history"}) {
+    if (name == flag) return std::string(name) + "=True";
+  }
+  return std::string(name);
+}
+
+PyRun run(const py::object& scene_in, const RunOptions& options, const py::object& out, bool force) {
+  RunRequest request;
+  request.options = options;
+  request.force = force;
+  request.keep_rows = true;
+  if (!out.is_none()) request.out = path_arg(out, "out");
   const bool is_scene = py::isinstance<PyScene>(scene_in);
   if (!is_scene && !(py::isinstance<py::str>(scene_in) || py::isinstance<py::bytes>(scene_in) ||
                      py::hasattr(scene_in, "__fspath__"))) {
     wrong_type("scene", "a pumasim.Scene or a scene file's path", scene_in);
   }
-  Scene sc = is_scene ? scene_in.cast<const PyScene&>().scene() : load_checked_scene(path_arg(scene_in, "scene"), {});
-  const RunControls rc = run_controls(sc, request);
-  // What `pumasim run` says on stderr before it starts, as Python warnings.
-  for (const std::string& w : run_start_warnings(sc, rc)) {
-    if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-  }
-  CompletedRun done;
+  if (is_scene) request.scene = &scene_in.cast<const PyScene&>().scene();
+  else request.file = path_arg(scene_in, "scene");
   RunInterrupts interrupts;
-  ProgressHook hook;
-  hook.cancel = interrupts.flag();
-  hook.poll = [&interrupts] { interrupts.poll(); };
+  RunSinks sinks;
+  sinks.words = python_words;
+  // What `pumasim run` says on stderr before it starts, as Python warnings
+  // (an error when the warnings filter makes them one: the run does not start).
+  sinks.warning = [](const std::string& w) {
+    const py::gil_scoped_acquire gil;
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+  };
+  sinks.progress.cancel = interrupts.flag();
+  sinks.progress.poll = [&interrupts] { interrupts.poll(); };
+  RunRecord done;
   {
     py::gil_scoped_release release;
-    done = run_scene(sc, rc, dir, force, hook, nullptr, /*keep_rows=*/true);
+    done = pumasim::run(request, sinks);
   }
+  const Scene& sc = done.plan.scene;
+  const std::optional<std::filesystem::path>& dir = done.plan.folder;
   const SceneRun& r = done.run;
   if (r.result.failure_kind == "interrupted") interrupts.raise("pumasim.run " + sc.name + ": " + r.result.failure);
   const auto m = static_cast<py::ssize_t>(r.state_names.size());
@@ -775,7 +794,7 @@ void bind_run(py::module_& m) {
          const py::object& dt, const py::object& t_end, const py::object& out, const py::object& force,
          const py::object& backend, const py::object& jacobian, const py::object& max_steps,
          const py::object& max_wall, const py::object& late_events, const py::object& stop_at_outputs) {
-        RunRequest r;  // each option's range is checked with the command line's (run_controls)
+        RunOptions r;  // each option's range is checked with the command line's (plan_run)
         r.integrator = optional_text(integrator, "integrator");
         r.backend = optional_text(backend, "backend");
         r.rtol = optional_number(rtol, "rtol");
@@ -818,9 +837,11 @@ PYBIND11_MODULE(pumasim, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const ConfigError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, phrased(e.what(), python_words).c_str());
     } catch (const RunFolderError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, phrased(e.what(), python_words).c_str());
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, phrased(e.what(), python_words).c_str());
     }
   });
 

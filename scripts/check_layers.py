@@ -9,7 +9,7 @@ The layers, lowest first (each a folder and a CMake target; ARCHITECTURE.md):
   models/plant      the plant ODE
   models/scene      scene files (TOML)
   integrators       the ODE interface, methods, registry: no model code
-  experiments/simulation   the driver and run folders: models and integrators
+  simulation        the front door (run), the driver and run folders: models and integrators
   experiments, tests       anything below
   python           the Python module (pybind11): anything below but tests
 
@@ -25,10 +25,10 @@ MODELS = ["core", "models/dynamics", "models/robot", "models/reference", "models
 # Folder -> the project folders its files may include from (longest prefix wins).
 ALLOWED = {MODELS[k]: MODELS[:k + 1] for k in range(len(MODELS))}
 ALLOWED["integrators"] = ["core", "integrators"]
-ALLOWED["experiments/simulation"] = MODELS + ["integrators", "experiments/simulation"]
-ALLOWED["experiments"] = MODELS + ["integrators", "experiments"]
-ALLOWED["tests"] = MODELS + ["integrators", "experiments", "tests"]
-ALLOWED["python"] = MODELS + ["integrators", "experiments", "python"]
+ALLOWED["simulation"] = MODELS + ["integrators", "simulation"]
+ALLOWED["experiments"] = MODELS + ["integrators", "simulation", "experiments"]
+ALLOWED["tests"] = MODELS + ["integrators", "simulation", "experiments", "tests"]
+ALLOWED["python"] = MODELS + ["integrators", "simulation", "experiments", "python"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 
@@ -44,7 +44,7 @@ def folder_of(path, folders):
 def main():
     bad = []
     checked = 0
-    for top in ("core", "models", "integrators", "experiments", "tests", "python"):
+    for top in ("core", "models", "integrators", "simulation", "experiments", "tests", "python"):
         for d, _, names in os.walk(os.path.join(ROOT, top)):
             for n in sorted(names):
                 if not n.endswith((".hpp", ".cpp", ".h")):

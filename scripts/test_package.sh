@@ -20,7 +20,7 @@ mkdir -p "$work"
 cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 for f in lib/cmake/pumasim/pumasim-config.cmake lib/cmake/pumasim/pumasim-config-version.cmake \
          lib/cmake/pumasim/pumasim-targets.cmake include/pumasim/models/plant/plant.hpp \
-         include/pumasim/experiments/simulation/scene_run.hpp share/pumasim/robots/puma560.toml \
+         include/pumasim/simulation/scene_run.hpp share/pumasim/robots/puma560.toml \
          share/pumasim/scenes/paper_slow_6dof_hybrid.toml; do
   [[ -f $prefix/$f ]] || fail "not installed: $f"
 done

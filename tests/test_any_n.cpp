@@ -29,7 +29,7 @@
 
 #include <Eigen/Geometry>
 
-#include "experiments/simulation/driver.hpp"
+#include "simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/plant/plant.hpp"
@@ -299,9 +299,9 @@ std::vector<double> any_n_final_state(int n, const IntegratorInfo& info, const I
   Plant plant(any_n_passive_scene(n).plant);
   auto integ = info.make(o);
   std::vector<double> x;
-  const RunResult r = run_plant(plant, *integ, kAnyNT, kAnyNT, [&](double, const double* s) {
+  const RunResult r = run_plant(plant, *integ, {.t_end = kAnyNT, .output_interval = kAnyNT, .observe = [&](double, const double* s) {
     x.assign(s, s + plant.size());
-  });
+  }});
   EXPECT_TRUE(r.ok) << info.name << " n = " << n << ": " << r.failure;
   return x;
 }
@@ -406,7 +406,7 @@ TEST(AnyN, ALongArmTracksAPosePathWithinTheComputedTorqueBound) {
     double e_max = 0, qd_max = 0, moved = 0;
     const int q0 = plant.layout().q, v0 = plant.layout().qd;
     const Eigen::VectorXd q_start = plant.reference_at(0.0).q;
-    const RunResult r = run_plant(plant, *integ, 2.5, 0.01, [&](double t, const double* x) {
+    const RunResult r = run_plant(plant, *integ, {.t_end = 2.5, .output_interval = 0.01, .observe = [&](double t, const double* x) {
       const Eigen::VectorXd q_ref = plant.reference_at(t).q;  // a copy: the plant's sample is reused
       double speed2 = 0;
       for (int j = 0; j < n; ++j) {
@@ -415,7 +415,7 @@ TEST(AnyN, ALongArmTracksAPosePathWithinTheComputedTorqueBound) {
         moved = std::max(moved, std::abs(q_ref[j] - q_start[j]));
       }
       qd_max = std::max(qd_max, std::sqrt(speed2));
-    });
+    }});
     ASSERT_TRUE(r.ok) << n << ": " << r.failure;
     double zb = 0, zi = std::numeric_limits<double>::infinity();
     for (const JointParams& J : m.joints) {

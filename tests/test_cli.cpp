@@ -25,8 +25,8 @@
 #include "models/robot/robot_file.hpp"
 #include "tests/cli_capture.hpp"
 #include "tests/scratch.hpp"
-#include "experiments/simulation/driver.hpp"
-#include "experiments/simulation/run_documents.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run_documents.hpp"
 
 namespace pumasim {
 namespace {
@@ -280,6 +280,36 @@ TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
   fs::remove_all(d);
 }
 
+// The library names an option neutrally ({{name}}: core/option_words.hpp);
+// the command line phrases every such message in its own words, whichever
+// layer wrote it: the scene overrides (models), the run's options and the
+// run folder (simulation), a failed run (the driver, in stats.json too).
+TEST(CliOutput, EveryMessageNamesTheOptionsAsTheCommandLineSpellsThem) {
+  const fs::path d = scratch("words");
+  fs::create_directories(d / "mine");
+  {
+    std::ofstream(d / "mine" / "notes.txt") << "keep";
+  }
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"check", kScene, "--set", "scene.duration"}, "--set scene.duration: expected section.key=value"},
+      {{"check", kScene, "--unset", "scene.no_such_key"}, "--unset scene.no_such_key: "},
+      {{"run", kScene, "--integrator", "cvode-bdf", "--dt", "1e-3", "--out", (d / "a").string()},
+       "--dt: cvode-bdf is adaptive; expected --rtol and --atol"},
+      {{"run", kScene, "--t-end", "0.01", "--out", (d / "mine").string(), "--force"}, "--out " + (d / "mine").string()},
+      {{"run", kScene, "--integrator", "rk4", "--dt", "1e-3", "--max-steps", "3", "--out", (d / "b").string(),
+        "--quiet"},
+       "a larger --max-steps"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const CliResult r = cli(args);
+    EXPECT_NE(r.status, kExitOk) << args[0];
+    EXPECT_NE(r.err.find(expected), std::string::npos) << expected << " in: " << r.err;
+    EXPECT_EQ(r.err.find("{{"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("{{"), std::string::npos) << r.out;  // stats.json's failure
+  }
+  fs::remove_all(d);
+}
+
 // A run over its step budget: a reported failure (exit 1, files written)
 // naming --max-steps, the time, the last step and the state changing fastest
 // relative to its typical magnitude. (On a smooth scene: on the paper's rule
@@ -295,7 +325,7 @@ TEST(CliOutput, AStepBudgetFailureNamesMaxStepsAndTheFastestState) {
   EXPECT_EQ(doc["ok"], false);
   EXPECT_EQ(doc["steps"], 301);
   for (const char* f : {"cvode-bdf: step budget of 300 steps exhausted at t = ", "(last step h = ",
-                        "fastest-changing component ", "(|f| / scale = ", "--max-steps N"}) {
+                        "fastest-changing component ", "(|f| / scale = ", "a larger --max-steps"}) {
     EXPECT_NE(failure.find(f), std::string::npos) << f << " in: " << failure;
   }
   EXPECT_EQ(r.err, "pumasim run: " + failure + "\n");

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation/driver.hpp"
+#include "simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "tests/integrator_helpers.hpp"
@@ -253,9 +253,9 @@ std::vector<double> plant_final_state(const IntegratorInfo& info, const Integrat
   Plant plant(plant_scene().plant);
   auto integ = info.make(o);
   std::vector<double> x;
-  const RunResult r = run_plant(plant, *integ, kPlantT, kPlantT, [&](double, const double* s) {
+  const RunResult r = run_plant(plant, *integ, {.t_end = kPlantT, .output_interval = kPlantT, .observe = [&](double, const double* s) {
     x.assign(s, s + plant.size());
-  });
+  }});
   EXPECT_TRUE(r.ok) << info.name << ": " << r.failure;
   if (steps) *steps = integ->stats().steps;
   return x;

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "core/invariant.hpp"
+#include "core/option_words.hpp"
 #include "core/registry.hpp"
 
 namespace pumasim {
@@ -52,6 +53,27 @@ TEST(CoreInvariant, AFalseConditionIsAnInternalErrorNamingItAndWhere) {
     EXPECT_NE(msg.find("1 + 1 == 3 is false"), std::string::npos) << msg;
     EXPECT_NE(msg.find("test_core.cpp:" + std::to_string(line)), std::string::npos) << msg;
   }
+}
+
+// The library names an option as {{name}}; each caller's words replace
+// exactly those tokens, and nothing else (a TOML inline table's braces, an
+// unfinished or empty token, upper-case letters) is touched.
+TEST(CoreOptionWords, EachTokenIsTheCallersWordAndNothingElseChanges) {
+  const OptionWords cli = [](std::string_view n) {
+    std::string w = "--" + std::string(n);
+    for (char& c : w) c = c == '_' ? '-' : c;
+    return w;
+  };
+  EXPECT_EQ(option_word("max_steps"), "{{max_steps}}");
+  EXPECT_EQ(phrased("more steps: a larger {{max_steps}}; {{dt}} or {{rtol}}", cli),
+            "more steps: a larger --max-steps; --dt or --rtol");
+  EXPECT_EQ(phrased("{{set}} a={b={c=1}}: x", cli), "--set a={b={c=1}}: x");
+  for (const char* kept : {"{{}}", "{{Dt}}", "{{dt", "{dt}", "{{ dt}}", "{{dt}", "}}{{"}) {
+    EXPECT_EQ(phrased(kept, cli), kept) << kept;
+  }
+  EXPECT_EQ(phrased("{{{dt}}}", cli), "{--dt}") << "the first '{{' that starts a token";
+  EXPECT_EQ(phrased("{{t_end}} and {{t_end}}", {}), "t_end and t_end") << "no words: the neutral names";
+  EXPECT_EQ(phrased("", cli), "");
 }
 
 }  // namespace

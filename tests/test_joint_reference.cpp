@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation/driver.hpp"
+#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/reference/joint_curve.hpp"
 #include "models/reference/numerical_ik.hpp"
@@ -539,7 +539,7 @@ void run_rk4(Plant& plant, double t_end, const Observer& observe) {
   IntegratorOptions o;
   o.dt = 1e-3;
   auto rk4 = make_integrator("rk4", o);
-  const RunResult r = run_plant(plant, *rk4, t_end, 0.01, observe);
+  const RunResult r = run_plant(plant, *rk4, {.t_end = t_end, .output_interval = 0.01, .observe = observe});
   ASSERT_TRUE(r.ok) << r.failure;
 }
 

@@ -1,4 +1,4 @@
-// The friction mode log (experiments/simulation/mode_log.hpp, events.csv) on
+// The friction mode log (simulation/mode_log.hpp, events.csv) on
 // one joint under a known input, against closed forms.
 // The PUMA's first joint alone (vertical axis: no gravity torque; alone, its
 // inertia J = H11 is constant, so h = 0 and the applied torque is the input
@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation/mode_log.hpp"
-#include "experiments/simulation/scene_run.hpp"
+#include "simulation/mode_log.hpp"
+#include "simulation/scene_run.hpp"
 #include "models/scene/scene.hpp"
 #include "tests/scratch.hpp"
 

@@ -19,8 +19,8 @@
 
 #include "experiments/cli.hpp"
 #include "tests/cli_capture.hpp"
-#include "experiments/simulation/driver.hpp"
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run.hpp"
 #include "integrators/registry.hpp"
 #include "models/plant/physical_bounds.hpp"
 #include "models/scene/scene.hpp"
@@ -88,13 +88,13 @@ TEST(PhysicalBounds, PassiveArmSpeedsStayWithinTheEnergyBound) {
     auto integ = find_integrator("odeint-dopri5").make(o);
     double peak = 0;
     int worst = 0;
-    const RunResult r = run_plant(p, *integ, std::min(sc.duration, 2.0), 1e-3, [&](double, const double* x) {
+    const RunResult r = run_plant(p, *integ, {.t_end = std::min(sc.duration, 2.0), .output_interval = 1e-3, .observe = [&](double, const double* x) {
       for (int j = 0; j < L.n; ++j) {
         if (std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j) > peak) {
           peak = std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j), worst = j;
         }
       }
-    });
+    }});
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_GT(peak, 0.0) << scene << ": the arm moved";
     EXPECT_LE(peak, 1.0) << scene << ": qd" << worst + 1 << " past its bound";
@@ -122,13 +122,13 @@ TEST(PhysicalBounds, ADivergedRunIsANamedUnstableFailure) {
 
 // A stable run gets no warning and no failure.
 TEST(PhysicalBounds, TheShippedPaperRunIsNeitherWarnedNorFlagged) {
-  const Scene sc0 = load_checked_scene(kScenes + "/paper_slow.toml", {});
-  Scene sc = sc0;
+  const Scene sc = load_checked_scene(kScenes + "/paper_slow.toml", {});
+  const RunPlan plan = plan_run(sc, {.t_end = 2.0});
+  EXPECT_EQ(stability_warning(plan.scene, plan.controls), "");
   RunRequest req;
-  req.t_end = 2.0;
-  const RunControls rc = run_controls(sc, req);
-  EXPECT_EQ(stability_warning(sc, rc), "");
-  const CompletedRun done = run_scene(sc, rc, std::nullopt, false);
+  req.scene = &sc;
+  req.options.t_end = 2.0;
+  const RunRecord done = run(req);
   EXPECT_TRUE(done.run.result.ok) << done.run.result.failure;
 }
 

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "experiments/simulation/driver.hpp"
+#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/plant/plant.hpp"
@@ -29,7 +29,7 @@ RunResult run_rk4(Plant& plant, double t_end, double dt, double output_interval,
   IntegratorOptions o;
   o.dt = dt;
   auto rk4 = make_integrator("rk4", o);
-  const RunResult r = run_plant(plant, *rk4, t_end, output_interval, observe);
+  const RunResult r = run_plant(plant, *rk4, {.t_end = t_end, .output_interval = output_interval, .observe = observe});
   EXPECT_TRUE(r.ok) << r.failure;
   return r;
 }
@@ -181,7 +181,7 @@ TEST(Friction, HybridModesStayConsistentWithEveryRootFinder) {
     std::vector<double> g(n), q_first(n), q_range(n, 0.0);
     std::vector<bool> slipped(n, false);
     bool first = true;
-    const RunResult r = run_plant(plant, *integ, 4.0, 0.01, [&](double t, const double* x) {
+    const RunResult r = run_plant(plant, *integ, {.t_end = 4.0, .output_interval = 0.01, .observe = [&](double t, const double* x) {
       plant.roots(t, x, g.data());
       for (int j = 0; j < n; ++j) {
         const double qr = plant.reference_at(t).q[j];
@@ -195,7 +195,7 @@ TEST(Friction, HybridModesStayConsistentWithEveryRootFinder) {
         EXPECT_GE(g[j], -1e-6 * sc.plant.friction[j].static_torque) << name << " joint " << j + 1 << " t = " << t;
       }
       first = false;
-    });
+    }});
     ASSERT_TRUE(r.ok) << name << ": " << r.failure;
     EXPECT_GT(r.root_events, 0) << name;
     for (int j = 0; j < n; ++j) {
@@ -269,12 +269,12 @@ TEST(Plant, EnergyLedgerClosesToTheTolerance) {
     double E0 = 0, worst = 0;
     bool first = true;
     scale = 0;
-    run_plant(plant, *integ, 3.0, 0.01, [&](double, const double* x) {
+    run_plant(plant, *integ, {.t_end = 3.0, .output_interval = 0.01, .observe = [&](double, const double* x) {
       const double E = plant.mechanical_energy(x) + plant.magnetic_energy(x);
       if (first) E0 = E, first = false;
       worst = std::max(worst, std::abs(E - E0 - (x[e] - x[e + 1] - x[e + 2])));
       scale = std::max({scale, x[e], x[e + 1], x[e + 2]});
-    });
+    }});
     return worst;
   };
   double scale_tight, scale_loose;

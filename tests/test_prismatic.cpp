@@ -9,7 +9,7 @@
 #include <cmath>
 #include <string>
 
-#include "experiments/simulation/run_recorder.hpp"
+#include "simulation/run_recorder.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/robot/robot_file.hpp"

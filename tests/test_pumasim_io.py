@@ -14,7 +14,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import pumasim_io  # noqa: E402
 
 MARKER = ("# a pumasim run folder: the files pumasim wrote here (it replaces the folder only with --force,\n"
-          "# and only while nothing else is in it)\n")  # as experiments/simulation/run_folder.cpp writes it
+          "# and only while nothing else is in it)\n")  # as simulation/run_folder.cpp writes it
 TRAJECTORY = ("t [s],q1 [rad],qd1 [rad/s],x [m],path_error [mm]\n"
               "0,0.5,0,0.1,0\n"
               "0.01,0.5001,0.02,0.1001,1e-05\n"

@@ -20,9 +20,9 @@
 #include <unistd.h>
 
 #include "experiments/cli.hpp"
-#include "experiments/simulation/run_folder.hpp"
-#include "experiments/simulation/run_recorder.hpp"
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/run_folder.hpp"
+#include "simulation/run_recorder.hpp"
+#include "simulation/run.hpp"
 #include "tests/scratch.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
@@ -262,13 +262,13 @@ TEST(RunFolder, TheSwapWaitsForTheParentFoldersLock) {
 // observed (kept here with keep_rows; %.17g round-trips a double).
 TEST(RunFolder, TheTrajectoryStreamedInChunksHoldsEveryRowExactly) {
   const fs::path root = scratch("stream"), d = root / "run";
-  Scene sc = load_checked_scene(kScene, {"scene.output_interval=0.0001"});
   RunRequest req;
-  req.integrator = "rk4";
-  req.dt = 5e-4;
-  req.t_end = 2.0;
-  const RunControls rc = run_controls(sc, req);
-  const CompletedRun done = run_scene(sc, rc, d, false, {}, nullptr, /*keep_rows=*/true);
+  req.file = kScene;
+  req.sets = {"scene.output_interval=0.0001"};
+  req.options = {.integrator = "rk4", .dt = 5e-4, .t_end = 2.0};
+  req.out = d;
+  req.keep_rows = true;
+  const RunRecord done = run(req);
   ASSERT_TRUE(done.run.result.ok) << done.run.result.failure;
   const std::size_t width = done.run.state_names.size() + 1, rows = 20001;
   ASSERT_GT(rows * width, 3 * RunRecorder::kChunkValues) << "the run must span several chunks";

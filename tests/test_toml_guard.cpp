@@ -155,6 +155,7 @@ TEST(TomlGuard, EveryShippedFilePassesTheGuard) {
 }
 
 // The --set text goes through the same guard: "KEY = VALUE" is what toml++ parses.
+// The library names the option neutrally ({{set}}: core/option_words.hpp).
 TEST(TomlGuard, SetOverridesAreGuardedToo) {
   const std::string scene = test::scene_path("paper_slow");
   auto message = [&](const std::string& set) -> std::string {
@@ -165,7 +166,7 @@ TEST(TomlGuard, SetOverridesAreGuardedToo) {
     }
     return "accepted";
   };
-  EXPECT_NE(message("x\n[=1").find("--set x\n[=1: expected section.key=value with a TOML value (expected a table "
+  EXPECT_NE(message("x\n[=1").find("{{set}} x\n[=1: expected section.key=value with a TOML value (expected a table "
                                    "name after '['"),
             std::string::npos)
       << message("x\n[=1");

@@ -27,7 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
-#include "experiments/simulation/run_documents.hpp"
+#include "simulation/run_documents.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/reference/numerical_ik.hpp"
 #include "models/robot/kinematics.hpp"

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <string>
 
-#include "experiments/simulation/scene_run.hpp"  // simulate_scene
+#include "simulation/run.hpp"  // plan_run, simulate_scene
 #include "integrators/registry.hpp"              // find_integrator
 #include "models/dynamics/backend.hpp"           // make_backend
 #include "models/robot/robot_file.hpp"           // load_robot_file
@@ -40,15 +40,12 @@ int main() try {
 
   // A shipped scene (six joints, hybrid stick-slip, CVODE BDF), its first 0.5 s,
   // with the scene's own integrator settings.
-  Scene scene = load_scene(data + "/scenes/paper_slow_6dof_hybrid.toml");
-  scene.duration = 0.5;
-  RunControls controls;
-  controls.options.dt = scene.integrator.dt;
-  controls.options.rtol = scene.integrator.rtol;
-  controls.options.atol = scene.integrator.atol;
-  controls.adaptive = find_integrator(scene.integrator.name).kind == IntegratorKind::kAdaptive;
+  // plan_run (the front door's first half, simulation/run.hpp) applies the
+  // options to the scene with pumasim run's checks.
+  const RunPlan plan = plan_run(load_scene(data + "/scenes/paper_slow_6dof_hybrid.toml"), {.t_end = 0.5});
+  const Scene& scene = plan.scene;
   std::ostringstream trajectory;  // trajectory.csv's text, as `pumasim run` writes it
-  const SceneRun run = simulate_scene(scene, controls, {}, false, &trajectory);
+  const SceneRun run = simulate_scene(scene, plan.controls, {.trajectory = &trajectory});
   std::cout << "scene " << scene.name << " (robot from " << scene.plant.robot.source << "), "
             << scene.integrator.name << ": " << (run.result.ok ? "ok" : run.result.failure) << ", t = "
             << run.result.t_final << " s, " << run.stats.steps << " steps, " << run.stats.rhs_evaluations

@@ -3,7 +3,7 @@
 // that change the context: time events (controller samples, set-point
 // updates, the reference's and an input's pieces) and the friction modes
 // (friction/stick_slip.hpp). What the integrators see, through PlantSystem
-// (experiments/simulation/driver.hpp). Several Plants may share one model:
+// (simulation/driver.hpp). Several Plants may share one model:
 // Plant(std::shared_ptr<const PlantModel>) makes a context and evaluators of
 // its own, so that threads each with their own Plant evaluate f on one
 // model.

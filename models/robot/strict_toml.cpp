@@ -95,24 +95,24 @@ std::string echoed_override(const std::string& o) {
 void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides) {
   for (const std::string& full : overrides) {
     if (full.size() > kMaxOverrideChars) {
-      throw ConfigError("--set " + echoed_override(full) + ": expected at most " + std::to_string(kMaxOverrideChars) +
+      throw ConfigError("{{set}} " + echoed_override(full) + ": expected at most " + std::to_string(kMaxOverrideChars) +
                         " characters (a longer value belongs in the scene file)");
     }
     const std::string o = echoed_override(full);  // in messages and as the values' source name
     const auto eq = full.find('=');
     if (eq == std::string::npos || eq == 0) {
-      throw ConfigError("--set " + o + ": expected section.key=value (a TOML value, e.g. motor.inductance=1e-5)");
+      throw ConfigError("{{set}} " + o + ": expected section.key=value (a TOML value, e.g. motor.inductance=1e-5)");
     }
     const std::string text = full.substr(0, eq) + " = " + full.substr(eq + 1);
     if (const auto hazard = find_toml_hazard(text)) {
-      throw ConfigError("--set " + o + ": expected section.key=value with a TOML value (expected " +
+      throw ConfigError("{{set}} " + o + ": expected section.key=value with a TOML value (expected " +
                         hazard->expected + ", got " + hazard->got + ")");
     }
     toml::table t;
     try {
-      t = toml::parse(text, "--set " + o);
+      t = toml::parse(text, "{{set}} " + o);
     } catch (const toml::parse_error& e) {
-      throw ConfigError("--set " + o + ": expected section.key=value with a TOML value (" +
+      throw ConfigError("{{set}} " + o + ": expected section.key=value with a TOML value (" +
                         std::string(e.description()) + ")");
     }
     merge_into(doc, t);
@@ -135,7 +135,7 @@ void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const s
         return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
       });
       if (!bare) {
-        throw ConfigError("--unset " + key +
+        throw ConfigError("{{unset}} " + key +
                           ": expected section.key (names of the scene file, e.g. friction.static_torque)");
       }
     }
@@ -144,13 +144,13 @@ void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const s
     for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
       at += (at.empty() ? "" : ".") + parts[i];
       table = table->get_as<toml::table>(parts[i]);
-      if (!table) throw ConfigError("--unset " + key + ": " + file + " has no table [" + at + "]");
+      if (!table) throw ConfigError("{{unset}} " + key + ": " + file + " has no table [" + at + "]");
     }
     if (!table->contains(parts.back())) {
       std::string present;
       for (const auto& [k, v] : *table) present += (present.empty() ? "" : ", ") + std::string(k.str());
       const std::string where = at.empty() ? std::string("its top level") : "[" + at + "]";
-      throw ConfigError("--unset " + key + ": " + file + " has no key '" + key + "'" +
+      throw ConfigError("{{unset}} " + key + ": " + file + " has no key '" + key + "'" +
                         (present.empty() ? std::string() : "; " + where + " has: " + present));
     }
     table->erase(parts.back());
@@ -165,11 +165,11 @@ std::string StrictTable::key_path(std::string_view key) const {
 }
 
 namespace {
-// The command-line override a key came from ("--set a.b=1"), or "". (Keys
+// The override a key came from ("{{set}} a.b=1": core/option_words.hpp), or "". (Keys
 // keep their source when merged; values copied into a table do not.)
 std::string override_of(const toml::key& k) {
   const auto& p = k.source().path;
-  return p && p->rfind("--set", 0) == 0 ? *p : std::string();
+  return p && p->rfind("{{set}}", 0) == 0 ? *p : std::string();
 }
 }  // namespace
 
@@ -191,7 +191,7 @@ std::string StrictTable::where() const {
 }
 
 // A table with no line of the file made it from the command line: the
-// override that did ("--set a.b=1"), else the file alone.
+// override that did ("{{set}} a.b=1"), else the file alone.
 std::string StrictTable::table_origin() const {
   for (const auto& [k, v] : *table_) {
     if (const std::string o = override_of(k); !o.empty()) return o;
@@ -407,7 +407,7 @@ std::string StrictTable::why_not_applicable(const toml::key& k) const {
   for (const auto& [key, v] : *table_) {
     const bool asked = std::find(asked_.begin(), asked_.end(), key.str()) != asked_.end();
     if (asked || find(key.str()) == not_applicable_.end() || !override_of(key).empty()) continue;
-    unsets += " --unset " + key_path(key.str());
+    unsets += " {{unset}} " + key_path(key.str());
   }
   return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
          "; remove it from the file or with" + unsets + ")";

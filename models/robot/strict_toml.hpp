@@ -32,14 +32,15 @@ toml::table parse_toml_file(const std::string& path);
 
 // Command-line overrides "section.key=value" (value in TOML syntax) merged
 // into a parsed document before it is checked; a bad value is reported as
-// "--set section.key=value: section.key: expected ...". An override longer
+// "{{set}} section.key=value: section.key: expected ..." (core/option_words.hpp:
+// each caller names the option in its own words). An override longer
 // than kMaxOverrideChars is refused; messages show at most 120 characters of one.
 inline constexpr std::size_t kMaxOverrideChars = std::size_t{1} << 16;
 void apply_overrides(toml::table& doc, const std::vector<std::string>& overrides);
 
 // Command-line removals "section.key" (any depth; a whole table too): each
 // must name a key of the parsed document `doc` read from `file`, or
-// ConfigError "--unset section.key: FILE has no key 'section.key' ...".
+// ConfigError "{{unset}} section.key: FILE has no key 'section.key' ...".
 void remove_keys(toml::table& doc, const std::vector<std::string>& keys, const std::string& file);
 
 class StrictTable {

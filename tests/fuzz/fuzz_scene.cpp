@@ -5,7 +5,7 @@
 // exception, a crash, a sanitizer report or a hang is a finding.
 #include <cstdint>
 
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/run.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

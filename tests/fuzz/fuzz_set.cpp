@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/run.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

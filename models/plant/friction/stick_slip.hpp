@@ -29,7 +29,7 @@
 
 namespace pumasim {
 
-// One change of a joint's friction mode (experiments/simulation/mode_log.hpp
+// One change of a joint's friction mode (simulation/mode_log.hpp
 // writes them as events.csv): at time t, joint (0-based) entered `mode`;
 // `applied` is the applied torque that decided it [N m, motor side] (the
 // hybrid model: the constraint torque holding the joint after a stick, or the

@@ -1,4 +1,4 @@
-#include "experiments/simulation/run_folder.hpp"
+#include "simulation/run_folder.hpp"
 
 #include <atomic>
 #include <cerrno>
@@ -45,21 +45,21 @@ void check_run_folder_target(const fs::path& dir, bool force) {
   if (!fs::exists(st)) return;
   const std::string d = dir.string();
   if (!fs::is_directory(st)) {
-    throw RunFolderError("--out " + d + ": exists and is not a folder; pumasim writes a run into a new folder");
+    throw RunFolderError("{{out}} " + d + ": exists and is not a folder; pumasim writes a run into a new folder");
   }
   if (!fs::exists(dir / kRunMarker)) {
-    throw RunFolderError("--out " + d + ": the folder exists and is not a pumasim run folder (no " +
+    throw RunFolderError("{{out}} " + d + ": the folder exists and is not a pumasim run folder (no " +
                          std::string(kRunMarker) + " marker); pumasim never replaces what it did not write: "
                          "choose a new folder");
   }
   if (!force) {
-    throw RunFolderError("--out " + d + ": a pumasim run folder is already there; pass --force to replace it");
+    throw RunFolderError("{{out}} " + d + ": a pumasim run folder is already there; pass {{force}} to replace it");
   }
   const std::set<std::string> ours = marker_entries(dir);
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     if (name != kRunMarker && !ours.count(name)) {
-      throw RunFolderError("--out " + d + ": holds " + name + ", which pumasim did not write; it is not replaced "
+      throw RunFolderError("{{out}} " + d + ": holds " + name + ", which pumasim did not write; it is not replaced "
                            "(move that file, or choose a new folder)");
     }
   }
@@ -176,7 +176,7 @@ RunFolderWriter::RunFolderWriter(fs::path dir, bool force) : dir_(std::move(dir)
   } catch (const fs::filesystem_error& e) {  // a folder that cannot be made: the path, not "internal"
     std::error_code ec;
     fs::remove_all(tmp_, ec);
-    throw RunFolderError("--out " + dir_.string() + ": " + e.code().message() + " (" + e.path1().string() +
+    throw RunFolderError("{{out}} " + dir_.string() + ": " + e.code().message() + " (" + e.path1().string() +
                          "); no run folder written");
   } catch (...) {
     std::error_code ec;
@@ -236,7 +236,7 @@ void RunFolderWriter::commit() {
     }
     committed_ = true;
   } catch (const fs::filesystem_error& e) {  // a folder that cannot be renamed: the path, not "internal"
-    throw RunFolderError("--out " + dir_.string() + ": " + e.code().message() + " (" + e.path1().string() +
+    throw RunFolderError("{{out}} " + dir_.string() + ": " + e.code().message() + " (" + e.path1().string() +
                          "); no run folder written");
   }
 }

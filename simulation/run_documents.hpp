@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "experiments/simulation/scene_run.hpp"
+#include "simulation/scene_run.hpp"
 
 namespace pumasim {
 

@@ -112,22 +112,33 @@ enum class Stops {
                        // next output, in order, with the state then (shows what stepping over samples does)
 };
 
-// Runs from the plant's initial state to t_end; observe(t, x) at t = 0 and at
-// every multiple of output_interval reached. An output at an event's instant
-// sees the state after the event. A run that needs more than max_steps steps
-// in all (0: no limit) ends as a reported failure, naming --max-steps and
-// the state changing fastest relative to its typical magnitude (the system's
-// tolerance scale); so does one still running after max_wall seconds of
-// wall-clock time (0: no limit), checked whenever the loop reads the clock
-// (every few ms, see ProgressHook; one step of any method is bounded: it
-// either succeeds or fails); so does one whose progress.cancel is set, as
-// "interrupted" at the time reached. progress.report and progress.poll, when
-// set, are called as ProgressHook says; none of these changes a step. on_step, when set, sees the
-// state at the end of every accepted step, before the events there are
-// applied (the friction mode log: experiments/simulation/mode_log.hpp); it
-// must not change the plant's discrete state.
-RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps = 0, Stops stops = Stops::kEvents,
-                    double max_wall = 0, const ProgressHook& progress = {}, const Observer& on_step = {});
+// What run_plant is asked: how far, what it reports, its budgets.
+struct PlantRunSpec {
+  double t_end = 0;            // [s]
+  double output_interval = 0;  // [s] observe at every multiple of it reached
+  Observer observe;            // each output (may be empty)
+  long max_steps = 0;          // steps in all (0: no limit)
+  Stops stops = Stops::kEvents;
+  double max_wall = 0;         // [s] wall-clock time (0: no limit)
+  ProgressHook progress;
+  Observer on_step;            // the end of every accepted step (may be empty)
+};
+
+// Runs from the plant's initial state to spec.t_end; observe(t, x) at t = 0
+// and at every multiple of output_interval reached. An output at an event's
+// instant sees the state after the event. A run that needs more than
+// max_steps steps in all (0: no limit) ends as a reported failure, naming
+// {{max_steps}} and the state changing fastest relative to its typical
+// magnitude (the system's tolerance scale); so does one still running after
+// max_wall seconds of wall-clock time (0: no limit), checked whenever the
+// loop reads the clock (every few ms, see ProgressHook; one step of any
+// method is bounded: it either succeeds or fails); so does one whose
+// progress.cancel is set, as "interrupted" at the time reached.
+// progress.report and progress.poll, when set, are called as ProgressHook
+// says; none of these changes a step. on_step, when set, sees the state at
+// the end of every accepted step, before the events there are applied (the
+// friction mode log: simulation/mode_log.hpp); it must not change the plant's
+// discrete state.
+RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& spec);
 
 }  // namespace pumasim

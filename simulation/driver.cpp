@@ -1,4 +1,4 @@
-#include "experiments/simulation/driver.hpp"
+#include "simulation/driver.hpp"
 
 #include "core/time_rule.hpp"
 #include "models/plant/physical_bounds.hpp"
@@ -145,12 +145,12 @@ std::string budget_failure(Integrator& integrator, PlantSystem& sys, double t, d
   if (max_wall > 0 && wall > max_wall) {
     const std::string c = chatter();
     return std::string(integrator.name()) + ": wall-clock budget of " + g(max_wall) + " s" + where() + "; " +
-           (c.empty() ? "more time: pumasim run --max-wall S (0: no limit)" : c);
+           (c.empty() ? "more time: a larger {{max_wall}} (0: no limit)" : c);
   }
   if (max_steps > 0 && integrator.stats().steps > max_steps) {
     const std::string c = chatter();
     return std::string(integrator.name()) + ": step budget of " + std::to_string(max_steps) + " steps" + where() +
-           "; " + (c.empty() ? "more steps: pumasim run --max-steps N (0: no limit)" : c);
+           "; " + (c.empty() ? "more steps: a larger {{max_steps}} (0: no limit)" : c);
   }
   return {};
 }
@@ -317,9 +317,8 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
   return sys.state_name(worst) + buf;
 }
 
-RunResult run_plant(Plant& plant, Integrator& integrator, double t_end, double output_interval,
-                    const Observer& observe, long max_steps, Stops stops, double max_wall,
-                    const ProgressHook& progress, const Observer& on_step) {
+RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& spec) {
+  const auto& [t_end, output_interval, observe, max_steps, stops, max_wall, progress, on_step] = spec;
   start_profile();
   const auto start = Clock::now();
   StepClock clock(start);

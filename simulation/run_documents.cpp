@@ -1,4 +1,4 @@
-#include "experiments/simulation/run_documents.hpp"
+#include "simulation/run_documents.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -20,7 +20,7 @@
 #include <sundials/sundials_config.h>
 #include <toml++/toml.h>
 
-#include "experiments/simulation/mode_log.hpp"
+#include "simulation/mode_log.hpp"
 #include "integrators/registry.hpp"
 #include "models/robot/urdf_file.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time

@@ -1,4 +1,4 @@
-#include "experiments/simulation/mode_log.hpp"
+#include "simulation/mode_log.hpp"
 
 #include <cstdio>
 

@@ -1,4 +1,4 @@
-#include "experiments/simulation/run_request.hpp"
+#include "simulation/run.hpp"
 
 #include <charconv>
 #include <cmath>
@@ -8,8 +8,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "experiments/simulation/run_documents.hpp"
-#include "experiments/simulation/run_folder.hpp"
+#include "simulation/run_documents.hpp"
+#include "simulation/run_folder.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
 
@@ -26,47 +26,50 @@ void check_value(const char* option, const std::optional<double>& v, const char*
                               "'");
 }
 
-void check_request(const RunRequest& r) {
-  check_value("--dt", r.dt, "a number > 0", r.dt > 0.0);
-  check_value("--rtol", r.rtol, "a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no digit controlled)",
+void check_options(const RunOptions& r) {
+  check_value("{{dt}}", r.dt, "a number > 0", r.dt > 0.0);
+  check_value("{{rtol}}", r.rtol, "a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no digit controlled)",
               r.rtol >= kRtolMin && r.rtol <= kRtolMax);
-  check_value("--atol", r.atol, "a number > 0", r.atol > 0.0);
-  check_value("--t-end", r.t_end, "a number > 0", r.t_end > 0.0);
+  check_value("{{atol}}", r.atol, "a number > 0", r.atol > 0.0);
+  check_value("{{t_end}}", r.t_end, "a number > 0", r.t_end > 0.0);
+  check_value("{{output_interval}}", r.output_interval, "a number > 0", r.output_interval > 0.0);
   if (r.jacobian && *r.jacobian != "exact" && *r.jacobian != "differences") {
-    throw std::invalid_argument("--jacobian: expected exact or differences, got '" + *r.jacobian + "'");
+    throw std::invalid_argument("{{jacobian}}: expected exact or differences, got '" + *r.jacobian + "'");
   }
-  check_value("--max-steps", r.max_steps, "a whole number in [0, 1e18] (0: no limit)",
+  check_value("{{max_steps}}", r.max_steps, "a whole number in [0, 1e18] (0: no limit)",
               r.max_steps && *r.max_steps >= 0 && *r.max_steps <= 1e18 && *r.max_steps == std::floor(*r.max_steps));
-  check_value("--max-wall", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
-  if (r.late_events && r.stop_at_outputs) throw std::invalid_argument("--late-events excludes --stop-at-outputs");
+  check_value("{{max_wall}}", r.max_wall, "seconds >= 0 (0: no limit)", r.max_wall >= 0.0);
+  if (r.late_events && r.stop_at_outputs) {
+    throw std::invalid_argument("{{late_events}} excludes {{stop_at_outputs}}");
+  }
 }
 
-// --backend: the scene's robot as simulated must be one the back-end can describe.
+// The back-end: the scene's robot as simulated must be one the back-end can describe.
 void override_backend(Scene& sc, const std::string& name) {
   const BackendInfo& info = find_backend(name);
   const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
-  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw std::invalid_argument("--backend: " + why);
+  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw std::invalid_argument("{{backend}}: " + why);
   sc.plant.backend = name;
 }
 
-// --jacobian exact|differences, checked against what the method can take.
+// The Jacobian, exact or differences, checked against what the method can take.
 bool jacobian_choice(const std::string& method, const IntegratorInfo& info, const std::string& choice) {
   const IntegratorCapabilities c = capabilities_of(info);
   const bool exact = choice == "exact";
-  if (!c.uses_jacobian) throw std::invalid_argument("--jacobian: " + method + " uses no Jacobian");
+  if (!c.uses_jacobian) throw std::invalid_argument("{{jacobian}}: " + method + " uses no Jacobian");
   if (exact && !c.exact_jacobian) {
-    throw std::invalid_argument("--jacobian exact: " + method + " forms its own difference quotients only");
+    throw std::invalid_argument("{{jacobian}} exact: " + method + " forms its own difference quotients only");
   }
   if (!exact && !c.jacobian_choice) {
-    throw std::invalid_argument("--jacobian differences: " + method + " takes the plant's exact Jacobian only");
+    throw std::invalid_argument("{{jacobian}} differences: " + method + " takes the plant's exact Jacobian only");
   }
   return exact;
 }
 
-// The integrator's settings: the scene's, overridden by --dt (fixed-step
-// methods) or --rtol and --atol (adaptive ones); an option the method cannot
-// honour is refused. The scene records what was used.
-IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adaptive) {
+// The integrator's settings: the scene's, overridden by dt (fixed-step
+// methods) or rtol and atol (adaptive ones); an option the method cannot
+// honour is refused. The scene (the plan's copy) records what is used.
+IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adaptive) {
   const IntegratorInfo& info = find_integrator(sc.integrator.name);
   IntegratorOptions io;
   io.dt = sc.integrator.dt;
@@ -75,17 +78,17 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
   io.keep_history = a.keep_history;
   adaptive = info.kind == IntegratorKind::kAdaptive;
   if (io.keep_history && adaptive) {
-    throw std::invalid_argument("--keep-history: " + sc.integrator.name + " is adaptive; expected a fixed-step method");
+    throw std::invalid_argument("{{keep_history}}: " + sc.integrator.name + " is adaptive; expected a fixed-step method");
   }
   if (a.dt) {
-    if (adaptive) throw std::invalid_argument("--dt: " + sc.integrator.name + " is adaptive; expected --rtol and --atol");
+    if (adaptive) throw std::invalid_argument("{{dt}}: " + sc.integrator.name + " is adaptive; expected {{rtol}} and {{atol}}");
     io.dt = sc.integrator.dt = *a.dt;
   }
   if (a.rtol || a.atol) {
-    if (!adaptive) throw std::invalid_argument("--rtol/--atol: " + sc.integrator.name + " has a fixed step; expected --dt");
+    if (!adaptive) throw std::invalid_argument("{{rtol}}/{{atol}}: " + sc.integrator.name + " has a fixed step; expected {{dt}}");
     if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
     if (a.atol) io.atol = sc.integrator.atol = *a.atol;
-    // --rtol alone: atol follows it (1e-3 rtol per unit of each state's
+    // rtol alone: atol follows it (1e-3 rtol per unit of each state's
     // scale), so that a tolerance study does not plateau at the scene's atol.
     if (a.rtol && !a.atol) io.atol = sc.integrator.atol = kAtolPerRtol * *a.rtol;
   }
@@ -96,13 +99,13 @@ IntegratorOptions integrator_options(Scene& sc, const RunRequest& a, bool& adapt
         throw std::invalid_argument(
             sc.integrator.name + ": the energy ledger does not count the friction impulses' loss (set-valued friction, "
             "model " + std::string(to_string(f.model)) +
-            "); expected scene.energy_ledger = false (--set scene.energy_ledger=false), or a smooth law "
+            "); expected scene.energy_ledger = false ({{set}} scene.energy_ledger=false), or a smooth law "
             "(tanh, viscous, none)");
       }
     }
   }
   if (!(io.dt > 0) || !(io.rtol > 0) || !(io.atol > 0)) {
-    throw std::invalid_argument("--dt, --rtol, --atol: expected numbers > 0");
+    throw std::invalid_argument("{{dt}}, {{rtol}}, {{atol}}: expected numbers > 0");
   }
   return io;
 }
@@ -121,11 +124,11 @@ Scene load_checked_scene(const std::string& file, const std::vector<std::string>
   return sc;
 }
 
-RunControls run_controls(Scene& sc, const RunRequest& a) {
-  check_request(a);
+RunPlan plan_run(Scene sc, const RunOptions& a) {
+  check_options(a);
   if (a.backend) override_backend(sc, *a.backend);
   if (a.integrator) {
-    find_integrator(*a.integrator);  // an unknown name: the registry's message, before the scene changes
+    find_integrator(*a.integrator);  // an unknown name: the registry's message
     sc.integrator.name = *a.integrator;
   }
   RunControls rc;
@@ -138,10 +141,11 @@ RunControls run_controls(Scene& sc, const RunRequest& a) {
   if (rc.max_steps > 0) rc.options.max_steps = rc.max_steps;  // also each integrator's own per-call limit
   if (a.max_wall) rc.max_wall = *a.max_wall;
   if (a.t_end) sc.duration = *a.t_end, sc.duration_source = "the run's end time (t_end)";
+  if (a.output_interval) sc.output_interval = *a.output_interval;
   rc.stops = a.late_events       ? Stops::kOutputsLateEvents
              : a.stop_at_outputs ? Stops::kEventsAndOutputs
                                  : Stops::kEvents;
-  return rc;
+  return {std::move(sc), rc, std::nullopt};
 }
 
 std::string stability_warning(const Scene& sc, const RunControls& rc) {
@@ -180,28 +184,49 @@ std::vector<std::string> run_start_warnings(const Scene& sc, const RunControls& 
   return out;
 }
 
-CompletedRun run_scene(const Scene& sc, const RunControls& rc, const std::optional<std::filesystem::path>& out,
-                       bool force, const ProgressHook& progress, const RunContext* context, bool keep_rows) {
+namespace {
+
+// Writes the run's folder from its twin (the trajectory already streamed in).
+void write_folder(RunFolderWriter& folder, const RunRecord& rec, const RunContext& started) {
+  folder.write("stats.json", rec.stats);
+  folder.write("meta.json", meta_json(started));
+  folder.write("scene.resolved.toml", resolved_toml(rec.plan.scene));
+  if (!rec.run.events_csv.empty()) folder.write("events.csv", rec.run.events_csv);
+  if (!rec.run.events_speed_csv.empty()) folder.write("events_speed.csv", rec.run.events_speed_csv);
+  folder.commit();
+}
+
+}  // namespace
+
+RunRecord run(const RunRequest& request, const RunSinks& sinks) {
+  std::optional<Scene> loaded;
+  if (!request.scene) loaded.emplace(load_checked_scene(request.file, request.sets, request.unsets));
+  const Scene& given = request.scene ? *request.scene : *loaded;
+  // The start time and the files as loaded, before anything else is read.
+  const RunContext started = run_context(request.argv, given);
+  RunRecord rec{loaded ? plan_run(std::move(*loaded), request.options) : plan_run(given, request.options), {}, {}};
+  const Scene& sc = rec.plan.scene;
+  const RunControls& rc = rec.plan.controls;
+  if (request.out) rec.plan.folder = *request.out;
+  else if (request.default_out) rec.plan.folder = "runs" / std::filesystem::path(sc.name);  // the user's scratch space
+  if (sinks.warning) {
+    for (const std::string& w : run_start_warnings(sc, rc)) sinks.warning(phrased(w, sinks.words));
+  }
   check_run_size(sc, rc.max_steps);
   // Before the run: a refusal costs nothing; the trajectory then streams into
   // the folder's temporary twin, which a failure below removes.
   std::optional<RunFolderWriter> folder;
-  if (out) folder.emplace(*out, force);
-  const RunContext started = context ? *context : run_context({}, sc);  // the start time, the robot file as loaded
-  CompletedRun done;
-  done.run = simulate_scene(sc, rc, progress, keep_rows, folder ? &folder->stream("trajectory.csv") : nullptr);
-  done.stats = stats_json(sc, rc, done.run);
+  if (rec.plan.folder) folder.emplace(*rec.plan.folder, request.force);
+  if (sinks.planned) sinks.planned(rec.plan);
+  rec.run = simulate_scene(sc, rc, {.progress = sinks.progress, .output = sinks.output,
+                                    .keep_rows = request.keep_rows,
+                                    .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
+  rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
+  rec.stats = stats_json(sc, rc, rec.run);
   // An interrupted run (ProgressHook::cancel: Ctrl-C in the Python module)
   // leaves no folder: the twin goes, and a folder it would replace stays.
-  if (folder && done.run.result.failure_kind != "interrupted") {
-    folder->write("stats.json", done.stats);
-    folder->write("meta.json", meta_json(started));
-    folder->write("scene.resolved.toml", resolved_toml(sc));
-    if (!done.run.events_csv.empty()) folder->write("events.csv", done.run.events_csv);
-    if (!done.run.events_speed_csv.empty()) folder->write("events_speed.csv", done.run.events_speed_csv);
-    folder->commit();
-  }
-  return done;
+  if (folder && rec.run.result.failure_kind != "interrupted") write_folder(*folder, rec, started);
+  return rec;
 }
 
 }  // namespace pumasim

@@ -1,4 +1,4 @@
-#include "experiments/simulation/run_recorder.hpp"
+#include "simulation/run_recorder.hpp"
 
 #include <algorithm>
 #include <chrono>

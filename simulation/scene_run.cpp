@@ -1,4 +1,4 @@
-#include "experiments/simulation/scene_run.hpp"
+#include "simulation/scene_run.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "experiments/simulation/mode_log.hpp"
+#include "simulation/mode_log.hpp"
 #include "integrators/registry.hpp"
 
 namespace pumasim {
@@ -31,7 +31,7 @@ void check_stops(const char* key, double period, const Scene& sc, long max_steps
     std::ostringstream m;
     m << key << ": " << period << " s over " << duration << " s (" << sc.duration_source << ") is " << stops
       << " stops, more than the step budget of " << max_steps
-      << " steps (--max-steps N raises it; a longer period or a shorter duration)";
+      << " steps (a larger {{max_steps}} raises it; a longer period or a shorter duration)";
     throw std::invalid_argument(m.str());
   }
 }
@@ -66,13 +66,12 @@ void check_output_size(const Scene& sc, const Plant& plant) {
   }
 }
 
-SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHook& progress, bool keep_rows,
-                        std::ostream* trajectory) {
+SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const SceneRunIo& io) {
   Plant plant(sc.plant);
   check_output_size(sc, plant);  // before anything is sized by the rows
   auto integ = make_integrator(sc.integrator.name, rc.options);
-  RunRecorder recorder(plant, trajectory, keep_rows,
-                       keep_rows ? static_cast<std::size_t>(sc.duration / sc.output_interval + 1) : 0);
+  RunRecorder recorder(plant, io.trajectory, io.keep_rows,
+                       io.keep_rows ? static_cast<std::size_t>(sc.duration / sc.output_interval + 1) : 0);
   SceneRun run;
   bool modes = false;
   for (int j = 0; j < plant.layout().n; ++j) modes |= plant.joint_has_modes(j);
@@ -88,6 +87,7 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   const auto observe = [&](double t, const double* x) {
     if (t == 0.0 && run.modes_classified && classifier.changes().empty()) classifier.step(0.0, x);  // x(0)
     if (t == 0.0 && speed_twin && by_speed.changes().empty()) by_speed.step(0.0, x);
+    if (io.output) io.output(plant, t, x);
     recorder.observe(t, x);
   };
   const Observer on_step = [&](double t, const double* x) {
@@ -97,8 +97,10 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
     if (speed_twin) by_speed.step(t, x);
     run.mode_log_wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  run.result = run_plant(plant, *integ, sc.duration, sc.output_interval, observe, rc.max_steps, rc.stops,
-                         rc.max_wall, progress, modes ? on_step : Observer{});
+  run.result = run_plant(plant, *integ,
+                         {.t_end = sc.duration, .output_interval = sc.output_interval, .observe = observe,
+                          .max_steps = rc.max_steps, .stops = rc.stops, .max_wall = rc.max_wall,
+                          .progress = io.progress, .on_step = modes ? on_step : Observer{}});
   if (modes) {
     const auto& changes = run.modes_classified ? classifier.changes() : plant.mode_changes();
     run.events_csv = events_csv(plant, changes);
@@ -111,7 +113,7 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const ProgressHo
   run.result.wall_time -= recorder.output_seconds();
   recorder.finish();
   run.figures = recorder.figures();
-  if (keep_rows) {
+  if (io.keep_rows) {
     RunRecorder::Rows rows = recorder.take_rows();
     run.rows = std::move(rows.rows);
     run.path_error = std::move(rows.path_error);

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/simulation/driver.hpp"
-#include "experiments/simulation/run_recorder.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run_recorder.hpp"
 #include "integrators/integrator.hpp"
 #include "models/scene/scene.hpp"
 
@@ -74,13 +74,23 @@ struct SceneRun {
   std::vector<double> rows, path_error, path_deviation;
 };
 
-// Runs the scene (integrator scene.integrator.name) over scene.duration;
-// progress.report (may be empty) by wall-clock time from the step loop
-// (driver.hpp: ProgressHook). keep_rows: SceneRun::rows and the path errors.
-// trajectory: where trajectory.csv's text is written as the run goes
-// (nullptr: no text). The run's wall time leaves out the time spent
-// formatting it; its wall-clock budget (controls.max_wall) does not.
-SceneRun simulate_scene(const Scene& scene, const RunControls& controls, const ProgressHook& progress = {},
-                        bool keep_rows = false, std::ostream* trajectory = nullptr);
+// Each output's state, with the run's plant at its discrete state then (the
+// stiffness command takes its Jacobian there); it sees the output before
+// the run recorder does and must not change the plant's discrete state.
+using OutputSink = std::function<void(Plant& plant, double t, const double* x)>;
+
+// What a scene's run reports, and to whom, besides its result.
+struct SceneRunIo {
+  ProgressHook progress;  // by wall-clock time from the step loop (driver.hpp); may be empty
+  OutputSink output;      // may be empty
+  bool keep_rows = false;  // SceneRun::rows and the path errors
+  // Where trajectory.csv's text is written as the run goes (nullptr: no text).
+  std::ostream* trajectory = nullptr;
+};
+
+// Runs the scene (integrator scene.integrator.name) over scene.duration. The
+// run's wall time leaves out the time spent formatting its output; its
+// wall-clock budget (controls.max_wall) does not.
+SceneRun simulate_scene(const Scene& scene, const RunControls& controls, const SceneRunIo& io = {});
 
 }  // namespace pumasim
