@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""The memory a `pumasim run` takes does not grow with its output (README,
-"Reliability: bounds"): the six-joint hybrid scene over 1 s at a 1e-5 s output
+"""The memory a `pumasim run` takes does not grow with its output (docs/user-guide/limits.md):
+the six-joint hybrid scene over 1 s at a 1e-5 s output
 interval (100001 rows) run under an address-space limit (RLIMIT_AS, what
 `ulimit -v` sets) of 64 MiB, with its peak resident memory and the size of
 the trajectory it wrote. The test tests/check_memory_bound.sh asserts the same

@@ -826,7 +826,7 @@ PYBIND11_MODULE(pumasim, m) {
   using namespace pumasim;
 
   m.doc() =
-      "pumasim: the PUMA 560 as one stiff state-space ODE (README.md, \"Use it as a library\").\n\n"
+      "pumasim: the PUMA 560 as one stiff state-space ODE (docs/user-guide/python.md).\n\n"
       "backends(), integrators(): the registries' names; dynamics(...): H, h, g, and tau or qdd;\n"
       "Scene.load(path, overrides): a scene's plant as f(t, x) and its Jacobian; run(scene, ...): `pumasim run`.\n"
       "Bad input raises ValueError with the command line's message, a wrong type TypeError naming the argument.";

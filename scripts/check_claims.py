@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Checks that every figure quoted in the READMEs is backed by the results file it names.
+"""Checks that every figure quoted in the READMEs and in docs/ is backed by the results file it names.
 
     /usr/bin/python3 scripts/check_claims.py [--list] [--root DIR] [--allow FILE] [DOC.md ...]
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes the parsers of user input with libFuzzer (tests/fuzz/, README.md "Sanitizers and fuzzing"):
+# Fuzzes the parsers of user input with libFuzzer (tests/fuzz/, docs/developer-guide/sanitizers-and-fuzzing.md):
 # builds the preset asan (clang, AddressSanitizer + UndefinedBehaviorSanitizer),
 # writes the seed corpora from every shipped file (scripts/fuzz_seeds.py), then runs
 # each harness -- robot, scene, set, urdf, joint_csv, open_loop_csv -- for a time or
@@ -14,7 +14,7 @@
 #   scripts/fuzz.sh --time 3600             a long run, an hour per harness
 #   scripts/fuzz.sh --runs 1000000 robot    one million inputs, the robot harness only
 #   --record                                also write the summary to results/fuzz/long_run.json
-#                                           (the run the README quotes): the harnesses run
+#                                           (the run docs/developer-guide/sanitizers-and-fuzzing.md quotes): the harnesses run
 #                                           replace their entries, the others' stay, each
 #                                           entry with its own command, date and revision
 #

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes the fuzz harnesses' seed corpora (README.md, "Sanitizers and fuzzing") from every shipped file.
+"""Writes the fuzz harnesses' seed corpora (docs/developer-guide/sanitizers-and-fuzzing.md) from every shipped file.
 
   robot/  every robot file (models/robots/*.toml)
   scene/  every scene file (experiments/scenes/*.toml)

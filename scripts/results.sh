@@ -90,13 +90,13 @@ stage_order() {
 stage_testset() { /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"; }
 stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
 stage_extreme() {
-  # extreme but valid scenes x every integrator end within their budgets (README, the reliability checks)
+  # extreme but valid scenes x every integrator end within their budgets (docs/user-guide/limits.md)
   /usr/bin/python3 tests/check_extreme_runs.py "$PUMASIM" --jobs "$jobs" --out results/reliability > /dev/null
-  # a long run's memory under a 64 MiB address-space limit (README, "Reliability: bounds")
+  # a long run's memory under a 64 MiB address-space limit (docs/user-guide/limits.md)
   /usr/bin/python3 experiments/memory_bound.py --bin "$PUMASIM" --out results/reliability/memory_bound.json > /dev/null
 }
 stage_rosenbrock() {
-  # rosenbrock4's error estimate against its true local error (README, "Is the instrument right?")
+  # rosenbrock4's error estimate against its true local error (docs/science/instrument.md)
   for lam in -1050 -1e4; do
     "$PUMASIM_BIN/rosenbrock_local_error" "$lam" > "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp"
     mv "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp" "results/testset/rosenbrock_local_error_lambda$lam.tsv"

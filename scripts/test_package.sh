@@ -16,7 +16,7 @@ fail() { echo "test_package: $*" >&2; exit 1; }
 rm -rf "$work"
 mkdir -p "$work"
 
-# 1. Install, as the README says (cmake --install <build> --prefix <dir>).
+# 1. Install, as docs/user-guide/cpp.md says (cmake --install <build> --prefix <dir>).
 cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 for f in lib/cmake/pumasim/pumasim-config.cmake lib/cmake/pumasim/pumasim-config-version.cmake \
          lib/cmake/pumasim/pumasim-targets.cmake include/pumasim/models/plant/plant.hpp \

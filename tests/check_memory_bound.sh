@@ -3,7 +3,7 @@
 # run streams trajectory.csv to its folder in chunks (run_recorder.hpp), so
 # that the six-joint hybrid scene over 1 s at a 1e-5 s output interval --
 # 100001 rows of 55 columns, a file larger than the whole address space
-# allowed -- runs under `ulimit -v` at the bound the README states (64 MiB).
+# allowed -- runs under `ulimit -v` at the bound docs/user-guide/limits.md states (64 MiB).
 # Sizes derived from the scene are refused before anything is allocated, under
 # the same bound: rows x columns above 1e8, and a reference whose duration
 # (path length / max_speed) would need 1e9 table pieces.
@@ -15,7 +15,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 scenes=$root/experiments/scenes
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-bound_kib=65536  # 64 MiB: README.md, "Reliability: bounds"
+bound_kib=65536  # 64 MiB: docs/user-guide/limits.md
 
 status=0
 (ulimit -v $bound_kib

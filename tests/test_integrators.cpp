@@ -346,7 +346,7 @@ class CountingJacobians final : public OdeSystem {
 };
 
 TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
-  // What each method is documented to use (README, the integrator table), with
+  // What each method is documented to use (docs/user-guide/integrators.md, the integrator table), with
   // exact_jacobian true and false: E exact (calls OdeSystem::jacobian), D its
   // own difference quotients.
   const std::map<std::string, std::string> documented = {

@@ -1,4 +1,4 @@
-// Shared by the libFuzzer harnesses (README.md, "Sanitizers and fuzzing"): the input written
+// Shared by the libFuzzer harnesses (docs/developer-guide/sanitizers-and-fuzzing.md): the input written
 // to a file the loaders can read (the loaders take paths, and their messages
 // name them), in memory when /dev/shm exists.
 #pragma once
