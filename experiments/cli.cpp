@@ -23,9 +23,6 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "simulation/run_folder.hpp"
-#include "simulation/run.hpp"
-#include "simulation/scene_run.hpp"
 #include "experiments/stiffness.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
@@ -35,6 +32,9 @@
 #include "models/robot/robot_file.hpp"
 #include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/run.hpp"
+#include "simulation/run_folder.hpp"
+#include "simulation/scene_run.hpp"
 
 namespace pumasim {
 namespace {
@@ -471,16 +471,19 @@ void add_run(CLI::App* app, RunArgs& a) {
       ->check(registry_name([](const std::string& s) { find_integrator(s); }));
   add_text(app, "--backend", o.backend, "the dynamics back-end (pumasim backends; default: the scene's)", "NAME")
       ->check(registry_name([](const std::string& s) { find_backend(s); }));
-  add_number(app, "--dt", o.dt, kPositive, "fixed-step methods: the step [s] (default: the scene's integrator.dt, "
-             "else 5e-4)", "SECONDS");
-  add_number(app, "--rtol", o.rtol, kRtol, "adaptive methods: the relative tolerance (default: the scene's "
+  add_number(app, "--dt", o.dt, kPositive,
+             "fixed-step methods: the step [s] (default: the scene's integrator.dt, "
+             "else 5e-4)",
+             "SECONDS");
+  add_number(app, "--rtol", o.rtol, kRtol,
+             "adaptive methods: the relative tolerance (default: the scene's "
              "integrator.rtol, else 1e-6)");
   add_number(app, "--atol", o.atol, kPositive,
              "adaptive methods: the absolute tolerance per unit of each state's typical magnitude (default: "
              "1e-3 x --rtol when --rtol is given, else the scene's integrator.atol, else 1e-8)");
   add_number(app, "--t-end", o.t_end, kPositive, "the run's end [s] (default: the scene's duration)", "SECONDS");
-  app->add_option_function<std::string>("--out", [&r](const std::string& s) { r.out = s; },
-                                        "the run folder (default runs/<scene name>/)")
+  app->add_option_function<std::string>(
+         "--out", [&r](const std::string& s) { r.out = s; }, "the run folder (default runs/<scene name>/)")
       ->type_name("DIR");
   app->add_flag("--force", r.force, "replace DIR if it is a pumasim run folder holding only what pumasim wrote");
   app->add_option("--jacobian", o.jacobian,
@@ -491,10 +494,14 @@ void add_run(CLI::App* app, RunArgs& a) {
             return s == "exact" || s == "differences" ? "" : "expected exact or differences, got '" + s + "'";
           },
           "exact|differences", "jacobian"));
-  add_number(app, "--max-steps", o.max_steps, kStepBudget, "steps in all before the run ends as a failure "
-             "(default 10000000)", "N");
-  add_number(app, "--max-wall", o.max_wall, kSecondsBudget, "wall-clock seconds before the run ends as a failure "
-             "(default 600)", "SECONDS");
+  add_number(app, "--max-steps", o.max_steps, kStepBudget,
+             "steps in all before the run ends as a failure "
+             "(default 10000000)",
+             "N");
+  add_number(app, "--max-wall", o.max_wall, kSecondsBudget,
+             "wall-clock seconds before the run ends as a failure "
+             "(default 600)",
+             "SECONDS");
   app->add_flag("--quiet,-q", a.quiet, "no progress line and no 'results: DIR/' line on stderr (errors and a "
                 "failed run's reason still are)");
   auto* late = app->add_flag("--late-events", o.late_events,

@@ -10,11 +10,11 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "simulation/run.hpp"
 #include "core/time_rule.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
 #include "models/dynamics/backend.hpp"
+#include "simulation/run.hpp"
 
 namespace pumasim {
 namespace {
@@ -27,12 +27,16 @@ struct Run {
 // A run of the scene through the front door (simulation/run.hpp), with
 // `integrator` at its scene settings or at step dt, over [0, t_end], `at`
 // seeing each output with the run's plant.
-Run run_scene(const Scene& sc, const std::string& integrator, std::optional<double> dt, double t_end,
-              double interval, const OutputSink& at) {
+Run run_scene(const Scene& sc, const std::string& integrator, std::optional<double> dt, double t_end, double interval,
+              const OutputSink& at) {
   RunRequest request;
   request.scene = &sc;
-  request.options = {.integrator = integrator, .dt = dt, .t_end = t_end, .output_interval = interval,
-                     .max_steps = 20'000'000, .max_wall = 0};
+  request.options = {.integrator = integrator,
+                     .dt = dt,
+                     .t_end = t_end,
+                     .output_interval = interval,
+                     .max_steps = 20'000'000,
+                     .max_wall = 0};
   Run r;
   RunSinks sinks;
   sinks.output = [&](Plant& plant, double t, const double* x) {
@@ -131,11 +135,11 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
   StiffnessReport rep;
   std::vector<std::complex<double>> all;
   Eigen::MatrixXd J;
-  const Run ref = run_scene(sc, sc.integrator.name, std::nullopt, t_end, t_end / samples,
-                            [&](Plant& p, double t, const double* x) {
-                              p.jacobian_exact(t, x, J);
-                              rep.samples.push_back(spectrum_sample(p, t, J, all));
-                            });
+  const Run ref =
+      run_scene(sc, sc.integrator.name, std::nullopt, t_end, t_end / samples, [&](Plant& p, double t, const double* x) {
+        p.jacobian_exact(t, x, J);
+        rep.samples.push_back(spectrum_sample(p, t, J, all));
+      });
   if (!ref.ok) throw std::runtime_error("stiffness: the scene's own run (" + sc.integrator.name + ") failed");
   std::vector<std::complex<double>> decaying;
   for (const auto& l : all) {

@@ -23,14 +23,14 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "simulation/driver.hpp"
-#include "simulation/run_folder.hpp"
-#include "simulation/run.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
 #include "models/robot/dynamics_query.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run.hpp"
+#include "simulation/run_folder.hpp"
 
 namespace py = pybind11;
 
@@ -193,7 +193,8 @@ class TomlLiteral {
   void append(const std::string& s) {
     out_ += s;
     if (out_.size() > kMaxOverride) {
-      throw std::invalid_argument("overrides " + key_ + ": expected a value of at most " + std::to_string(kMaxOverride) +
+      throw std::invalid_argument("overrides " + key_ + ": expected a value of at most " +
+                                  std::to_string(kMaxOverride) +
                                   " characters of TOML (the longest command-line argument), got more");
     }
   }
@@ -218,7 +219,8 @@ class TomlLiteral {
                              std::string(py::str(e.value())) + ")");
       }
       if (overflow != 0) {
-        throw std::invalid_argument("overrides " + key_ + ": expected an integer within +-2^63 (a TOML integer), "
+        throw std::invalid_argument("overrides " + key_ +
+                                    ": expected an integer within +-2^63 (a TOML integer), "
                                     "got a larger one");
       }
       return append(std::to_string(n));
@@ -638,8 +640,10 @@ PyRun run(const py::object& scene_in, const RunOptions& options, const py::objec
                      py::hasattr(scene_in, "__fspath__"))) {
     wrong_type("scene", "a pumasim.Scene or a scene file's path", scene_in);
   }
-  if (is_scene) request.scene = &scene_in.cast<const PyScene&>().scene();
-  else request.file = path_arg(scene_in, "scene");
+  if (is_scene)
+    request.scene = &scene_in.cast<const PyScene&>().scene();
+  else
+    request.file = path_arg(scene_in, "scene");
   RunInterrupts interrupts;
   RunSinks sinks;
   sinks.words = python_words;
@@ -792,8 +796,8 @@ void bind_run(py::module_& m) {
       "run",
       [](const py::object& scene, const py::object& integrator, const py::object& rtol, const py::object& atol,
          const py::object& dt, const py::object& t_end, const py::object& out, const py::object& force,
-         const py::object& backend, const py::object& jacobian, const py::object& max_steps,
-         const py::object& max_wall, const py::object& late_events, const py::object& stop_at_outputs) {
+         const py::object& backend, const py::object& jacobian, const py::object& max_steps, const py::object& max_wall,
+         const py::object& late_events, const py::object& stop_at_outputs) {
         RunOptions r;  // each option's range is checked with the command line's (plan_run)
         r.integrator = optional_text(integrator, "integrator");
         r.backend = optional_text(backend, "backend");

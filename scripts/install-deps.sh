@@ -18,6 +18,7 @@ PACKAGES=(
   python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
   python3-pytest                       # tests of the Python scripts' module (tests/test_pumasim_io.py)
   strace                               # tests/test_input_files.py: every file a run opens is hashed
+  clang-format                         # clang-format 14: the lines a change touches follow .clang-format (scripts/check_format.sh)
   pybind11-dev python3-pybind11 python3-dev  # the Python module `import pumasim` (python/)
   python3-numpy python3-scipy          # its arrays, and its tests against scipy's solve_ivp
   python3-hypothesis                   # its property-based test with hostile arguments (tests/test_python_hostile.py)

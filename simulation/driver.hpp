@@ -119,9 +119,9 @@ struct PlantRunSpec {
   Observer observe;            // each output (may be empty)
   long max_steps = 0;          // steps in all (0: no limit)
   Stops stops = Stops::kEvents;
-  double max_wall = 0;         // [s] wall-clock time (0: no limit)
+  double max_wall = 0;  // [s] wall-clock time (0: no limit)
   ProgressHook progress;
-  Observer on_step;            // the end of every accepted step (may be empty)
+  Observer on_step;  // the end of every accepted step (may be empty)
 };
 
 // Runs from the plant's initial state to spec.t_end; observe(t, x) at t = 0

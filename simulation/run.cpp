@@ -8,10 +8,10 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "simulation/run_documents.hpp"
-#include "simulation/run_folder.hpp"
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
+#include "simulation/run_documents.hpp"
+#include "simulation/run_folder.hpp"
 
 namespace pumasim {
 namespace {
@@ -28,7 +28,8 @@ void check_value(const char* option, const std::optional<double>& v, const char*
 
 void check_options(const RunOptions& r) {
   check_value("{{dt}}", r.dt, "a number > 0", r.dt > 0.0);
-  check_value("{{rtol}}", r.rtol, "a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no digit controlled)",
+  check_value("{{rtol}}", r.rtol,
+              "a number in [1e-14, 0.1] (below, less than about 50 roundings of a state; above, no digit controlled)",
               r.rtol >= kRtolMin && r.rtol <= kRtolMax);
   check_value("{{atol}}", r.atol, "a number > 0", r.atol > 0.0);
   check_value("{{t_end}}", r.t_end, "a number > 0", r.t_end > 0.0);
@@ -48,7 +49,8 @@ void check_options(const RunOptions& r) {
 void override_backend(Scene& sc, const std::string& name) {
   const BackendInfo& info = find_backend(name);
   const RobotModel sim = simulated_robot(sc.plant.robot, sc.plant.n, sc.plant.q_held);
-  if (const std::string why = info.why_unsupported(sim); !why.empty()) throw std::invalid_argument("{{backend}}: " + why);
+  if (const std::string why = info.why_unsupported(sim); !why.empty())
+    throw std::invalid_argument("{{backend}}: " + why);
   sc.plant.backend = name;
 }
 
@@ -78,14 +80,17 @@ IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adapt
   io.keep_history = a.keep_history;
   adaptive = info.kind == IntegratorKind::kAdaptive;
   if (io.keep_history && adaptive) {
-    throw std::invalid_argument("{{keep_history}}: " + sc.integrator.name + " is adaptive; expected a fixed-step method");
+    throw std::invalid_argument("{{keep_history}}: " + sc.integrator.name +
+                                " is adaptive; expected a fixed-step method");
   }
   if (a.dt) {
-    if (adaptive) throw std::invalid_argument("{{dt}}: " + sc.integrator.name + " is adaptive; expected {{rtol}} and {{atol}}");
+    if (adaptive)
+      throw std::invalid_argument("{{dt}}: " + sc.integrator.name + " is adaptive; expected {{rtol}} and {{atol}}");
     io.dt = sc.integrator.dt = *a.dt;
   }
   if (a.rtol || a.atol) {
-    if (!adaptive) throw std::invalid_argument("{{rtol}}/{{atol}}: " + sc.integrator.name + " has a fixed step; expected {{dt}}");
+    if (!adaptive)
+      throw std::invalid_argument("{{rtol}}/{{atol}}: " + sc.integrator.name + " has a fixed step; expected {{dt}}");
     if (a.rtol) io.rtol = sc.integrator.rtol = *a.rtol;
     if (a.atol) io.atol = sc.integrator.atol = *a.atol;
     // rtol alone: atol follows it (1e-3 rtol per unit of each state's
@@ -97,8 +102,10 @@ IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adapt
     for (const FrictionParams& f : sc.plant.friction) {
       if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {
         throw std::invalid_argument(
-            sc.integrator.name + ": the energy ledger does not count the friction impulses' loss (set-valued friction, "
-            "model " + std::string(to_string(f.model)) +
+            sc.integrator.name +
+            ": the energy ledger does not count the friction impulses' loss (set-valued friction, "
+            "model " +
+            std::string(to_string(f.model)) +
             "); expected scene.energy_ledger = false ({{set}} scene.energy_ledger=false), or a smooth law "
             "(tanh, viscous, none)");
       }
@@ -207,8 +214,10 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
   RunRecord rec{loaded ? plan_run(std::move(*loaded), request.options) : plan_run(given, request.options), {}, {}};
   const Scene& sc = rec.plan.scene;
   const RunControls& rc = rec.plan.controls;
-  if (request.out) rec.plan.folder = *request.out;
-  else if (request.default_out) rec.plan.folder = "runs" / std::filesystem::path(sc.name);  // the user's scratch space
+  if (request.out)
+    rec.plan.folder = *request.out;
+  else if (request.default_out)
+    rec.plan.folder = "runs" / std::filesystem::path(sc.name);  // the user's scratch space
   if (sinks.warning) {
     for (const std::string& w : run_start_warnings(sc, rc)) sinks.warning(phrased(w, sinks.words));
   }
@@ -218,9 +227,11 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
   std::optional<RunFolderWriter> folder;
   if (rec.plan.folder) folder.emplace(*rec.plan.folder, request.force);
   if (sinks.planned) sinks.planned(rec.plan);
-  rec.run = simulate_scene(sc, rc, {.progress = sinks.progress, .output = sinks.output,
-                                    .keep_rows = request.keep_rows,
-                                    .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
+  rec.run = simulate_scene(sc, rc,
+                           {.progress = sinks.progress,
+                            .output = sinks.output,
+                            .keep_rows = request.keep_rows,
+                            .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
   rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
   rec.stats = stats_json(sc, rc, rec.run);
   // An interrupted run (ProgressHook::cancel: Ctrl-C in the Python module)

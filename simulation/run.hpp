@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "core/option_words.hpp"
+#include "models/scene/scene.hpp"
 #include "simulation/run_documents.hpp"
 #include "simulation/scene_run.hpp"
-#include "models/scene/scene.hpp"
 
 namespace pumasim {
 
@@ -52,10 +52,10 @@ struct RunRequest {
   const Scene* scene = nullptr;
   RunOptions options;
   std::optional<std::filesystem::path> out;  // the run folder (none: none, unless default_out)
-  bool default_out = false;  // without out: runs/<the scene's name> (the command line's default)
-  bool force = false;        // out may replace a pumasim run folder holding only what pumasim wrote
-  bool keep_rows = false;    // the output rows kept in SceneRun::rows, with their path errors
-  std::vector<std::string> argv;  // the command line, for meta.json (empty: none)
+  bool default_out = false;                  // without out: runs/<the scene's name> (the command line's default)
+  bool force = false;                        // out may replace a pumasim run folder holding only what pumasim wrote
+  bool keep_rows = false;                    // the output rows kept in SceneRun::rows, with their path errors
+  std::vector<std::string> argv;             // the command line, for meta.json (empty: none)
 };
 
 // The run's record, made before it runs: the scene as run (the request's
@@ -72,8 +72,8 @@ struct RunPlan {
 struct RunSinks {
   std::function<void(const RunPlan&)> planned;      // the plan, once made, before the run
   std::function<void(const std::string&)> warning;  // each warning before the run (run_start_warnings)
-  ProgressHook progress;                             // from the step loop (driver.hpp)
-  OutputSink output;                                 // each output, with the run's plant (scene_run.hpp)
+  ProgressHook progress;                            // from the step loop (driver.hpp)
+  OutputSink output;                                // each output, with the run's plant (scene_run.hpp)
   OptionWords words;  // the caller's words for the options in the warnings and the failure (empty: neutral)
 };
 

@@ -20,10 +20,10 @@
 #include <sundials/sundials_config.h>
 #include <toml++/toml.h>
 
-#include "simulation/mode_log.hpp"
 #include "integrators/registry.hpp"
 #include "models/robot/urdf_file.hpp"
 #include "pumasim_build_info.hpp"  // generated at build time
+#include "simulation/mode_log.hpp"
 
 namespace pumasim {
 namespace {

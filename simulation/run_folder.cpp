@@ -49,7 +49,8 @@ void check_run_folder_target(const fs::path& dir, bool force) {
   }
   if (!fs::exists(dir / kRunMarker)) {
     throw RunFolderError("{{out}} " + d + ": the folder exists and is not a pumasim run folder (no " +
-                         std::string(kRunMarker) + " marker); pumasim never replaces what it did not write: "
+                         std::string(kRunMarker) +
+                         " marker); pumasim never replaces what it did not write: "
                          "choose a new folder");
   }
   if (!force) {
@@ -59,7 +60,8 @@ void check_run_folder_target(const fs::path& dir, bool force) {
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     if (name != kRunMarker && !ours.count(name)) {
-      throw RunFolderError("{{out}} " + d + ": holds " + name + ", which pumasim did not write; it is not replaced "
+      throw RunFolderError("{{out}} " + d + ": holds " + name +
+                           ", which pumasim did not write; it is not replaced "
                            "(move that file, or choose a new folder)");
     }
   }

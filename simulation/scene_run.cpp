@@ -6,8 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "simulation/mode_log.hpp"
 #include "integrators/registry.hpp"
+#include "simulation/mode_log.hpp"
 
 namespace pumasim {
 namespace {
@@ -98,9 +98,14 @@ SceneRun simulate_scene(const Scene& sc, const RunControls& rc, const SceneRunIo
     run.mode_log_wall_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   run.result = run_plant(plant, *integ,
-                         {.t_end = sc.duration, .output_interval = sc.output_interval, .observe = observe,
-                          .max_steps = rc.max_steps, .stops = rc.stops, .max_wall = rc.max_wall,
-                          .progress = io.progress, .on_step = modes ? on_step : Observer{}});
+                         {.t_end = sc.duration,
+                          .output_interval = sc.output_interval,
+                          .observe = observe,
+                          .max_steps = rc.max_steps,
+                          .stops = rc.stops,
+                          .max_wall = rc.max_wall,
+                          .progress = io.progress,
+                          .on_step = modes ? on_step : Observer{}});
   if (modes) {
     const auto& changes = run.modes_classified ? classifier.changes() : plant.mode_changes();
     run.events_csv = events_csv(plant, changes);

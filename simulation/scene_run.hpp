@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "simulation/driver.hpp"
-#include "simulation/run_recorder.hpp"
 #include "integrators/integrator.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run_recorder.hpp"
 
 namespace pumasim {
 
@@ -81,8 +81,8 @@ using OutputSink = std::function<void(Plant& plant, double t, const double* x)>;
 
 // What a scene's run reports, and to whom, besides its result.
 struct SceneRunIo {
-  ProgressHook progress;  // by wall-clock time from the step loop (driver.hpp); may be empty
-  OutputSink output;      // may be empty
+  ProgressHook progress;   // by wall-clock time from the step loop (driver.hpp); may be empty
+  OutputSink output;       // may be empty
   bool keep_rows = false;  // SceneRun::rows and the path errors
   // Where trajectory.csv's text is written as the run goes (nullptr: no text).
   std::ostream* trajectory = nullptr;

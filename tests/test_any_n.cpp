@@ -29,11 +29,10 @@
 
 #include <Eigen/Geometry>
 
-#include "simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
-#include "models/plant/plant.hpp"
 #include "models/dynamics/jet2.hpp"
+#include "models/plant/plant.hpp"
 #include "models/reference/numerical_ik.hpp"
 #include "models/reference/trajectory.hpp"
 #include "models/robot/kinematics.hpp"
@@ -41,8 +40,9 @@
 #include "models/robot/robot_file.hpp"
 #include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
-#include "tests/integrator_helpers.hpp"
+#include "simulation/driver.hpp"
 #include "tests/any_n_scenes.hpp"
+#include "tests/integrator_helpers.hpp"
 #include "tests/scratch.hpp"
 
 namespace pumasim {
@@ -299,9 +299,10 @@ std::vector<double> any_n_final_state(int n, const IntegratorInfo& info, const I
   Plant plant(any_n_passive_scene(n).plant);
   auto integ = info.make(o);
   std::vector<double> x;
-  const RunResult r = run_plant(plant, *integ, {.t_end = kAnyNT, .output_interval = kAnyNT, .observe = [&](double, const double* s) {
-    x.assign(s, s + plant.size());
-  }});
+  const RunResult r =
+      run_plant(plant, *integ, {.t_end = kAnyNT, .output_interval = kAnyNT, .observe = [&](double, const double* s) {
+                                  x.assign(s, s + plant.size());
+                                }});
   EXPECT_TRUE(r.ok) << info.name << " n = " << n << ": " << r.failure;
   return x;
 }
@@ -406,16 +407,18 @@ TEST(AnyN, ALongArmTracksAPosePathWithinTheComputedTorqueBound) {
     double e_max = 0, qd_max = 0, moved = 0;
     const int q0 = plant.layout().q, v0 = plant.layout().qd;
     const Eigen::VectorXd q_start = plant.reference_at(0.0).q;
-    const RunResult r = run_plant(plant, *integ, {.t_end = 2.5, .output_interval = 0.01, .observe = [&](double t, const double* x) {
-      const Eigen::VectorXd q_ref = plant.reference_at(t).q;  // a copy: the plant's sample is reused
-      double speed2 = 0;
-      for (int j = 0; j < n; ++j) {
-        e_max = std::max(e_max, std::abs(q_ref[j] - x[q0 + j]));
-        speed2 += x[v0 + j] * x[v0 + j];
-        moved = std::max(moved, std::abs(q_ref[j] - q_start[j]));
-      }
-      qd_max = std::max(qd_max, std::sqrt(speed2));
-    }});
+    const RunResult r =
+        run_plant(plant, *integ, {.t_end = 2.5, .output_interval = 0.01, .observe = [&](double t, const double* x) {
+                                    const Eigen::VectorXd q_ref =
+                                        plant.reference_at(t).q;  // a copy: the plant's sample is reused
+                                    double speed2 = 0;
+                                    for (int j = 0; j < n; ++j) {
+                                      e_max = std::max(e_max, std::abs(q_ref[j] - x[q0 + j]));
+                                      speed2 += x[v0 + j] * x[v0 + j];
+                                      moved = std::max(moved, std::abs(q_ref[j] - q_start[j]));
+                                    }
+                                    qd_max = std::max(qd_max, std::sqrt(speed2));
+                                  }});
     ASSERT_TRUE(r.ok) << n << ": " << r.failure;
     double zb = 0, zi = std::numeric_limits<double>::infinity();
     for (const JointParams& J : m.joints) {

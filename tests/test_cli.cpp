@@ -23,10 +23,10 @@
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/robot_file.hpp"
-#include "tests/cli_capture.hpp"
-#include "tests/scratch.hpp"
 #include "simulation/driver.hpp"
 #include "simulation/run_documents.hpp"
+#include "tests/cli_capture.hpp"
+#include "tests/scratch.hpp"
 
 namespace pumasim {
 namespace {
@@ -287,9 +287,7 @@ TEST(CliOutput, RunPrintsOnlyItsJsonOnStdout) {
 TEST(CliOutput, EveryMessageNamesTheOptionsAsTheCommandLineSpellsThem) {
   const fs::path d = scratch("words");
   fs::create_directories(d / "mine");
-  {
-    std::ofstream(d / "mine" / "notes.txt") << "keep";
-  }
+  { std::ofstream(d / "mine" / "notes.txt") << "keep"; }
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"check", kScene, "--set", "scene.duration"}, "--set scene.duration: expected section.key=value"},
       {{"check", kScene, "--unset", "scene.no_such_key"}, "--unset scene.no_such_key: "},

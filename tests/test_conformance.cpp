@@ -24,12 +24,12 @@
 #include <string>
 #include <vector>
 
-#include "simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
-#include "tests/integrator_helpers.hpp"
 #include "integrators/testset/problems.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
+#include "tests/integrator_helpers.hpp"
 
 namespace pumasim {
 namespace {
@@ -253,9 +253,10 @@ std::vector<double> plant_final_state(const IntegratorInfo& info, const Integrat
   Plant plant(plant_scene().plant);
   auto integ = info.make(o);
   std::vector<double> x;
-  const RunResult r = run_plant(plant, *integ, {.t_end = kPlantT, .output_interval = kPlantT, .observe = [&](double, const double* s) {
-    x.assign(s, s + plant.size());
-  }});
+  const RunResult r =
+      run_plant(plant, *integ, {.t_end = kPlantT, .output_interval = kPlantT, .observe = [&](double, const double* s) {
+                                  x.assign(s, s + plant.size());
+                                }});
   EXPECT_TRUE(r.ok) << info.name << ": " << r.failure;
   if (steps) *steps = integ->stats().steps;
   return x;

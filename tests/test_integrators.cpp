@@ -14,15 +14,15 @@
 
 #include <unistd.h>
 
+#include "core/time_rule.hpp"
 #include "experiments/cli.hpp"
-#include "simulation/driver.hpp"
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
+#include "integrators/stability.hpp"
+#include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 #include "tests/integrator_helpers.hpp"
 #include "tests/scratch.hpp"
-#include "integrators/stability.hpp"
-#include "core/time_rule.hpp"
-#include "models/scene/scene.hpp"
 
 #ifndef PUMASIM_SCENES_DIR
 #error "PUMASIM_SCENES_DIR must be defined by the build"
@@ -497,9 +497,10 @@ TEST(Driver, StopsAtEverySampleAndAgreesAcrossIntegrators) {
     o.rtol = 1e-10, o.atol = 1e-12;
     auto integ = make_integrator(name, o);
     std::vector<double>& out = std::string(name) == "rk4" ? a : b;
-    const RunResult r = run_plant(plant, *integ, {.t_end = T, .output_interval = T, .observe = [&](double, const double* x) {
-      out.assign(x, x + plant.size());
-    }});
+    const RunResult r =
+        run_plant(plant, *integ, {.t_end = T, .output_interval = T, .observe = [&](double, const double* x) {
+                                    out.assign(x, x + plant.size());
+                                  }});
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_EQ(r.time_events, 200) << name;  // samples at 1 ms, 2 ms, ..., 200 ms
   }
@@ -517,9 +518,12 @@ TEST(Driver, LateEventsAreExactOnlyWhenTheStopsFallOnTheSamples) {
     Plant plant(sc.plant);
     auto integ = make_integrator("cvode-bdf", tol(1e-10, 1e-12));
     std::vector<double> out;
-    const RunResult r = run_plant(plant, *integ, {.t_end = T, .output_interval = output_interval, .observe = [&](double, const double* x) {
-      out.assign(x, x + plant.size());
-    }, .max_steps = 0, .stops = stop_at_events ? Stops::kEvents : Stops::kOutputsLateEvents});
+    const RunResult r = run_plant(plant, *integ,
+                                  {.t_end = T,
+                                   .output_interval = output_interval,
+                                   .observe = [&](double, const double* x) { out.assign(x, x + plant.size()); },
+                                   .max_steps = 0,
+                                   .stops = stop_at_events ? Stops::kEvents : Stops::kOutputsLateEvents});
     EXPECT_TRUE(r.ok) << r.failure;
     EXPECT_EQ(r.time_events, 200);
     return out;
@@ -566,7 +570,10 @@ TEST(Imex, AgreesWithBdfOnThePlant) {
     Plant plant(sc.plant);
     auto integ = make_integrator(name, tol(1e-10, 1e-12));
     std::vector<double>& out = std::string(name) == "cvode-bdf" ? b : a;
-    const RunResult r = run_plant(plant, *integ, {.t_end = 0.1, .output_interval = 0.1, .observe = [&](double, const double* x) { out.assign(x, x + plant.size()); }});
+    const RunResult r =
+        run_plant(plant, *integ, {.t_end = 0.1, .output_interval = 0.1, .observe = [&](double, const double* x) {
+                                    out.assign(x, x + plant.size());
+                                  }});
     ASSERT_TRUE(r.ok) << r.failure;
   }
   for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(a[i], b[i], 1e-8) << i;
@@ -588,8 +595,13 @@ TEST(HybridFriction, WithoutFrictionLevelsIsTheViscousLaw) {
       Plant plant(sc->plant);
       auto integ = make_integrator(name, tol(1e-8, 1e-10));
       std::vector<double>& out = sc == &hybrid ? a : b;
-      const RunResult r = run_plant(
-          plant, *integ, {.t_end = 0.05, .output_interval = 0.05, .observe = [&](double, const double* x) { out.assign(x, x + plant.size()); }, .max_steps = 200000, .stops = Stops::kEvents, .max_wall = 20.0});
+      const RunResult r = run_plant(plant, *integ,
+                                    {.t_end = 0.05,
+                                     .output_interval = 0.05,
+                                     .observe = [&](double, const double* x) { out.assign(x, x + plant.size()); },
+                                     .max_steps = 200000,
+                                     .stops = Stops::kEvents,
+                                     .max_wall = 20.0});
       ASSERT_TRUE(r.ok) << name << ": " << r.failure;
       EXPECT_EQ(r.root_events, 0) << name;
     }
@@ -644,7 +656,13 @@ TEST(Run, EndsWhenItsCancelFlagIsSet) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     cancel.store(true);
   });
-  const RunResult r = run_plant(plant, *integ, {.t_end = sc.duration, .output_interval = sc.output_interval, .max_steps = 0, .stops = Stops::kEvents, .max_wall = 0, .progress = hook});
+  const RunResult r = run_plant(plant, *integ,
+                                {.t_end = sc.duration,
+                                 .output_interval = sc.output_interval,
+                                 .max_steps = 0,
+                                 .stops = Stops::kEvents,
+                                 .max_wall = 0,
+                                 .progress = hook});
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stopper.join();
   EXPECT_FALSE(r.ok);

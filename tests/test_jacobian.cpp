@@ -16,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/dynamics/dual_n.hpp"
@@ -28,6 +27,7 @@
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 #include "tests/helpers.hpp"
 #include "tests/scene_paths.hpp"
 
@@ -286,15 +286,16 @@ TEST(PlantJacobian, HybridFrictionStuckAndSlippingJointsAlongARun) {
     o.rtol = 1e-6, o.atol = 1e-8;
     auto integ = make_integrator("cvode-bdf", o);
     int mixed = 0, some_stuck = 0, some_slipping = 0;
-    const RunResult r = run_plant(plant, *integ, {.t_end = t_end, .output_interval = t_end / 40, .observe = [&](double t, const double* x) {
-      const int n = plant.layout().n;
-      int stuck = 0;
-      for (int j = 0; j < n; ++j) stuck += plant.slip_mode(j) == SlipMode::kStuck;
-      mixed += stuck > 0 && stuck < n;
-      some_stuck += stuck > 0;
-      some_slipping += stuck < n;
-      expect_plant_jacobians_agree(plant, t, x, std::to_string(stuck) + " stuck");
-    }});
+    const RunResult r = run_plant(
+        plant, *integ, {.t_end = t_end, .output_interval = t_end / 40, .observe = [&](double t, const double* x) {
+                          const int n = plant.layout().n;
+                          int stuck = 0;
+                          for (int j = 0; j < n; ++j) stuck += plant.slip_mode(j) == SlipMode::kStuck;
+                          mixed += stuck > 0 && stuck < n;
+                          some_stuck += stuck > 0;
+                          some_slipping += stuck < n;
+                          expect_plant_jacobians_agree(plant, t, x, std::to_string(stuck) + " stuck");
+                        }});
     EXPECT_TRUE(r.ok);
     EXPECT_GT(some_stuck, 0);
     EXPECT_GT(some_slipping, 0);

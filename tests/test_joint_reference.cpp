@@ -13,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/reference/joint_curve.hpp"
 #include "models/reference/numerical_ik.hpp"
@@ -22,6 +21,7 @@
 #include "models/robot/robot_file.hpp"
 #include "models/scene/joint_csv.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 
 #include "tests/scene_paths.hpp"
 #include "tests/scratch.hpp"

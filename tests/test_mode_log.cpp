@@ -24,9 +24,9 @@
 #include <string>
 #include <vector>
 
+#include "models/scene/scene.hpp"
 #include "simulation/mode_log.hpp"
 #include "simulation/scene_run.hpp"
-#include "models/scene/scene.hpp"
 #include "tests/scratch.hpp"
 
 namespace pumasim {

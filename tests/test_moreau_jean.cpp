@@ -16,12 +16,12 @@
 
 #include <Eigen/Dense>
 
-#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/plant/friction/stick_solve.hpp"
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 #include "tests/scene_paths.hpp"
 #include "tests/scratch.hpp"
 
@@ -327,11 +327,12 @@ Times moreau_jean_times(const PlantConfig& pc, double dt, double t_end) {
   auto integ = make_integrator("moreau-jean", o);
   Times out{-1, -1};
   const int qd = plant.layout().qd;
-  const RunResult r = run_plant(plant, *integ, {.t_end = t_end, .output_interval = dt, .observe = [&](double t, const double* x) {
-    const bool moving = std::abs(x[qd]) > 1e-12;
-    if (moving && out.t_b < 0) out.t_b = t;
-    if (!moving && out.t_b >= 0 && out.t_s < 0) out.t_s = t;
-  }});
+  const RunResult r =
+      run_plant(plant, *integ, {.t_end = t_end, .output_interval = dt, .observe = [&](double t, const double* x) {
+                                  const bool moving = std::abs(x[qd]) > 1e-12;
+                                  if (moving && out.t_b < 0) out.t_b = t;
+                                  if (!moving && out.t_b >= 0 && out.t_s < 0) out.t_s = t;
+                                }});
   EXPECT_TRUE(r.ok) << r.failure;
   const IntegratorStats& st = integ->stats();
   EXPECT_EQ(st.friction_solves, st.steps);  // one coupled solve per step
@@ -399,9 +400,10 @@ TEST(MoreauJean, FirstOrderOnASmoothScene) {
     o.dt = dt;
     auto integ = make_integrator(method, o);
     std::vector<double> x;
-    const RunResult r = run_plant(plant, *integ, {.t_end = 1.0, .output_interval = 1.0, .observe = [&](double t, const double* xs) {
-      if (t == 1.0) x.assign(xs, xs + 2 * pc.n);
-    }});
+    const RunResult r =
+        run_plant(plant, *integ, {.t_end = 1.0, .output_interval = 1.0, .observe = [&](double t, const double* xs) {
+                                    if (t == 1.0) x.assign(xs, xs + 2 * pc.n);
+                                  }});
     EXPECT_TRUE(r.ok) << r.failure;
     return x;
   };
@@ -442,9 +444,10 @@ TEST(MoreauJean, FirstOrderThroughTheFrictionImpulses) {
     Plant plant(pc);
     auto integ = make_integrator(method, o);
     std::vector<double> x;
-    const RunResult r = run_plant(plant, *integ, {.t_end = kEnd, .output_interval = kEnd, .observe = [&](double t, const double* xs) {
-      if (t == kEnd) x.assign(xs, xs + 2 * pc.n);
-    }});
+    const RunResult r =
+        run_plant(plant, *integ, {.t_end = kEnd, .output_interval = kEnd, .observe = [&](double t, const double* xs) {
+                                    if (t == kEnd) x.assign(xs, xs + 2 * pc.n);
+                                  }});
     EXPECT_TRUE(r.ok) << r.failure;
     if (out) *out = r;
     EXPECT_EQ(integ->stats().friction_solves, std::string(method).starts_with("moreau") ? integ->stats().steps : 0);

@@ -18,12 +18,12 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
-#include "tests/cli_capture.hpp"
-#include "simulation/driver.hpp"
-#include "simulation/run.hpp"
 #include "integrators/registry.hpp"
 #include "models/plant/physical_bounds.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run.hpp"
+#include "tests/cli_capture.hpp"
 #include "tests/scratch.hpp"
 
 namespace pumasim {
@@ -88,13 +88,15 @@ TEST(PhysicalBounds, PassiveArmSpeedsStayWithinTheEnergyBound) {
     auto integ = find_integrator("odeint-dopri5").make(o);
     double peak = 0;
     int worst = 0;
-    const RunResult r = run_plant(p, *integ, {.t_end = std::min(sc.duration, 2.0), .output_interval = 1e-3, .observe = [&](double, const double* x) {
-      for (int j = 0; j < L.n; ++j) {
-        if (std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j) > peak) {
-          peak = std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j), worst = j;
-        }
-      }
-    }});
+    const RunResult r = run_plant(
+        p, *integ,
+        {.t_end = std::min(sc.duration, 2.0), .output_interval = 1e-3, .observe = [&](double, const double* x) {
+           for (int j = 0; j < L.n; ++j) {
+             if (std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j) > peak) {
+               peak = std::abs(x[L.qd + j]) / p.physical_bound(L.qd + j), worst = j;
+             }
+           }
+         }});
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_GT(peak, 0.0) << scene << ": the arm moved";
     EXPECT_LE(peak, 1.0) << scene << ": qd" << worst + 1 << " past its bound";

@@ -31,11 +31,11 @@
 #include <vector>
 
 #include "experiments/cli.hpp"
-#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 #include "tests/scratch.hpp"
 
 namespace pumasim {
@@ -103,7 +103,8 @@ RunResult run(Plant& plant, const std::string& integrator, double t_end, double 
   o.rtol = 1e-6;
   o.atol = 1e-8;
   auto method = make_integrator(integrator, o);
-  const RunResult r = run_plant(plant, *method, {.t_end = t_end, .output_interval = output_interval, .observe = observe});
+  const RunResult r =
+      run_plant(plant, *method, {.t_end = t_end, .output_interval = output_interval, .observe = observe});
   EXPECT_TRUE(r.ok) << r.failure;
   return r;
 }
@@ -169,7 +170,9 @@ TEST(OpenLoop, ConstantVoltageRunsTheMotorAtItsClosedFormSteadyState) {
     o.dt = 1e-4;  // under the electrical time constant La / Rt ~ 1 ms
     auto rk4 = make_integrator("rk4", o);
     const RunResult r =
-        run_plant(plant, *rk4, {.t_end = t_end, .output_interval = t_end, .observe = [&](double, const double* x) { x_end.assign(x, x + plant.size()); }});
+        run_plant(plant, *rk4, {.t_end = t_end, .output_interval = t_end, .observe = [&](double, const double* x) {
+                                  x_end.assign(x, x + plant.size());
+                                }});
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_NEAR(x_end[plant.layout().index("qd1")], w / Z, 1e-10 * std::abs(w / Z)) << c.u;
     EXPECT_NEAR(x_end[plant.layout().index("i_motor1")], B * w / K, 1e-10 * B * w / K) << c.u;

@@ -10,13 +10,13 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "simulation/driver.hpp"
 #include "integrators/registry.hpp"
-#include "models/robot/kinematics.hpp"
 #include "models/plant/plant.hpp"
+#include "models/robot/kinematics.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
 
 #include "tests/scene_paths.hpp"
 #include "tests/scratch.hpp"
@@ -181,21 +181,23 @@ TEST(Friction, HybridModesStayConsistentWithEveryRootFinder) {
     std::vector<double> g(n), q_first(n), q_range(n, 0.0);
     std::vector<bool> slipped(n, false);
     bool first = true;
-    const RunResult r = run_plant(plant, *integ, {.t_end = 4.0, .output_interval = 0.01, .observe = [&](double t, const double* x) {
-      plant.roots(t, x, g.data());
-      for (int j = 0; j < n; ++j) {
-        const double qr = plant.reference_at(t).q[j];
-        if (first) q_first[j] = qr;
-        q_range[j] = std::max(q_range[j], std::abs(qr - q_first[j]));
-        if (plant.slip_mode(j) != SlipMode::kStuck) {
-          slipped[j] = true;
-          continue;
-        }
-        EXPECT_EQ(x[plant.layout().qd + j], 0.0) << name << " joint " << j + 1 << " t = " << t;
-        EXPECT_GE(g[j], -1e-6 * sc.plant.friction[j].static_torque) << name << " joint " << j + 1 << " t = " << t;
-      }
-      first = false;
-    }});
+    const RunResult r = run_plant(
+        plant, *integ, {.t_end = 4.0, .output_interval = 0.01, .observe = [&](double t, const double* x) {
+                          plant.roots(t, x, g.data());
+                          for (int j = 0; j < n; ++j) {
+                            const double qr = plant.reference_at(t).q[j];
+                            if (first) q_first[j] = qr;
+                            q_range[j] = std::max(q_range[j], std::abs(qr - q_first[j]));
+                            if (plant.slip_mode(j) != SlipMode::kStuck) {
+                              slipped[j] = true;
+                              continue;
+                            }
+                            EXPECT_EQ(x[plant.layout().qd + j], 0.0) << name << " joint " << j + 1 << " t = " << t;
+                            EXPECT_GE(g[j], -1e-6 * sc.plant.friction[j].static_torque)
+                                << name << " joint " << j + 1 << " t = " << t;
+                          }
+                          first = false;
+                        }});
     ASSERT_TRUE(r.ok) << name << ": " << r.failure;
     EXPECT_GT(r.root_events, 0) << name;
     for (int j = 0; j < n; ++j) {
@@ -270,11 +272,11 @@ TEST(Plant, EnergyLedgerClosesToTheTolerance) {
     bool first = true;
     scale = 0;
     run_plant(plant, *integ, {.t_end = 3.0, .output_interval = 0.01, .observe = [&](double, const double* x) {
-      const double E = plant.mechanical_energy(x) + plant.magnetic_energy(x);
-      if (first) E0 = E, first = false;
-      worst = std::max(worst, std::abs(E - E0 - (x[e] - x[e + 1] - x[e + 2])));
-      scale = std::max({scale, x[e], x[e + 1], x[e + 2]});
-    }});
+                                const double E = plant.mechanical_energy(x) + plant.magnetic_energy(x);
+                                if (first) E0 = E, first = false;
+                                worst = std::max(worst, std::abs(E - E0 - (x[e] - x[e + 1] - x[e + 2])));
+                                scale = std::max({scale, x[e], x[e + 1], x[e + 2]});
+                              }});
     return worst;
   };
   double scale_tight, scale_loose;

@@ -9,10 +9,10 @@
 #include <cmath>
 #include <string>
 
-#include "simulation/run_recorder.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/robot/robot_file.hpp"
+#include "simulation/run_recorder.hpp"
 #include "tests/helpers.hpp"
 
 #ifndef PUMASIM_TEST_ROBOTS_DIR

@@ -20,9 +20,9 @@
 #include <unistd.h>
 
 #include "experiments/cli.hpp"
+#include "simulation/run.hpp"
 #include "simulation/run_folder.hpp"
 #include "simulation/run_recorder.hpp"
-#include "simulation/run.hpp"
 #include "tests/scratch.hpp"
 
 #ifndef PUMASIM_SCENES_DIR

@@ -27,7 +27,6 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/cli.hpp"
-#include "simulation/run_documents.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/reference/numerical_ik.hpp"
 #include "models/robot/kinematics.hpp"
@@ -35,6 +34,7 @@
 #include "models/robot/robot_file.hpp"
 #include "models/robot/urdf_file.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/run_documents.hpp"
 #include "tests/helpers.hpp"
 #include "tests/scratch.hpp"
 

@@ -7,11 +7,11 @@
 #include <sstream>
 #include <string>
 
-#include "simulation/run.hpp"  // plan_run, simulate_scene
-#include "integrators/registry.hpp"              // find_integrator
-#include "models/dynamics/backend.hpp"           // make_backend
-#include "models/robot/robot_file.hpp"           // load_robot_file
-#include "models/scene/scene.hpp"                // load_scene
+#include "integrators/registry.hpp"     // find_integrator
+#include "models/dynamics/backend.hpp"  // make_backend
+#include "models/robot/robot_file.hpp"  // load_robot_file
+#include "models/scene/scene.hpp"       // load_scene
+#include "simulation/run.hpp"           // plan_run, simulate_scene
 
 int main() try {
   using namespace pumasim;
