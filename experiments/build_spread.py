@@ -30,8 +30,8 @@ import statistics
 import subprocess
 import sys
 
-import pumasim_io
-from pumasim_io import ROOT
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT
 
 RUNS = ([("paper_slow_6dof_hybrid", "cvode-adams", 1e-3)] +
         [("paper_slow_viscous", "cvode-bdf", r) for r in (1e-4, 1e-6, 1e-7, 1e-8, 1e-9)] +

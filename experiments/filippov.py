@@ -34,8 +34,8 @@ import tomllib
 import numpy as np
 
 import mode_sequence
-import pumasim_io
-from pumasim_io import PUMASIM, ROOT
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import PUMASIM, ROOT
 
 SCENE = os.path.join("experiments", "scenes", "stick_slip.toml")
 BUDGET = 200000  # steps, as experiments/sweeps/stick_slip.toml's max_steps

@@ -66,9 +66,9 @@ import time
 import numpy as np
 
 import order_fit
-import pumasim_io
+from pumasim_exp import io as pumasim_io
 from order_fit import THEORY
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp.io import ROOT, PUMASIM
 
 REFERENCE = ("cvode-bdf", ["--rtol", "1e-12", "--atol", "1e-15"])
 CHECK = ("odeint-dopri5", ["--rtol", "1e-12", "--atol", "1e-15"])

@@ -33,8 +33,8 @@ import os
 import subprocess
 import sys
 
-import pumasim_io
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT, PUMASIM
 SCENE = "paper_slow_viscous"
 INTERVALS = [0.001, 0.01, 1.0]
 TOLS = [(1e-4, 1e-7), (1e-6, 1e-9)]

@@ -22,8 +22,8 @@ import statistics
 import subprocess
 import sys
 
-import pumasim_io
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT, PUMASIM
 DEFAULT_OUT = os.path.join(ROOT, "results", "paper")
 WORK = os.path.join(ROOT, "build", "paper_runs")  # a folder per --out below it: run.sh and results.sh apart
 PAPER_MAX_ERROR_MM = 0.65   # Sokolov & Toth 1999, sec. 6, slow run

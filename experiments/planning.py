@@ -27,8 +27,8 @@ import subprocess
 import sys
 import tomllib
 
-import pumasim_io
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT, PUMASIM
 SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
 PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
 VIA = 16

@@ -25,8 +25,8 @@ import tomllib
 
 import findings
 import mode_table
-import pumasim_io
-from pumasim_io import ROOT
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT
 
 PLANNING_FINDINGS = os.path.join(ROOT, "experiments", "planning_findings.toml")
 STANDARD_TABLES = ("runs", "references", "creep", "limit")

@@ -27,8 +27,8 @@ import statistics
 import subprocess
 import sys
 
-import pumasim_io
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT, PUMASIM
 
 SCENE = "paper_slow_viscous"
 SETTINGS = [("cvode-bdf", r) for r in (1e-4, 1e-6, 1e-7, 1e-8, 1e-9)] + \

@@ -38,8 +38,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-import pumasim_io
-from pumasim_io import ROOT, PUMASIM
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT, PUMASIM
 
 SCENE = os.path.join(ROOT, "experiments", "scenes", "paper_slow.toml")
 WORK = os.path.join(ROOT, "build", "sensitivity")

@@ -38,8 +38,8 @@ import time
 from collections import OrderedDict, defaultdict
 
 import order_fit
-import pumasim_io
-from pumasim_io import ROOT
+from pumasim_exp import io as pumasim_io
+from pumasim_exp.io import ROOT
 
 # An error that rises by more than this factor when the setting tightens is a
 # break in monotonicity (smaller changes are noise of the step-size controller).

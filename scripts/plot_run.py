@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 
 
 def load(run_dir):

@@ -2,7 +2,7 @@
 # Regenerates the committed results under results/ (the only script that
 # writes there; the README's main command, scripts/run.sh, writes runs/).
 #
-#   scripts/results.sh [--jobs N] [STAGE ...]     (default: every stage but fuzz, in this order)
+#   scripts/results.sh [--jobs N] [STAGE ...]     (default: every stage but fuzz, cost and ci, in this order)
 #
 # Stages:
 #   sweeps      every sweep in experiments/sweeps/ (work-precision on the paper's
@@ -20,6 +20,12 @@
 #   buildspread adaptive counts of the native build against the portable one
 #               (experiments/build_spread.py)
 #   paper       the paper's experiment re-run (experiments/paper_experiment.py)
+#   sensitivity the paper's experiment against its unpublished parameters
+#               (experiments/sensitivity.py; long: converged runs at every point)
+#   partitioned the paper's scheme, monolithic and partitioned Adams-Bashforth
+#               (experiments/partitioned.py; long: rk4 references at 1e-5 s)
+#   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
+#   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (scripts/bench_dynamics.sh)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
@@ -27,21 +33,36 @@
 #               results/fuzz/long_run.json). About half an hour for the six harnesses on
 #               2 cores, hence not in the default run; FUZZ_HARNESSES="urdf joint_csv"
 #               runs only those (their entries replaced, the others' kept).
+#   cost        only when named: where a run's wall time goes (scripts/cost_breakdown.py,
+#               the release build against the profiled one, preset profile, which it
+#               builds); records the label COST_LABEL (default main) in
+#               results/cost_breakdown.json, the other labels kept.
+#   ci          only when named: CI's wall time on a fresh clone (scripts/measure_ci.sh;
+#               as long as CI, on a committed tree with nothing else running).
 #
-# Every figure but the fuzz stage's comes from the portable build (preset portable: the x86-64
+# What each stage writes is the `# writes:` line above its function (a path
+# ending in '/' is the folder and everything in it; {folder} and {name} stand
+# for every sweep file's [sweep] folder and name): every file under results/
+# must be written by a stage (the CTest Python.ResultsHaveProducers checks it,
+# without running anything).
+#
+# Every figure but the fuzz, cost and ci stages' comes from the portable build (preset portable: the x86-64
 # baseline, no -march=native), so that results/ does not depend on this
 # machine's instruction set; each run's meta.json and the benchmark's table
 # record the flags and the CPU. (The native release build is built too: the
 # buildspread stage compares the two.) A fresh full run takes about 20 minutes
-# on 2 cores (the report's header states how long its last full run took).
+# on 2 cores, before sensitivity and partitioned (the report's header states
+# how long its last full run took).
 # Runs already complete under build/sweeps/ are skipped: delete that folder
 # for a fresh run. Uses private copies of the binaries (build/results-bin/),
 # so that rebuilding meanwhile does not change the program under measurement.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
-all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper panda bench report)
-named_only=(fuzz)
+all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
+     partitioned filippov panda bench report)
+named_only=(fuzz cost ci)
+own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -56,22 +77,9 @@ while [ $# -gt 0 ]; do
 done
 full=0
 if [ ${#stages[@]} -eq 0 ]; then stages=("${all[@]}"); full=1; fi
-if [ "${stages[*]}" = fuzz ]; then
-  # The fuzz stage alone needs neither release build: scripts/fuzz.sh builds build/asan.
-  # shellcheck disable=SC2086
-  exec scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}
-fi
-scripts/build.sh > /dev/null   # the dependencies, and the native build (buildspread)
-cmake --preset portable > /dev/null
-cmake --build --preset portable -j "$(nproc)" > /dev/null
-mkdir -p build/results-bin
-for b in pumasim testset rosenbrock_local_error bench_dynamics; do
-  cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
-done
-cp build/release/bin/pumasim build/results-bin/pumasim-native.tmp && mv build/results-bin/pumasim-native.tmp build/results-bin/pumasim-native
-export PUMASIM=$PWD/build/results-bin/pumasim PUMASIM_BIN=$PWD/build/results-bin
-start=$(date +%s)
 
+# writes: results/{folder}/{name}.csv results/{folder}/{name}.png results/{folder}/{name}_cost.png
+# writes: results/{folder}/{name}_precision.md results/{folder}/{name}_modes.md results/{folder}/{name}_summary.json
 stage_sweeps() {
   # The work-precision sweeps (wall time is their headline) run one at a time,
   # so that no run shares the machine with another; the others in parallel.
@@ -81,20 +89,31 @@ stage_sweeps() {
     /usr/bin/python3 experiments/sweep.py "$f" --jobs "$j"
   done
 }
+# writes: results/stiffness/
 stage_stiffness() { /usr/bin/python3 experiments/stiffness_table.py; }
+# writes: results/planning/
 stage_planning() { /usr/bin/python3 experiments/planning.py; }
+# writes: results/observed_order/README.md results/observed_order/observed_order.csv
+# writes: results/observed_order/ladder.csv results/observed_order/references.csv results/observed_order/*.png
+# writes: results/observed_order/rounding_spread.csv results/observed_order/rounding_spread.md
 stage_order() {
   /usr/bin/python3 experiments/observed_order.py
   /usr/bin/python3 experiments/rounding_spread.py   # steps of the same run over the back-ends (rounding-level changes of f)
 }
+# writes: results/testset/README.md results/testset/testset.csv results/testset/problems.csv
+# writes: results/testset/observed_slopes.csv results/testset/*.png
 stage_testset() { /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"; }
+# writes: results/output_grid/
 stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
+# writes: results/reliability/extreme_runs.csv results/reliability/extreme_runs_summary.csv
+# writes: results/reliability/memory_bound.json
 stage_extreme() {
   # extreme but valid scenes x every integrator end within their budgets (docs/user-guide/limits.md)
   /usr/bin/python3 tests/check_extreme_runs.py "$PUMASIM" --jobs "$jobs" --out results/reliability > /dev/null
   # a long run's memory under a 64 MiB address-space limit (docs/user-guide/limits.md)
   /usr/bin/python3 experiments/memory_bound.py --bin "$PUMASIM" --out results/reliability/memory_bound.json > /dev/null
 }
+# writes: results/testset/rosenbrock_local_error_lambda*.tsv
 stage_rosenbrock() {
   # rosenbrock4's error estimate against its true local error (docs/science/instrument.md)
   for lam in -1050 -1e4; do
@@ -102,14 +121,35 @@ stage_rosenbrock() {
     mv "results/testset/rosenbrock_local_error_lambda$lam.tsv.tmp" "results/testset/rosenbrock_local_error_lambda$lam.tsv"
   done
 }
+# writes: results/observed_order/build_spread.csv results/observed_order/build_spread.md
 stage_buildspread() {
   /usr/bin/python3 experiments/build_spread.py --native "$PUMASIM_BIN/pumasim-native" --portable "$PUMASIM"
 }
+# writes: results/paper/README.md results/paper/paper_fast/ results/paper/paper_slow/ results/paper/paper_*.png
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
+# writes: results/paper/sensitivity.csv results/paper/sensitivity.md
+stage_sensitivity() { /usr/bin/python3 experiments/sensitivity.py --jobs "$jobs"; }
+# writes: results/paper/partitioned.csv results/paper/partitioned.md
+stage_partitioned() { /usr/bin/python3 experiments/partitioned.py; }
+# writes: results/stick_slip/filippov.md results/stick_slip/filippov.json
+stage_filippov() { /usr/bin/python3 experiments/filippov.py --out results/stick_slip/filippov.md; }
+# writes: results/panda/authors_code_difference.md results/panda/authors_code_difference.json
 stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --out results/panda/authors_code_difference.md; }
+# writes: results/bench/dynamics.json results/dynamics_backends.md results/dynamics_cost_vs_n.png
 stage_bench() { scripts/bench_dynamics.sh --out results; }
+# writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
+# writes: results/cost_breakdown.json results/cost_breakdown.md
+stage_cost() {
+  cmake --preset profile > /dev/null   # the timers (PUMASIM_PROFILE) beside scripts/build.sh's release build
+  cmake --build --preset profile --target pumasim -j "$(nproc)" > /dev/null
+  /usr/bin/python3 scripts/cost_breakdown.py --label "${COST_LABEL:-main}" \
+    --revision "release and profiled builds of $(git rev-parse --short HEAD)"
+}
+# writes: results/reliability/ci_phases.txt
+stage_ci() { scripts/measure_ci.sh; }
+# writes: results/README.md results/report_run.json
 stage_report() {
   if [ $full -eq 1 ]; then
     /usr/bin/python3 experiments/report.py --minutes $(( ($(date +%s) - start + 30) / 60 ))
@@ -117,7 +157,31 @@ stage_report() {
     /usr/bin/python3 experiments/report.py   # not a full run: the header quotes the last full run's time (report_run.json)
   fi
 }
+
+run_stages() {
+  for s in "${stages[@]}"; do
+    echo "results.sh: stage $s" >&2
+    "stage_$s"
+  done
+}
+
+own=1
 for s in "${stages[@]}"; do
-  echo "results.sh: stage $s" >&2
-  "stage_$s"
+  if [[ " ${own_builds[*]} " != *" $s "* ]]; then own=0; fi
 done
+if [ $own -eq 1 ]; then
+  # Only stages that build (fuzz: build/asan) or clone (ci) what they run: no release build needed.
+  run_stages
+  exit 0
+fi
+scripts/build.sh > /dev/null   # the dependencies, and the native build (buildspread, cost)
+cmake --preset portable > /dev/null
+cmake --build --preset portable -j "$(nproc)" > /dev/null
+mkdir -p build/results-bin
+for b in pumasim testset rosenbrock_local_error bench_dynamics; do
+  cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
+done
+cp build/release/bin/pumasim build/results-bin/pumasim-native.tmp && mv build/results-bin/pumasim-native.tmp build/results-bin/pumasim-native
+export PUMASIM=$PWD/build/results-bin/pumasim PUMASIM_BIN=$PWD/build/results-bin
+start=$(date +%s)
+run_stages

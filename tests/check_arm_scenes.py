@@ -49,7 +49,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 sys.path.insert(0, os.path.join(ROOT, "experiments"))
 sys.path.insert(0, HERE)
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 from check_extreme_runs import integrators, judge  # noqa: E402
 
 SCENES_DIR = os.path.join(ROOT, "experiments", "scenes")

@@ -40,7 +40,7 @@ import tomllib
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 sys.path.insert(0, os.path.join(ROOT, "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 
 SCENES_DIR = os.path.join(ROOT, "experiments", "scenes")
 MAX_STEPS = 20000

@@ -24,7 +24,7 @@ import time
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 sys.path.insert(0, os.path.join(ROOT, "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 SCENE = os.path.join(ROOT, "experiments", "scenes", "paper_slow_viscous.toml")
 ARGS = ["--integrator", "ab2", "--dt", "0.0005", "--set", "scene.output_interval=0.001"]
 ROWS = 24001  # t = 0, 0.001, ..., 24 s

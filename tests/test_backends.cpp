@@ -77,6 +77,31 @@ const std::vector<std::string> kGenerated = {
 const std::vector<std::string> kFolded = {"crba-symbolic-puma560", "lagrange-symbolic-puma560",
                                           "rnea-probing-symbolic-puma560"};
 
+// The algorithm interface as a C++20 concept (models/dynamics/algorithms.hpp):
+// every built algorithm satisfies it (AlgorithmList requires it), and one
+// that cannot compute the mass matrix does not.
+template <class S, int N>
+struct AlgorithmWithoutMassMatrix {
+  static constexpr const char* kName = "partial";
+  explicit AlgorithmWithoutMassMatrix(const Chain<S, N>&) {}
+  template <class V, class W>
+  void inverse_dynamics(const V&, const V&, const V&, W&) {}
+  template <class V, class W>
+  void bias(const V&, const V&, W&) {}
+  template <class V, class W>
+  void coriolis(const V&, const V&, W&) {}
+  template <class V, class W>
+  void gravity(const V&, W&) {}
+  template <class V, class W>
+  void forward_dynamics(const V&, const V&, const V&, W&) {}
+};
+
+TEST(AlgorithmConcept, TheBuiltAlgorithmsSatisfyItAndAPartialOneDoesNot) {
+  static_assert(DynamicsAlgorithm<Crba>);
+  static_assert(DynamicsAlgorithm<Aba>);
+  static_assert(!DynamicsAlgorithm<AlgorithmWithoutMassMatrix>);
+}
+
 TEST(BackendAgreement, Puma560) {
   const RobotModel puma = load_robot("puma560");
   ASSERT_EQ(testing::supported(puma).size(), backends().size()) << "every back-end takes part";

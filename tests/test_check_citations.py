@@ -32,6 +32,6 @@ def test_existing_files_units_urls_and_literals_pass(tmp_path):
 
 
 def test_python_comments_and_docstrings_are_read(tmp_path):
-    assert bad(tmp_path, "f.py", '"""See experiments/pumasim_io.py."""\nx = "../shared/x.md"  # fine\n') == 0
+    assert bad(tmp_path, "f.py", '"""See experiments/pumasim_exp/io.py."""\nx = "../shared/x.md"  # fine\n') == 0
     assert bad(tmp_path, "g.py", '"""See ../shared/reference/puma560.md."""\n') == 1
     assert bad(tmp_path, "h.py", "x = 1  # from scripts/no_such_script.py\n") == 1

@@ -20,7 +20,7 @@ import termios
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 
 SCENES = os.path.join(pumasim_io.ROOT, "experiments", "scenes")
 SCENE = os.path.join(SCENES, "paper_slow.toml")

@@ -26,7 +26,7 @@ import pytest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
 import observed_order  # noqa: E402
 import order_fit  # noqa: E402
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 import testset  # noqa: E402
 
 

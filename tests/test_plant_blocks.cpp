@@ -16,6 +16,36 @@
 namespace pumasim {
 namespace {
 
+// The laws' interfaces as C++20 concepts (friction/registry.hpp,
+// controller/registry.hpp): every registered law satisfies its concept (the
+// lists require it; checked again here), and a type that lacks one member,
+// or has it with the wrong type, does not.
+struct FrictionLawWithoutTorque {
+  static constexpr const char* kName = "half";
+  static constexpr bool kNeedsAppliedTorque = false;
+  static constexpr bool kStickSlipEvents = false;
+  static constexpr bool kSetValued = false;
+  static constexpr FrictionKeys kKeys{};
+};
+struct FrictionLawWithAnIntegerName : TanhFriction {
+  static constexpr int kName = 3;
+};
+struct PivWithoutHold : PivController {
+  using PivController::PivController;
+  void hold() const {}
+};
+
+TEST(LawConcepts, EveryRegisteredLawSatisfiesItsConceptAndAPartialOneDoesNot) {
+  FrictionLaws::for_each([](auto law) { static_assert(FrictionLaw<decltype(law)>); });
+  ControllerLaws::for_each([](auto tag) { static_assert(ControllerLaw<typename decltype(tag)::Law>); });
+  static_assert(!FrictionLaw<FrictionLawWithoutTorque>);
+  static_assert(!FrictionLaw<FrictionLawWithAnIntegerName>);
+  static_assert(!FrictionLaw<int>);
+  static_assert(ControllerLaw<PivController>);
+  static_assert(!ControllerLaw<PivWithoutHold>);
+  static_assert(!ControllerLaw<TanhFriction>);
+}
+
 TEST(FrictionRegistry, EveryLawHasAUniqueNameThatReadsBack) {
   std::set<std::string> names;
   std::set<int> models;

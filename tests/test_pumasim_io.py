@@ -1,4 +1,4 @@
-"""Tests of experiments/pumasim_io.py on hand-made run folders and tables.
+"""Tests of experiments/pumasim_exp/io.py on hand-made run folders and tables.
 
     /usr/bin/python3 -m pytest -q tests/test_pumasim_io.py
 """
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 
 MARKER = ("# a pumasim run folder: the files pumasim wrote here (it replaces the folder only with --force,\n"
           "# and only while nothing else is in it)\n")  # as simulation/run_folder.cpp writes it

@@ -24,9 +24,9 @@ import pytest
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 sys.path.insert(0, os.path.join(ROOT, "experiments"))
 import findings  # noqa: E402
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 import report  # noqa: E402
-import sweep  # noqa: E402
+from pumasim_exp import measures, specs  # noqa: E402
 
 PY = "/usr/bin/python3"
 RESULTS = os.path.join(ROOT, "results")
@@ -230,7 +230,7 @@ def test_a_sweep_file_with_findings_still_loads_in_sweep_py():
         path = os.path.join(ROOT, "experiments", "sweeps", name + ".toml")
         with open(path, "rb") as f:
             assert isinstance(tomllib.load(f)["sweep"]["findings"], list)
-        s, _ = sweep._sweep_table(path, sweep._read_toml(path))
+        s, _ = specs._sweep_table(path, specs._read_toml(path))
         assert s["findings"], name
 
 
@@ -256,7 +256,7 @@ def synthetic_table(targets, judged=True):
              "max_joint_error_rad": 1e-6 if ok else NAN, CURRENT: current, "final_state_error": 1e-6 if ok else NAN,
              "below_reference_accuracy": False if ok else ""}
         if judged:
-            missed = sweep.disqualified_by(r, targets)
+            missed = measures.disqualified_by(r, targets)
             r["within_targets"], r["disqualified_by"] = not missed, " ".join(missed)
         rows.append({**r, "wall_time_median_s": 0.05, "wall_time_min_s": 0.04, "wall_time_max_s": 0.06,
                      "rhs_evaluations": rhs})
@@ -264,13 +264,13 @@ def synthetic_table(targets, judged=True):
 
 
 def synthetic_summary(targets):
-    """The summary keys the report's tables read (sweep._summary's)."""
+    """The summary keys the report's tables read (pumasim_exp.report's _summary)."""
     return {"rank_by": {"measure": "tool_position", "column": POSITION, "label": "max tool position error",
                         "unit": "mm", "target": targets[POSITION]},
             "measures": {m: {"column": col, "unit": unit, "label": label, "target": targets.get(col)}
-                         for m, (col, unit, _, label) in sweep.MEASURES.items()},
+                         for m, (col, unit, _, label) in measures.MEASURES.items()},
             "variants": [{"label": "base", "value": 0.0}], "agreement": {"base": {"reference_too_weak": []}},
-            "below_reference_factor": sweep.BELOW_REFERENCE_FACTOR}
+            "below_reference_factor": measures.BELOW_REFERENCE_FACTOR}
 
 
 def test_a_run_within_the_position_target_but_past_the_current_one_is_not_named_cheapest():
@@ -334,8 +334,8 @@ def with_current_target(folder, name, target):
     targets = {POSITION: summary["rank_by"]["target"], CURRENT: target}
     rows = []
     for raw in table.rows:
-        typed = {"ok": raw["ok"] == "True", **{col: pumasim_io.fnum(raw[col]) for col, *_ in sweep.MEASURES.values()}}
-        missed = sweep.disqualified_by(typed, targets)
+        typed = {"ok": raw["ok"] == "True", **{col: pumasim_io.fnum(raw[col]) for col, *_ in measures.MEASURES.values()}}
+        missed = measures.disqualified_by(typed, targets)
         r = {}
         for k, v in raw.items():
             if k in ("within_targets", "disqualified_by"):  # a table merged with targets: judged anew below

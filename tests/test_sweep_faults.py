@@ -24,7 +24,7 @@ import pytest
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 sys.path.insert(0, os.path.join(ROOT, "experiments"))
-import pumasim_io  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
 
 PY = "/usr/bin/python3"
 SWEEP_PY = os.path.join(ROOT, "experiments", "sweep.py")

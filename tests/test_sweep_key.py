@@ -18,8 +18,8 @@ import sys
 import pytest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
-import pumasim_io  # noqa: E402
-import sweep  # noqa: E402
+from pumasim_exp import io as pumasim_io  # noqa: E402
+from pumasim_exp import merge, runner, specs  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_input_files  # noqa: E402  (its urdf_scene)
@@ -57,7 +57,7 @@ def _tiny_sweep(tmp_path, monkeypatch, scene):
     """A counter of `pumasim run` processes, and a function that loads the
     tiny sweep over `scene` and runs what is not complete, returning the ids
     of the runs it ran."""
-    monkeypatch.setattr(sweep, "scene_file", lambda s: str(scene))
+    monkeypatch.setattr(runner, "scene_file", lambda s: str(scene))
     ran = []
     real_run = subprocess.run
 
@@ -66,16 +66,16 @@ def _tiny_sweep(tmp_path, monkeypatch, scene):
             ran.append(cmd[cmd.index("--out") + 1])
         return real_run(cmd, *args, **kwargs)
 
-    monkeypatch.setattr(sweep.subprocess, "run", counting_run)
+    monkeypatch.setattr(runner.subprocess, "run", counting_run)
     work = str(tmp_path / "work")
 
     def run_sweep(t_end=0.02, dt=0.002, variant_set=""):
         path = tmp_path / "tiny.toml"
         path.write_text(SWEEP.format(t_end=t_end, dt=dt, variant_set=variant_set))
-        sweep.resolved_scene.cache_clear()  # a sweep reads its scene once; this test edits it in between
-        s = sweep.load_sweep(str(path), reduced=False)
+        runner.resolved_scene.cache_clear()  # a sweep reads its scene once; this test edits it in between
+        s = specs.load_sweep(str(path), reduced=False)
         ran.clear()
-        summaries = [sweep.execute(s, work, r) for r in sweep.run_list(s)]
+        summaries = [runner.execute(s, work, r) for r in specs.run_list(s)]
         assert all(sm["stats"]["ok"] for sm in summaries), [sm["stats"]["failure"] for sm in summaries]
         return s, sorted(os.path.relpath(d, work) for d in ran)
 
@@ -121,12 +121,12 @@ def test_another_program_reruns_and_merge_refuses_stale_runs(setup, monkeypatch)
     assert pumasim_io.read_json(os.path.join(work, "base", "reference.json"))["program"].startswith(version.strip())
     # The scene changes after the runs: --merge refuses to mix them in.
     scene.write_text(scene.read_text().replace("duration = 2.0", "duration = 1.5"))
-    sweep.resolved_scene.cache_clear()
-    with pytest.raises(sweep.SweepError, match="base/check .* was made from another scene, setting or program"):
-        sweep.merge(s, work, str(os.path.dirname(work) + "/out"))
+    runner.resolved_scene.cache_clear()
+    with pytest.raises(specs.SweepError, match="base/check .* was made from another scene, setting or program"):
+        merge.merge(s, work, str(os.path.dirname(work) + "/out"))
     assert run_sweep()[1] == ALL
     # Another build of pumasim: everything again.
-    monkeypatch.setattr(sweep, "program_identity", lambda pumasim: "pumasim 0000000 (another build)")
+    monkeypatch.setattr(runner, "program_identity", lambda pumasim: "pumasim 0000000 (another build)")
     assert run_sweep()[1] == ALL
     assert run_sweep()[1] == []
 
@@ -191,9 +191,9 @@ def test_editing_any_file_the_scene_reads_reruns_and_merge_refuses_the_old_runs(
     assert ran == ALL
     assert run_sweep()[1] == []
     edit(tmp_path / edited)
-    sweep.resolved_scene.cache_clear()
-    with pytest.raises(sweep.SweepError, match="was made from another scene, setting or program"):
-        sweep.merge(s, work, str(tmp_path / "out"))
+    runner.resolved_scene.cache_clear()
+    with pytest.raises(specs.SweepError, match="was made from another scene, setting or program"):
+        merge.merge(s, work, str(tmp_path / "out"))
     assert run_sweep()[1] == ALL, f"{kind} edited: every run again"
     assert run_sweep()[1] == []
 

@@ -14,7 +14,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
 import precision_table  # noqa: E402
-import sweep  # noqa: E402
+from pumasim_exp import measures  # noqa: E402
 
 POSITION, CURRENT = "max_tool_position_error_mm", "max_current_error_A"
 
@@ -34,7 +34,7 @@ def _row(integrator, setting, rhs, position, current, ok=True, state=math.nan, t
          "wall_time_median_s": 0.01, "wall_time_min_s": 0.01, "wall_time_max_s": 0.01}
     rtol = float(setting.split("=")[1].split("_")[0]) if setting.startswith("rtol=") else None
     r["error_over_rtol"] = "" if rtol is None else r["max_state_error"] / rtol
-    missed = sweep.disqualified_by(r, targets or {})
+    missed = measures.disqualified_by(r, targets or {})
     r["within_targets"], r["disqualified_by"] = not missed, " ".join(missed)
     return r
 
@@ -61,17 +61,17 @@ def test_a_run_past_the_current_target_does_not_qualify():
     assert by_setting["dt=0.001"]["disqualified_by"] == "tool_position current"
     assert by_setting["dt=0.002"]["disqualified_by"] == "failed"
     assert by_setting["dt=0.00025"]["within_targets"] is True
-    cost = sweep._cost_to_target(_sweep(TARGETS), rows, AGREEMENT, ["ab3"])
+    cost = measures.cost_to_target(_sweep(TARGETS), rows, AGREEMENT, ["ab3"])
     assert [(c["setting"], c["rhs"]) for c in cost["ab3"]] == [("dt=0.00025", 160_000)]
 
 
 def test_the_table_names_the_measure_that_disqualifies():
     s, rows = _sweep(TARGETS), _ab3_rows()
-    disq = sweep.disqualified_cheapest(s, rows, ["ab3"])
+    disq = measures.disqualified_cheapest(s, rows, ["ab3"])
     assert disq == [{"integrator": "ab3", "variant": "base", "setting": "dt=0.0005", "rhs": 80_971,
                      "measures": [{"measure": "current", "error": 48.3, "target": 1.0}]}]
-    cost = sweep._cost_to_target(s, rows, AGREEMENT, ["ab3"])
-    text = precision_table.markdown(s, rows, [], cost, disq, sweep.MEASURES, sweep.BELOW_REFERENCE_FACTOR)
+    cost = measures.cost_to_target(s, rows, AGREEMENT, ["ab3"])
+    text = precision_table.markdown(s, rows, [], cost, disq, measures.MEASURES, measures.BELOW_REFERENCE_FACTOR)
     line = next(x for x in text.splitlines() if x.startswith("| ab3 |"))
     assert "160,000 (dt=0.00025)" in line
     assert "dt=0.0005 (80,971 RHS) misses max motor-current error 48.3 A > 1 A" in line
@@ -81,17 +81,17 @@ def test_the_table_names_the_measure_that_disqualifies():
 def test_without_a_current_target_position_alone_decides():
     targets = {POSITION: 5e-3}
     rows = _ab3_rows(targets)
-    cost = sweep._cost_to_target(_sweep(targets), rows, AGREEMENT, ["ab3"])
+    cost = measures.cost_to_target(_sweep(targets), rows, AGREEMENT, ["ab3"])
     assert [c["setting"] for c in cost["ab3"]] == ["dt=0.0005"]
-    assert sweep.disqualified_cheapest(_sweep(targets), rows, ["ab3"]) == []
+    assert measures.disqualified_cheapest(_sweep(targets), rows, ["ab3"]) == []
 
 
 def test_no_qualifying_run_is_a_dash_with_the_measure_named():
     s = _sweep(TARGETS)
     rows = [_row("ab2", "dt=0.001", 1000, 1e-3, 30.0, targets=TARGETS)]
-    cost = sweep._cost_to_target(s, rows, AGREEMENT, ["ab2"])
-    disq = sweep.disqualified_cheapest(s, rows, ["ab2"])
-    text = precision_table.markdown(s, rows, [], cost, disq, sweep.MEASURES, sweep.BELOW_REFERENCE_FACTOR)
+    cost = measures.cost_to_target(s, rows, AGREEMENT, ["ab2"])
+    disq = measures.disqualified_cheapest(s, rows, ["ab2"])
+    text = precision_table.markdown(s, rows, [], cost, disq, measures.MEASURES, measures.BELOW_REFERENCE_FACTOR)
     line = next(x for x in text.splitlines() if x.startswith("| ab2 |"))
     assert line.startswith("| ab2 | –; dt=0.001 (1,000 RHS) misses max motor-current error 30 A > 1 A")
 
@@ -107,12 +107,12 @@ def test_error_over_rtol_and_its_slope_per_method():
     rows.append(_row("rk4", "dt=0.001", 100, 1e-3, 1e-3, state=1e-9))  # fixed step: no ratio
     assert rows[0]["error_over_rtol"] == 15 and rows[-1]["error_over_rtol"] == ""
     slopes = {(m["integrator"], m["options"]): m for m in
-              precision_table.tolerance_slopes(rows, AGREEMENT, sweep.BELOW_REFERENCE_FACTOR)}
+              precision_table.tolerance_slopes(rows, AGREEMENT, measures.BELOW_REFERENCE_FACTOR)}
     assert set(slopes) == {("cvode-bdf", ""), ("odeint-rodas4p", "late-events")}
     bdf, rodas = slopes[("cvode-bdf", "")], slopes[("odeint-rodas4p", "late-events")]
     assert abs(bdf["slope"] - 1) < 1e-12 and bdf["used"] == 4 and bdf["mark"] == ""
     assert abs(rodas["slope"] - 0.8) < 1e-12 and rodas["used"] == 2 and rodas["mark"] == "fewer than 3 runs"
-    text = "\n".join(precision_table.proportionality_section(list(slopes.values()), sweep.BELOW_REFERENCE_FACTOR))
+    text = "\n".join(precision_table.proportionality_section(list(slopes.values()), measures.BELOW_REFERENCE_FACTOR))
     assert "| base | cvode-bdf | – | 1e-03: 15, 1e-05: 15, 1e-07: 15, 1e-09: 15, 1e-12: 5* | 1.00 (4) |" in text
     assert "| base | odeint-rodas4p | late-events | 1e-04: 6.31, 1e-06: 15.8, 1e-08: –* | 0.80 (2) † |" in text
 
@@ -123,9 +123,9 @@ def test_a_variant_without_current_states_is_not_judged_on_currents():
     judged on the other targets, not all disqualified; a variant with
     currents keeps the current target, and the ranking one is always kept."""
     no_currents = {POSITION: 2e-9, CURRENT: math.nan}
-    assert sweep.variant_targets(TARGETS, no_currents, POSITION) == {POSITION: 5e-3}
-    assert sweep.variant_targets(TARGETS, AGREEMENT["base"], POSITION) == TARGETS
-    assert sweep.variant_targets(TARGETS, no_currents, CURRENT) == TARGETS
+    assert measures.variant_targets(TARGETS, no_currents, POSITION) == {POSITION: 5e-3}
+    assert measures.variant_targets(TARGETS, AGREEMENT["base"], POSITION) == TARGETS
+    assert measures.variant_targets(TARGETS, no_currents, CURRENT) == TARGETS
     run = _row("rk4", "dt=1e-05", 100, 1e-4, math.nan)
-    assert sweep.disqualified_by(run, TARGETS) == ["current"]
-    assert sweep.disqualified_by(run, sweep.variant_targets(TARGETS, no_currents, POSITION)) == []
+    assert measures.disqualified_by(run, TARGETS) == ["current"]
+    assert measures.disqualified_by(run, measures.variant_targets(TARGETS, no_currents, POSITION)) == []

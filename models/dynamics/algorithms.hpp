@@ -3,6 +3,7 @@
 // its forward dynamics solves with H.
 #pragma once
 
+#include <concepts>
 #include <string>
 
 #include "models/dynamics/aba.hpp"
@@ -15,6 +16,27 @@
 #include "models/dynamics/rnea_probing.hpp"
 
 namespace pumasim {
+
+// What a dynamics algorithm is (a template on the scalar and the size, N =
+// Eigen::Dynamic for any chain), as a C++20 concept: made from the chain it
+// reads, and computing inverse dynamics, H, h = C qd + g, C qd, g and forward
+// dynamics into the caller's vectors. The registry's entry() requires it,
+// so a back-end file lacking one fails to compile naming the member.
+// (clang-format 14 misreads a concept's constraints: the concepts are laid out by hand.)
+// clang-format off
+template <template <class, int> class Algo>
+concept DynamicsAlgorithm =
+    std::constructible_from<Algo<double, Eigen::Dynamic>, const Chain<double, Eigen::Dynamic>&> &&
+    requires(Algo<double, Eigen::Dynamic>& a, const Eigen::VectorXd& q, Eigen::VectorXd& out, Eigen::MatrixXd& H) {
+      { Algo<double, Eigen::Dynamic>::kName } -> std::convertible_to<const char*>;
+      a.inverse_dynamics(q, q, q, out);
+      a.mass_matrix(q, H);
+      a.bias(q, q, out);
+      a.coriolis(q, q, out);
+      a.gravity(q, out);
+      a.forward_dynamics(q, q, q, out);
+    };
+// clang-format on
 
 // Empty if Algo can handle the model, else the reason. General algorithms
 // handle every chain; generated ones declare `why_unsupported(chain)`.

@@ -179,6 +179,7 @@ OpCounts count_ops(const RobotModel& model, Quantity what) {
 
 template <template <class, int> class Algo>
 BackendInfo entry(const char* summary) {
+  static_assert(DynamicsAlgorithm<Algo>, "a back-end's algorithm: models/dynamics/algorithms.hpp");
   return BackendInfo{.name = Algo<double, 6>::kName,
                      .summary = summary,
                      .why_unsupported = &why_unsupported<Algo>,

@@ -7,6 +7,7 @@
 // list.
 #pragma once
 
+#include <concepts>
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -20,6 +21,36 @@
 #include "models/plant/controller/piv.hpp"
 
 namespace pumasim {
+
+// What a controller law is (law.hpp's list, as a C++20 concept): a law the
+// list is given that lacks a member, or has one of the wrong shape, fails
+// to compile here, naming it, instead of deep inside the plant's dispatch.
+// (clang-format 14 misreads a concept's constraints: the concepts are laid out by hand.)
+// clang-format off
+template <class L>
+concept ControllerLaw =
+    std::constructible_from<L, ControllerMode, const std::vector<typename L::Params>&, const typename L::Settings&,
+                            const ControllerContext&> &&
+    requires(const L& law, const typename L::Params& p, const typename L::Settings& settings, StateLayout& declared,
+             const StateLayout& layout, const ControllerClock& clock, const ReferenceSample& r, const double* x,
+             double* x_out, PlantWorkspace<double>& w, double* xdot, ControllerDiscreteState& d, double t, int j) {
+      { L::kName } -> std::convertible_to<std::string_view>;
+      { L::kHasInput } -> std::convertible_to<bool>;
+      { L::keys() } -> std::convertible_to<const std::vector<ControllerKey<typename L::Params>>&>;
+      { L::text_keys() } -> std::convertible_to<const std::vector<ControllerTextKey<typename L::Settings>>&>;
+      { L::command(settings) } -> std::same_as<ControllerCommand>;
+      { L::output_limit(p) } -> std::convertible_to<double>;
+      { L::input_end(settings) } -> std::convertible_to<double>;
+      law.declare(declared);
+      law.template output<double>(clock, r, x, layout, w);
+      law.template rates<double>(r, x, layout, w, xdot);
+      { law.discrete_size() } -> std::convertible_to<int>;
+      law.sample(clock, r, x, layout, w, d);
+      law.hold(j, t, x_out, layout, d);
+      { law.next_time_event(t) } -> std::convertible_to<double>;
+      { law.piece_after(t) } -> std::convertible_to<int>;
+    };
+// clang-format on
 
 // A law's parameters, one per simulated joint, and its settings for all
 // joints (a type per law, so that two laws may share a Params struct).
@@ -35,7 +66,7 @@ struct LawTag {
   using Law = L;
 };
 
-template <class... Laws>
+template <ControllerLaw... Laws>
 struct ControllerLawList {
   using Params = std::variant<LawParams<Laws>...>;
   using Block = std::variant<Laws...>;

@@ -13,6 +13,7 @@
 // call and no lookup by name in the right-hand side.
 #pragma once
 
+#include <concepts>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -29,7 +30,24 @@
 
 namespace pumasim {
 
-template <class... Laws>
+// What a friction law is (the list above, as a C++20 concept): a law the
+// list is given that lacks a member, or has one of the wrong type, fails to
+// compile here, naming the member, instead of deep inside a dispatch.
+// (clang-format 14 misreads a concept's constraints: the concepts are laid out by hand.)
+// clang-format off
+template <class L>
+concept FrictionLaw = std::default_initializable<L> &&
+    requires(const FrictionParams& f, const double& w, const double& applied, SlipMode mode) {
+  { L::kName } -> std::convertible_to<const char*>;
+  { L::kNeedsAppliedTorque } -> std::convertible_to<bool>;
+  { L::kStickSlipEvents } -> std::convertible_to<bool>;
+  { L::kSetValued } -> std::convertible_to<bool>;
+  { L::kKeys } -> std::convertible_to<FrictionKeys>;
+  { L::template torque<double>(f, w, applied, mode) } -> std::same_as<double>;
+};
+// clang-format on
+
+template <FrictionLaw... Laws>
 struct FrictionLawList {
   // The law's FrictionModel: its place in the list.
   template <class Law>
@@ -68,7 +86,7 @@ constexpr FrictionModel friction_model() {
 static_assert(friction_model<NoFriction>().none(), "the first law, the default, is none");
 // The plant's constrained accelerations (a stuck joint) read h, which it
 // computes only for a law that reads the applied torque.
-template <class... Laws>
+template <FrictionLaw... Laws>
 constexpr bool events_read_applied_torque(FrictionLawList<Laws...>*) {
   return ((!Laws::kStickSlipEvents || Laws::kNeedsAppliedTorque) && ...);
 }
