@@ -334,7 +334,9 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
   const bool stop_at_events = stops != Stops::kOutputsLateEvents;
   const bool stop_at_outputs = stops != Stops::kEvents;
   long k_out = 1;
-  auto output_time = [&] { return std::min(k_out * output_interval, t_end); };
+  // clang 14 cannot capture a structured binding (P1091, C++20): the lambda
+  // reads the spec's fields.
+  auto output_time = [&] { return std::min(k_out * spec.output_interval, spec.t_end); };
   double t = 0.0;
   // The next time event not yet applied (initial_state applied those at 0).
   double t_event = plant.next_time_event(0.0);

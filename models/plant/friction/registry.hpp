@@ -70,7 +70,7 @@ struct FrictionLawList {
  private:
   template <class F, std::size_t... I>
   static void visit_in(FrictionModel m, F& f, std::index_sequence<I...>) {
-    ((m.index == I ? (f(Laws{}), true) : false) || ...);
+    (void)((m.index == I ? (f(Laws{}), true) : false) || ...);
   }
 };
 
