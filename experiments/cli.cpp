@@ -673,6 +673,31 @@ int cmd_backends(bool json, std::ostream& out) {
                         out);
 }
 
+// Every scene key (models/scene/scene.cpp's entry tables), as text lines
+// "section.key<TAB>need<TAB>what<TAB>meaning[<TAB>applies when ...]" or one
+// JSON array of objects with those fields.
+int cmd_keys(bool json, std::ostream& out) {
+  const std::vector<SceneKeyDoc> keys = scene_key_docs();
+  if (!json) {
+    for (const SceneKeyDoc& k : keys) {
+      out << k.section << "." << k.key << "\t" << k.need << "\t" << k.what << "\t" << k.meaning
+          << (k.applies.empty() ? "" : "\tapplies when " + k.applies) << "\n";
+    }
+    return kExitOk;
+  }
+  Json doc = Json::array();
+  for (const SceneKeyDoc& k : keys) {
+    doc.push_back({{"section", k.section},
+                   {"key", k.key},
+                   {"need", k.need},
+                   {"what", k.what},
+                   {"meaning", k.meaning},
+                   {"applies", k.applies}});
+  }
+  out << doc.dump(2) << "\n";
+  return kExitOk;
+}
+
 // Every command's parsed options, filled by CLI11.
 struct Parsed {
   DynamicsArgs dynamics;
@@ -682,7 +707,7 @@ struct Parsed {
   StiffnessArgs stiffness;
   ConditioningArgs conditioning;
   std::string help_topic;
-  bool json = false;  // integrators, backends: --json
+  bool json = false;  // integrators, backends, keys: --json
 };
 
 using Handler = std::function<int(std::ostream& out, std::ostream& err)>;
@@ -754,6 +779,13 @@ const Command kCommands[] = {
                    "Jacobian use, ...)");
      },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_integrators(p.json, o); }},
+    {"keys", "lists every scene key: its section, need, value, meaning and when it applies",
+     "The entries of the scene reader's tables, in the order a scene is read (docs/reference/scene-keys.md is "
+     "generated from --json).",
+     [](CLI::App* a, Parsed& p) {
+       a->add_flag("--json", p.json, "one JSON array: section, key, need, what, meaning, applies");
+     },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_keys(p.json, o); }},
     {"help", "prints this text, or a command's options", "",
      [](CLI::App* a, Parsed& p) {
        a->add_option("command", p.help_topic, "the command whose options to print")->type_name("COMMAND");

@@ -4,11 +4,12 @@
     /usr/bin/python3 tests/test_docs_reference.py PUMASIM      # both checks (CTest Docs.ReferenceIsCurrent)
     /usr/bin/python3 tests/test_docs_reference.py --links-only # the links alone (CTest Docs.LinksResolve)
 
-Reference: scripts/gen_reference.py writes docs/reference/integrators.md and
-docs/reference/backends.md from `PUMASIM integrators --json` and `PUMASIM
-backends --json`; here it writes them into a temporary folder, and each must
-equal the committed file byte for byte (else: run the generator, as the
-message says, and commit what it writes).
+Reference: scripts/gen_reference.py writes docs/reference/integrators.md,
+docs/reference/backends.md and docs/reference/scene-keys.md from `PUMASIM
+integrators --json`, `PUMASIM backends --json` and `PUMASIM keys --json`;
+here it writes them into a temporary folder, and each must equal the
+committed file byte for byte (else: run the generator, as the message says,
+and commit what it writes).
 
 Links: every relative link of README.md and of every .md under docs/
 (`[text](target)`, `![alt](target)`, outside fenced code and inline code)
@@ -28,7 +29,7 @@ import sys
 import tempfile
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-GENERATED = ("integrators.md", "backends.md")
+GENERATED = ("integrators.md", "backends.md", "scene-keys.md")
 LINK_RE = re.compile(r"!?\[(?:[^\]\\]|\\.)*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
 FENCE_RE = re.compile(r"^[ \t]*(```|~~~).*?^[ \t]*\1[^\n]*$", re.M | re.S)
 CODE_RE = re.compile(r"(`+)(?:(?!\n\s*\n).)+?\1", re.S)

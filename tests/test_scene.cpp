@@ -239,5 +239,66 @@ TEST(SceneEntries, PerJointLengthsAreChecked) {
   for (const PivParams& p : law_params<PivController>(one.plant)) EXPECT_EQ(p.kp, 5.0);
 }
 
+// The reference's conditions (scene_key_docs, docs/reference/scene-keys.md)
+// against the laws' own declarations: a friction key applies exactly under
+// the laws whose kKeys say they read it (law.hpp), and a controller law's
+// keys exactly under that law, each listed once.
+TEST(SceneKeyDocs, ConditionsFollowTheLawsDeclarations) {
+  const std::vector<SceneKeyDoc> docs = scene_key_docs();
+  const auto applies = [&](const std::string& section, const std::string& key) {
+    std::vector<std::string> found;
+    for (const SceneKeyDoc& d : docs) {
+      if (d.section == section && d.key == key) found.push_back(d.applies);
+    }
+    EXPECT_EQ(found.size(), 1u) << section << "." << key;
+    return found.empty() ? std::string() : found[0];
+  };
+  const auto laws_reading = [](bool FrictionKeys::*flag) {
+    std::string r;
+    FrictionLaws::for_each([&](auto law) {
+      if (decltype(law)::kKeys.*flag)
+        r += (r.empty() ? "" : " or ") + ("\"" + std::string(decltype(law)::kName) + "\"");
+    });
+    return "model = " + r;
+  };
+  EXPECT_EQ(applies("friction", "viscous"), laws_reading(&FrictionKeys::viscous));
+  EXPECT_EQ(applies("friction", "static_torque"), laws_reading(&FrictionKeys::levels));
+  EXPECT_EQ(applies("friction", "kinetic_torque"), laws_reading(&FrictionKeys::levels));
+  EXPECT_EQ(applies("friction", "zero_speed"), laws_reading(&FrictionKeys::zero_speed));
+  EXPECT_EQ(applies("friction", "speed_scale"), laws_reading(&FrictionKeys::speed_scale));
+  EXPECT_EQ(applies("friction", "sigmoid_level"), laws_reading(&FrictionKeys::sigmoid));
+  EXPECT_EQ(applies("friction", "model"), "");
+  ControllerLaws::for_each([&](auto tag) {
+    using Law = typename decltype(tag)::Law;
+    const std::string under = "law = \"" + std::string(Law::kName) + "\"";
+    for (const auto& k : Law::keys()) {
+      bool seen = false;
+      for (const SceneKeyDoc& d : docs) {
+        if (d.section == "controller" && d.key == k.key && d.applies == under) seen = true;
+      }
+      EXPECT_TRUE(seen) << k.key << " under " << under;
+    }
+  });
+  EXPECT_EQ(applies("controller", "servo_period"), "mode = \"sampled\"");
+}
+
+// Every key that a shipped scene uses is in the reference, in its section:
+// the reference lists what the reader reads.
+TEST(SceneKeyDocs, EveryShippedSceneKeyIsListed) {
+  const std::vector<SceneKeyDoc> docs = scene_key_docs();
+  for (const std::string& file : shipped_scenes()) {
+    const toml::table doc = parse_toml_file(file);
+    for (const auto& [section, node] : doc) {
+      ASSERT_TRUE(node.is_table()) << file << ": " << section.str();
+      for (const auto& [key, value] : *node.as_table()) {
+        const bool listed = std::any_of(docs.begin(), docs.end(), [&](const SceneKeyDoc& d) {
+          return d.section == section.str() && d.key == key.str();
+        });
+        EXPECT_TRUE(listed) << file << ": " << section.str() << "." << key.str();
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace pumasim

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -12,11 +13,11 @@
 namespace pumasim {
 namespace {
 
+// The shortest text that reads back as x (0.1, not 0.10000000000000001).
 std::string format_number(double x) {
-  std::ostringstream s;
-  s.precision(17);
-  s << x;
-  return s.str();
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
 }
 
 std::string line_of(const toml::source_region& src) {

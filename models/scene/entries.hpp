@@ -16,12 +16,14 @@
 #include <cmath>
 #include <functional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
 #include "models/robot/strict_toml.hpp"
+#include "models/scene/key_doc.hpp"
 
 #define PUMASIM_AT(expr) [](auto& s, [[maybe_unused]] int j) -> auto& { return expr; }
 
@@ -40,6 +42,11 @@ struct Codec {
   std::function<void(StrictTable&, std::string_view key, T&, int n)> read;
   std::function<void(toml::table&, std::string_view key, const T&, int n)> write;
   std::function<bool(const T&)> unset;  // the value is 0 or empty (for kIfSet); null: never
+  // For the generated reference (pumasim keys): what the value is, as a
+  // message would say it ("a number > 0", "one of: ..."), and the names a
+  // choice allows (empty: not a choice).
+  std::string what;
+  std::vector<std::string> names;
 };
 
 template <class T>
@@ -54,6 +61,9 @@ struct Entry {
   struct Applies {
     bool (*fn)(const T&) = nullptr;
     std::string_view decided_by;
+    // The condition in words, for the reference, where fn reads more than
+    // one key (empty: derived from decided_by's values, see key_docs).
+    std::string_view when;
   } applies{};
   // After the entry is read (its value or its default): checks and derived values.
   void (*then)(StrictTable&, T&) = nullptr;
@@ -121,6 +131,13 @@ void assign(At at, T& obj, int n, bool shared, const V& v) {
   for (int j = 0; j < (shared ? n : 1); ++j) at(obj, j) = v;
 }
 
+// '"a", "b" or "c"': the names a choice allows, as the reference shows them.
+inline std::string one_of(const std::vector<std::string>& names) {
+  std::string r = "one of:";
+  for (std::size_t i = 0; i < names.size(); ++i) r += (i ? ", \"" : " \"") + names[i] + "\"";
+  return r;
+}
+
 // A number within bounds (shared: the same for every joint).
 template <class At>
 struct NumberCodec {
@@ -134,7 +151,9 @@ struct NumberCodec {
               assign(c.at, obj, n, c.shared, t.number(key, c.bounds));
             },
             [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
-            [c](const T& obj) { return c.at(obj, 0) == 0; }};
+            [c](const T& obj) { return c.at(obj, 0) == 0; },
+            c.bounds.describe() + (c.shared ? ", one for all joints" : ""),
+            {}};
   }
 };
 template <class At>
@@ -158,7 +177,9 @@ struct WholeCodec {
               c.at(obj, 0) = static_cast<int>(x);
             },
             [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
-            [c](const T& obj) { return c.at(obj, 0) == 0; }};
+            [c](const T& obj) { return c.at(obj, 0) == 0; },
+            "a whole " + c.bounds.describe().substr(2),  // "a whole number in [1, 100000]"
+            {}};
   }
 };
 template <class At>
@@ -173,7 +194,9 @@ struct FlagCodec {
     const At a = at;
     return {[a](StrictTable& t, std::string_view key, T& obj, int) { a(obj, 0) = t.boolean_or(key, a(obj, 0)); },
             [a](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, a(obj, 0)); },
-            nullptr};
+            nullptr,
+            "true or false",
+            {}};
   }
 };
 template <class At>
@@ -189,7 +212,8 @@ struct TextCodec {
     const TextCodec c = *this;
     return {[c](StrictTable& t, std::string_view key, T& obj, int) { c.at(obj, 0) = t.string(key, c.allowed); },
             [c](toml::table& out, std::string_view key, const T& obj, int) { out.insert(key, c.at(obj, 0)); },
-            [c](const T& obj) { return c.at(obj, 0).empty(); }};
+            [c](const T& obj) { return c.at(obj, 0).empty(); },
+            c.allowed.empty() ? std::string("a string") : one_of(c.allowed), c.allowed};
   }
 };
 template <class At>
@@ -202,13 +226,16 @@ struct ChoiceCodec {
   std::vector<std::pair<std::string, V>> options;
   At at;
   bool shared;
+  std::vector<std::string> names() const {
+    std::vector<std::string> r;
+    for (const auto& o : options) r.push_back(o.first);
+    return r;
+  }
   template <class T>
   operator Codec<T>() const {  // NOLINT(google-explicit-constructor)
     const ChoiceCodec c = *this;
     return {[c](StrictTable& t, std::string_view key, T& obj, int n) {
-              std::vector<std::string> names;
-              for (const auto& o : c.options) names.push_back(o.first);
-              const std::string s = t.string(key, names);
+              const std::string s = t.string(key, c.names());
               for (const auto& o : c.options) {
                 if (o.first == s) assign(c.at, obj, n, c.shared, o.second);
               }
@@ -218,7 +245,7 @@ struct ChoiceCodec {
                 if (o.second == c.at(obj, 0)) out.insert(key, o.first);
               }
             },
-            nullptr};
+            nullptr, one_of(c.names()) + (c.shared ? ", one for all joints" : ""), c.names()};
   }
 };
 template <class V, class At>
@@ -248,7 +275,9 @@ struct PerJointCodec {
               for (int j = 0; j < n; ++j) a.push_back(c.at(obj, j));
               out.insert(key, a);
             },
-            nullptr};
+            nullptr,
+            c.bounds.describe() + ", one per joint (an array) or one for all",
+            {}};
   }
 };
 template <class At>
@@ -272,12 +301,65 @@ struct NumbersCodec {
               for (double x : c.get(obj, n)) a.push_back(x);
               out.insert(key, a);
             },
-            [c](const T& obj) { return c.get(obj, 0).empty(); }};
+            [c](const T& obj) { return c.get(obj, 0).empty(); },
+            "an array of numbers, each " + c.bounds.describe(),
+            {}};
   }
 };
 template <class Size, class Get, class Set>
 NumbersCodec<Size, Get, Set> numbers(Size size, Bounds b, Get get, Set set) {
   return {size, b, get, set};
+}
+
+inline std::string need_name(Need n) {
+  switch (n) {
+    case Need::kRequired:
+      return "required";
+    case Need::kIfSet:
+      return "if set";
+    case Need::kOptional:
+      break;
+  }
+  return "optional";
+}
+
+// When entry e means something: its `when`; else the values of the entry it
+// is decided by (decided_by) for which its fn holds, each read into a copy of
+// `prototype` (the section's struct at its defaults, sized for one joint) by
+// that entry's own codec; a decider that is not a choice (a file, a pose):
+// whether it is given. Empty: always.
+template <class T>
+std::string applies_text(const std::vector<Entry<T>>& entries, const Entry<T>& e, const T& prototype) {
+  if (!e.applies.fn) return "";
+  if (!e.applies.when.empty()) return std::string(e.applies.when);
+  const Entry<T>* decider = nullptr;
+  for (const Entry<T>& d : entries) {
+    if (d.key == e.applies.decided_by && !decider) decider = &d;
+  }
+  const std::string by(e.applies.decided_by);
+  if (!decider)
+    throw std::logic_error("scene entry " + std::string(e.key) + ": decided by '" + by + "', no such entry");
+  if (decider->codec.names.empty()) return by + (e.applies.fn(prototype) ? " not given" : " given");
+  std::string yes;
+  for (const std::string& name : decider->codec.names) {
+    T obj = prototype;
+    toml::table doc;
+    doc.insert(by, name);
+    StrictTable t(doc, "(reference)", "");
+    decider->codec.read(t, by, obj, 1);
+    if (e.applies.fn(obj)) yes += (yes.empty() ? "" : " or ") + ("\"" + name + "\"");
+  }
+  return by + " = " + yes;
+}
+
+// The reference's rows for one section's table.
+template <class T>
+void add_key_docs(std::vector<SceneKeyDoc>& out, std::string_view section, const std::vector<Entry<T>>& entries,
+                  const T& prototype) {
+  for (const Entry<T>& e : entries) {
+    out.push_back({std::string(section), std::string(e.key), need_name(e.need), e.codec.what, std::string(e.meaning),
+                   applies_text(entries, e, prototype)});
+  }
 }
 
 }  // namespace pumasim::scene_io

@@ -84,7 +84,9 @@ Codec<Scene> joints_codec() {
             sc.plant.n = n;
           },
           [](toml::table& out, std::string_view key, const Scene& sc, int) { out.insert(key, sc.plant.n); },
-          nullptr};
+          nullptr,
+          "a whole number in [1, the robot's joint count]",
+          {}};
 }
 
 // held: the angles of joints n+1..dof, the tail of q_held (dof entries,
@@ -347,7 +349,7 @@ scene_io::Codec<PlantConfig> controller_law() {
           [](toml::table& out, std::string_view key, const PlantConfig& pc, int) {
             out.insert(key, std::string(controller_law_name(pc.controller_params)));
           },
-          nullptr};
+          nullptr, scene_io::one_of(controller_law_names()), controller_law_names()};
 }
 
 template <class Law>
@@ -385,7 +387,9 @@ Codec<PlantConfig> law_file(const ControllerTextKey<typename Law::Settings>& k) 
           [path](toml::table& out, std::string_view key, const PlantConfig& pc, int) {
             out.insert(key, std::get<LawParams<Law>>(pc.controller_params).settings.*path);
           },
-          nullptr};
+          nullptr,
+          "a CSV file's name (relative to the scene) of rows t, " + column + "1 ... " + column + "n",
+          {}};
 }
 
 // A law's keys: its text keys (settings for all joints: names from a list, or
@@ -533,7 +537,9 @@ Codec<ReferenceSettings> segments_codec() {
             }
             out.insert(key, segs);
           },
-          nullptr};
+          nullptr,
+          "an array of tables, each {line = L [m]} or {arc_radius = r [m], turn_degrees = a}",
+          {}};
 }
 
 // profile: [[t/T, v/v_max], ...] (the table timing).
@@ -546,7 +552,9 @@ Codec<ReferenceSettings> profile_codec() {
             for (const auto& pt : r.profile) prof.push_back(toml::array{pt.x(), pt.y()});
             out.insert(key, prof);
           },
-          nullptr};
+          nullptr,
+          "an array of rows [t/T, v/v_max]",
+          {}};
 }
 
 // orientation: a 3 x 3 rotation matrix, by rows.
@@ -568,7 +576,9 @@ Codec<ReferenceSettings> orientation_codec() {
             }
             out.insert(key, orient);
           },
-          nullptr};
+          nullptr,
+          "a 3 x 3 rotation matrix, by rows",
+          {}};
 }
 
 std::vector<std::pair<std::string, Interpolation>> interpolations() {
@@ -582,18 +592,19 @@ std::vector<std::pair<std::string, Interpolation>> interpolations() {
 // joints: a CSV file of rows t, q1 ... qn (joint_csv.hpp), relative to the
 // scene's folder; the resolved scene names it by its absolute path.
 Codec<ReferenceSettings> joints_csv_codec() {
-  return {[](StrictTable& t, std::string_view key, ReferenceSettings& r, int n) {
-            r.joints_file = beside_scene(r.scene_dir, t.string(key));
-            try {
-              r.points = read_joint_csv(r.joints_file, n);
-            } catch (const ConfigError& e) {
-              throw ConfigError(t.where(key) + e.what());
-            }
-          },
-          [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) {
-            out.insert(key, r.joints_file);
-          },
-          [](const ReferenceSettings& r) { return r.joints_file.empty(); }};
+  return {
+      [](StrictTable& t, std::string_view key, ReferenceSettings& r, int n) {
+        r.joints_file = beside_scene(r.scene_dir, t.string(key));
+        try {
+          r.points = read_joint_csv(r.joints_file, n);
+        } catch (const ConfigError& e) {
+          throw ConfigError(t.where(key) + e.what());
+        }
+      },
+      [](toml::table& out, std::string_view key, const ReferenceSettings& r, int) { out.insert(key, r.joints_file); },
+      [](const ReferenceSettings& r) { return r.joints_file.empty(); },
+      "a CSV file's name (relative to the scene) of rows t, q1 ... qn",
+      {}};
 }
 
 // via_points: [[t, q1, ..., qn], ...] in the scene (the CSV's rows).
@@ -610,7 +621,9 @@ Codec<ReferenceSettings> via_points_codec() {
               std::vector<double> v;
               for (const toml::node& x : *a) {
                 const auto d = StrictTable::as_double(x);
-                if (!d) t.fail(key, expected, at + (x.is_integer() ? " with an integer beyond +-2^53" : " with a non-number"));
+                if (!d)
+                  t.fail(key, expected,
+                         at + (x.is_integer() ? " with an integer beyond +-2^53" : " with a non-number"));
                 v.push_back(*d);
               }
               rows.push_back(v);
@@ -632,11 +645,14 @@ Codec<ReferenceSettings> via_points_codec() {
             }
             out.insert(key, rows);
           },
-          [](const ReferenceSettings& r) { return r.via_points.empty(); }};
+          [](const ReferenceSettings& r) { return r.via_points.empty(); },
+          "an array of rows [t, q1, ..., qn] of numbers",
+          {}};
 }
 
 bool no_joints_file(const ReferenceSettings& r) { return r.joints_file.empty(); }
 bool cartesian_path(const ReferenceSettings& r) { return !r.joint_source(); }
+constexpr std::string_view kCartesianPath = "a Cartesian path (neither joints nor via_points given)";
 bool numerical_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kNumerical; }
 bool closed_form_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kClosedForm; }
 
@@ -700,19 +716,22 @@ void ik_of_robot(StrictTable& t, ReferenceSettings& r) {
   }
 }
 
+// A table, one entry to a few lines as it reads (clang-format would put each
+// field on its own line):
+// clang-format off
 const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"joints", joints_csv_codec(), "a CSV file of rows t, q1 ... qn (relative to the scene)", Need::kIfSet, {},
      joint_defaults},
     {"via_points", via_points_codec(), "rows [t, q1, ..., qn]: the points in the scene", Need::kIfSet,
      {no_joints_file, "joints"}, joint_defaults},
-    {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired, {cartesian_path, {}}},
+    {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired, {cartesian_path, {}, kCartesianPath}},
     {"start", scene_io::numbers([](const ReferenceSettings&, int) { return 2; }, kAny,
                                 [](const ReferenceSettings& r, int) { return std::vector<double>{r.start.x(), r.start.y()}; },
                                 [](ReferenceSettings& r, const std::vector<double>& v) { r.start = {v[0], v[1]}; }),
-     "[m] (x, y) in the plane", Need::kRequired, {cartesian_path, {}}},
+     "[m] (x, y) in the plane", Need::kRequired, {cartesian_path, {}, kCartesianPath}},
     {"heading", scene_io::number({-2 * M_PI, 2 * M_PI}, PUMASIM_AT(s.heading)), "[rad] of the first segment",
-     Need::kOptional, {cartesian_path, {}}},
-    {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired, {cartesian_path, {}}},
+     Need::kOptional, {cartesian_path, {}, kCartesianPath}},
+    {"segments", segments_codec(), "lines and arcs, in order", Need::kRequired, {cartesian_path, {}, kCartesianPath}},
     {"timing", scene_io::text(PUMASIM_AT(s.timing), {"table", "trapezoid", "scurve", "quintic", "time-optimal", "explicit"}),
      "the timing law s(t)", Need::kOptional, {}, timing_of_source},
     {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, {table_timing, "timing"}},
@@ -733,7 +752,7 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"ik", scene_io::choice<IkMethod>({{"closed-form", IkMethod::kClosedForm}, {"numerical", IkMethod::kNumerical}},
                                       PUMASIM_AT(s.ik)),
      "inverse kinematics: closed-form (the PUMA; its default) | numerical (any arm)", Need::kOptional,
-     {cartesian_path, {}}, ik_of_robot},
+     {cartesian_path, {}, kCartesianPath}, ik_of_robot},
     {"ik_guess", scene_io::numbers([](const ReferenceSettings&, int n) { return n; }, kJointAngle,
                                    [](const ReferenceSettings& r, int) { return r.ik_guess; },
                                    [](ReferenceSettings& r, const std::vector<double>& v) { r.ik_guess = v; }),
@@ -745,8 +764,9 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"wrist", scene_io::choice<bool>({{"noflip", false}, {"flip", true}}, PUMASIM_AT(s.config.wrist_flip)),
      "inverse kinematics branch: wrist", Need::kOptional, {closed_form_ik, "ik"}},
     {"orientation", orientation_codec(), "6 joints or more: the flange's fixed orientation (rows)", Need::kOptional,
-     {cartesian_path, {}}},
+     {cartesian_path, {}, kCartesianPath}},
 };
+// clang-format on
 
 // ---------------------------------------------------------------- [planning]
 
@@ -1013,6 +1033,28 @@ std::string resolved_toml(const Scene& sc) {
   out << "# Resolved scene: every default filled in (from " << sc.file << ")\n" << write_toml(doc) << "\n";
   for (const InputFile& f : sc.inputs) out << "# input file: " << describe(f) << "\n";
   return out.str();
+}
+
+std::vector<SceneKeyDoc> scene_key_docs() {
+  using scene_io::add_key_docs;
+  // The sections' structs at their defaults, sized for one joint: where each
+  // entry's condition is evaluated (scene_io::applies_text).
+  PlantConfig pc;
+  pc.n = 1;
+  pc.amplifier.resize(1);
+  pc.motor.resize(1);
+  pc.friction.resize(1);
+  std::vector<SceneKeyDoc> out;
+  add_key_docs(out, "scene", kSceneEntries, Scene{});
+  add_key_docs(out, "integrator", kIntegratorEntries, IntegratorSettings{});
+  add_key_docs(out, "amplifier", kAmplifierEntries, pc);
+  add_key_docs(out, "motor", kMotorEntries, pc);
+  add_key_docs(out, "friction", kFrictionEntries, pc);
+  add_key_docs(out, "controller", controller_entries(), pc);
+  add_key_docs(out, "reference", kReferenceEntries, ReferenceSettings{});
+  add_key_docs(out, "planning", kPlanningEntries, ReferenceSettings{});
+  add_key_docs(out, "initial", kInitialEntries, InitialPose{});
+  return out;
 }
 
 std::string discontinuity_note(const Scene& sc) {

@@ -8,9 +8,10 @@
 #include <string>
 
 #include "models/plant/plant.hpp"
+#include "models/reference/time_optimal.hpp"
 #include "models/robot/input_files.hpp"
 #include "models/robot/strict_toml.hpp"
-#include "models/reference/time_optimal.hpp"
+#include "models/scene/key_doc.hpp"
 
 namespace pumasim {
 
