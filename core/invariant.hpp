@@ -7,14 +7,11 @@
 // none of the right-hand side's per-joint work uses it.
 #pragma once
 
-#include <stdexcept>
 #include <string>
 
-namespace pumasim {
+#include "core/errors.hpp"
 
-struct InternalError : std::logic_error {
-  using std::logic_error::logic_error;
-};
+namespace pumasim {
 
 namespace detail {
 [[noreturn]] inline void invariant_failed(const char* condition, const std::string& what, const char* file,

@@ -100,7 +100,8 @@ namespace {
 // (RODAS-type rosenbrock4: order 4, dense output order 3); the SUNDIALS 6.4
 // manuals (CVODE BDF 1-5 / Adams 1-12; ARKODE's order-4 tables, whose dense
 // output is ARKODE's Hermite interpolant, degree 3 by default).
-constexpr std::array<IntegratorInfo, 19> kIntegrators{{
+// std::to_array counts the rows: a new row is the only edit here.
+constexpr auto kIntegrators = std::to_array<IntegratorInfo>({
     {
         .name = "ab2",
         .summary = "Adams-Bashforth, order 2, fixed step (RK4 start)",
@@ -157,7 +158,8 @@ constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     },
     {
         .name = "arkode-dirk",
-        .summary = "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; adaptive",
+        .summary = "SUNDIALS ARKODE, diagonally implicit RK (ARK4(3)6L[2]SA's implicit table, order 4), Newton, dense; "
+                   "adaptive",
         .make = &detail::make_arkode_dirk,
         .kind = IntegratorKind::kAdaptive,
         .order = 4,
@@ -346,9 +348,10 @@ constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     // difference Jacobian's m + 1 more are counted when the system has no exact one).
     {
         .name = "moreau-jean",
-        .summary = "Moreau-Jean time-stepping: linearly implicit theta-method (theta = 1) on the state, set-valued "
-                   "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
-                   "step; no events; order 1, fixed step",
+        .summary =
+            "Moreau-Jean time-stepping: linearly implicit theta-method (theta = 1) on the state, set-valued "
+            "Coulomb friction (hybrid, paper, karnopp laws' Fs, Fk) as impulses from one coupled stick/slip solve per "
+            "step; no events; order 1, fixed step",
         .make = &detail::make_moreau_jean,
         .kind = IntegratorKind::kFixedStep,
         .order = 1,
@@ -402,8 +405,8 @@ constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     },
     {
         .name = "odeint-rodas4p",
-        .summary = "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order reduction), "
-                   "adaptive, linearly implicit, the system's Jacobian",
+        .summary = "Boost.Odeint's Rosenbrock stepper with Steinebach's Rodas4P table (order 4, built against order "
+                   "reduction), adaptive, linearly implicit, the system's Jacobian",
         .make = &detail::make_odeint_rodas4p,
         .kind = IntegratorKind::kAdaptive,
         .order = 4,
@@ -421,9 +424,10 @@ constexpr std::array<IntegratorInfo, 19> kIntegrators{{
     },
     {
         .name = "odeint-rosenbrock4",
-        .summary = "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; order "
-                   "4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly implicit, the "
-                   "system's Jacobian",
+        .summary =
+            "Boost.Odeint's rosenbrock4 stepper with Hairer's RODAS table (Boost's default, d4 repaired: -0.0362; "
+            "order 4, loses order on stiff time-dependent forcing: prefer odeint-rodas4p), adaptive, linearly "
+            "implicit, the system's Jacobian",
         .make = &detail::make_odeint_rosenbrock4,
         .kind = IntegratorKind::kAdaptive,
         .order = 4,
@@ -457,7 +461,7 @@ constexpr std::array<IntegratorInfo, 19> kIntegrators{{
         .finds_roots = false,
         .set_valued_friction = false,
     },
-}};
+});
 
 }  // namespace
 

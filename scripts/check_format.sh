@@ -37,5 +37,5 @@ case "$diff" in
     exit 0 ;;
 esac
 echo "$diff"
-echo "check_format: the lines above do not follow .clang-format; apply with: git clang-format $base" >&2
+echo "check_format: the lines above do not follow .clang-format; apply with: git clang-format --extensions cpp,hpp,h $base (the extensions: clang-format would also rewrite JSON)" >&2
 exit 1

@@ -2,7 +2,7 @@
 """Fails (exit 1) when a source file includes a header from a layer above its own.
 
 The layers, lowest first (each a folder and a CMake target; ARCHITECTURE.md):
-  core              the time rule, the registries' shape, invariants (standard library only)
+  core              the time rule, the registries' shape, error types, invariants, the Cholesky (std and Eigen only)
   models/dynamics   chain, RNEA/CRBA/ABA/probing/Lagrange, scalars (Eigen only)
   models/robot      robot files, random chains, kinematics, drive parameters
   models/reference  paths, timing laws, time-optimal planning

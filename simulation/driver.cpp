@@ -216,7 +216,7 @@ bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool t
 
 // The cost breakdown of the run (models/plant/profile.hpp; a build with
 // PUMASIM_PROFILE only): reset at its start, written at its end into the
-// file named by PUMASIM_PROFILE_OUT (scripts/cost_breakdown.py reads it).
+// file named by PUMASIM_PROFILE_OUT (experiments/cost_breakdown.py reads it).
 void start_profile() {
 #ifdef PUMASIM_PROFILE
   profile::reset();
@@ -334,8 +334,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
   const bool stop_at_events = stops != Stops::kOutputsLateEvents;
   const bool stop_at_outputs = stops != Stops::kEvents;
   long k_out = 1;
-  // clang 14 cannot capture a structured binding (P1091, C++20): the lambda
-  // reads the spec's fields.
+  // The spec's fields, not the bindings: clang 14 cannot capture those (P1091).
   auto output_time = [&] { return std::min(k_out * spec.output_interval, spec.t_end); };
   double t = 0.0;
   // The next time event not yet applied (initial_state applied those at 0).

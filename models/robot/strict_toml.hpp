@@ -17,15 +17,12 @@
 
 #include <toml++/toml.h>
 
+#include "core/errors.hpp"
 #include "models/robot/bounds.hpp"
 
 namespace pumasim {
 
-// Bad user input in a configuration file. main() turns it into exit status 2.
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// Bad user input in a configuration file: ConfigError (core/errors.hpp).
 
 // Parse a whole file; a syntax error becomes a ConfigError naming file and line.
 toml::table parse_toml_file(const std::string& path);
