@@ -6,7 +6,8 @@
 // the ODE right-hand side). Each benchmark also carries the operation counts
 // of one call (Counted scalar) as user counters, and each forward-dynamics
 // benchmark those of H, c = C(q, qd) qd, g, the solve and inverse dynamics
-// (prefixes H_, c_, g_, solve_, id_), so that one JSON file holds all; scripts/dynamics_table.py turns it into results/dynamics_backends.md.
+// (prefixes H_, c_, g_, solve_, id_), so that one JSON file holds all;
+// experiments/dynamics_table.py turns it into results/dynamics_backends.md.
 // `jacobian` rows: the forward dynamics' exact derivatives dqdd/d(q, qd, tau)
 // (DynamicsDerivatives: the back-end's h and H, the analytical partials of
 // inverse dynamics, rnea_derivatives.hpp), per back-end beside its `fd`. `plant_rhs` and

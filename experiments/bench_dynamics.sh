@@ -3,7 +3,7 @@
 # DIR/dynamics_cost_vs_n.png from its JSON (DIR/bench/dynamics.json; Debian's
 # python3, with matplotlib).
 #
-#   scripts/bench_dynamics.sh [--out DIR] [--quick]
+#   experiments/bench_dynamics.sh [--out DIR] [--quick]
 #
 # DIR is results/ by default (scripts/results.sh); the README's main command
 # (scripts/run.sh) writes runs/bench/, which git ignores. --quick: two
@@ -27,4 +27,4 @@ trap 'rm -f "$tmp"' EXIT
 "$bin/bench_dynamics" "${reps[@]}" --benchmark_out="$tmp" --benchmark_out_format=json >/dev/null
 chmod 644 "$tmp"
 mv "$tmp" "$out/bench/dynamics.json"   # complete results only: nothing half-written
-/usr/bin/python3 scripts/dynamics_table.py "$out/bench/dynamics.json" "$out/dynamics_backends.md"
+/usr/bin/python3 experiments/dynamics_table.py "$out/bench/dynamics.json" "$out/dynamics_backends.md"

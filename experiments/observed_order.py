@@ -3,6 +3,7 @@
 
     /usr/bin/python3 experiments/observed_order.py [--out DIR] [--work DIR]
         [--jobs N] [--paper-t-end T] [--reduced]
+    /usr/bin/python3 experiments/observed_order.py --replot [--out DIR]   # the plots alone, from DIR's tables
 
 Scenes: smooth_line_quintic (a C-infinity reference: one straight line,
 quintic timing, viscous friction; 8 s), the same with La = 20 mH
@@ -42,8 +43,9 @@ too. Every run not fitted has its reason in ladder.csv (fit_mark).
 Writes DIR (default results/observed_order/): observed_order.csv (one row per
 scene and method: theoretical and observed order or why there is none, runs
 used, error range), ladder.csv (every run, its floor and why it is not in the
-fit), references.csv (reference vs check), <scene>.png
-(error against dt and against RHS evaluations) and README.md (the table, read
+fit), references.csv (reference vs check), <scene>.png and the same as
+<scene>.pdf (error against dt and against RHS evaluations, in the house style
+of pumasim_exp/style.py) and README.md (the table, read
 back from the CSVs). Run folders go to --work (default build/observed_order/),
 with a private copy of the pumasim binary ($PUMASIM if set), so that a
 rebuild meanwhile does not change the program under measurement.
@@ -67,6 +69,7 @@ import numpy as np
 
 import order_fit
 from pumasim_exp import io as pumasim_io
+from pumasim_exp import style
 from order_fit import THEORY
 from pumasim_exp.io import ROOT, PUMASIM
 
@@ -160,6 +163,8 @@ def parse_args():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--paper-t-end", type=float, default=24.0)
     ap.add_argument("--reduced", action="store_true")
+    ap.add_argument("--replot", action="store_true",
+                    help="only redraw the plots from ladder.csv and references.csv in --out (no run)")
     return ap.parse_args()
 
 
@@ -305,6 +310,10 @@ def write_tables(out, rows, ladder, refs):
 def main():
     a = parse_args()
     out = a.out or os.path.join(ROOT, "results", "observed_order")
+    if a.replot:  # the plots alone, from the tables in out: no run
+        plots(out, [r["scene"] for r in read_csv(os.path.join(out, "references.csv"))])
+        print(f"observed order: plots redrawn from {out}/ladder.csv and references.csv")
+        return
     work = a.work or os.path.join(ROOT, "build", "observed_order-reduced" if a.reduced else "observed_order")
     private_copy(work)
     summaries = integrators()
@@ -332,38 +341,51 @@ def main():
 
 
 def plots(out, scenes):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """<scene>.png and <scene>.pdf in out, from ladder.csv and references.csv:
+    the fixed-step methods' error against dt (left), the adaptive ones'
+    against RHS evaluations (right). Every method has its own style across
+    both panels (style.series: colour, then dash and marker shape beyond
+    eight); a filled marker enters the fit, a hollow one does not. One legend,
+    right of the right-hand panel."""
+    from matplotlib.lines import Line2D
+    plt = style.pyplot()
     ladder = read_csv(os.path.join(out, "ladder.csv"))
     refs = {r["scene"]: r for r in read_csv(os.path.join(out, "references.csv"))}
     for scene in scenes:
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
         floor = ASYMPTOTIC_FACTOR * float(refs[scene]["difference"])
+        panels = {kind: [r for r in ladder if r["scene"] == scene and r["kind"] == kind and r["status"] == "ok"]
+                  for kind in ("fixed", "adaptive")}
+        methods = list(dict.fromkeys(r["integrator"] for kind in ("fixed", "adaptive") for r in panels[kind]))
+        styles = style.series_styles(methods)
         for ax, kind in zip(axes, ["fixed", "adaptive"]):
-            runs = [r for r in ladder if r["scene"] == scene and r["kind"] == kind and r["status"] == "ok"]
+            runs = panels[kind]
             for m in dict.fromkeys(r["integrator"] for r in runs):
+                st = styles[m]
                 rs = [r for r in runs if r["integrator"] == m]
                 x = [float(r["setting"].split("=")[1]) if kind == "fixed" else float(r["rhs_evaluations"])
                      for r in rs]
                 y = [float(r["error"]) for r in rs]
-                line, = ax.loglog(x, y, "-", lw=1, label=f"{m} (order {THEORY[m]})")
+                ax.loglog(x, y, ls=st["ls"], color=st["color"], lw=1)
                 for xi, yi, r in zip(x, y, rs):
-                    ax.loglog(xi, yi, "o", color=line.get_color(),
-                              mfc=line.get_color() if r["used_in_fit"] == "True" else "none")
+                    ax.loglog(xi, yi, st["marker"], color=st["color"],
+                              mfc=st["color"] if r["used_in_fit"] == "True" else "none")
             ax.axhline(floor, color="grey", ls=":", lw=1)
             ax.axhline(ASYMPTOTIC_MAX, color="grey", ls=":", lw=1)
             ax.set_xlabel("dt [s]" if kind == "fixed" else "RHS evaluations")
             ax.set_ylabel("max |x - x_ref| / max(1, |x_ref|)")
             ax.set_title(f"{kind}-step" if kind == "fixed" else "adaptive (rtol ladder)")
             ax.grid(True, which="both", alpha=0.3)
-            if runs:
-                ax.legend(fontsize=7)
+        if methods:
+            handles = [Line2D([], [], lw=1, **styles[m]) for m in methods]
+            labels = [f"{m} (order {THEORY[m]})" for m in methods]
+            handles.append(Line2D([], [], ls="none", marker="o", color="0.35", mfc="none"))
+            labels.append("hollow: outside the fit")
+            style.legend_right(axes[1], handles, labels)
         fig.suptitle(f"{scene}, {float(refs[scene]['t_end_s']):g} s: filled markers enter the fit (the asymptotic "
                      f"range; dotted: {ASYMPTOTIC_FACTOR} x reference vs check, and {ASYMPTOTIC_MAX:g})", fontsize=9)
         fig.tight_layout()
-        fig.savefig(os.path.join(out, f"{scene}.png"), dpi=110)
-        plt.close(fig)
+        style.save(fig, os.path.join(out, f"{scene}.png"))
 
 
 def reaches(slope, theory):
@@ -460,7 +482,7 @@ def readme(out, run_time, a):
          "armature pole ten times slower (−105 instead of −1050 1/s), the same motion; a one-step method",
          "whose slope is short of its order on the shipped scene and reaches it here shows order",
          "reduction from the stiff current (low stage order), not a wrong coefficient.",
-         "Plots: `<scene>.png`.", "",
+         "Plots: `<scene>.png` (and the same as `<scene>.pdf`).", "",
          "| scene | t_end [s] | reference vs check | (joint angles [rad]) | reference RHS | time events |",
          "|---|---|---|---|---|---|"]
     for r in refs:

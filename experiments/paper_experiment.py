@@ -10,7 +10,8 @@ leaves the committed results as they are.
 Runs experiments/scenes/paper_slow.toml and paper_fast.toml with the paper's
 method (Adams-Bashforth, dt = 0.5 ms; order 2, see the scenes) through
 `pumasim run`, five times each for the wall time (median), makes the plots
-with scripts/plot_run.py, keeps the stats, the resolved scene, the metadata
+with scripts/plot_run.py (each a .png and a .pdf beside it, written straight
+into the output folder), keeps the stats, the resolved scene, the metadata
 and a trajectory decimated to 0.1 s, and writes results/paper/README.md from
 those files only.
 """
@@ -97,7 +98,7 @@ def main():
         "",
         "Plots (from `scripts/plot_run.py`): `paper_slow_path_xy.png`, `paper_slow_speed.png`,",
         "`paper_slow_joints.png`, `paper_slow_path_error.png` (the paper's Figs. 6–9), and the",
-        "same for `paper_fast_*` (Figs. 10–11). Each run's folder keeps `stats.json`,",
+        "same for `paper_fast_*` (Figs. 10–11); each also as `.pdf` beside it. Each run's folder keeps `stats.json`,",
         "`scene.resolved.toml`, `meta.json` and the trajectory decimated to 0.1 s.",
         "",
         "## What differs from the paper, and why",

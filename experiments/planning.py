@@ -17,7 +17,8 @@ Writes DIR (default results/planning/): planning.csv (every run: tracking and
 path errors, peak voltage and current per joint, the share of the outputs at
 which a drive saturates), planning.png (errors against traversal time, one
 line per method), planning_along_path.png (distance to the path along it, per
-method, at two traversal times) and summary.json for experiments/report.py.
+method, at two traversal times), each plot also as .pdf beside it (the house
+style, pumasim_exp/style.py), and summary.json for experiments/report.py.
 --reduced (CI): T = 24 s cut to 1 s and T_opt only, into build/planning-reduced/.
 """
 import argparse
@@ -28,6 +29,7 @@ import sys
 import tomllib
 
 from pumasim_exp import io as pumasim_io
+from pumasim_exp import style
 from pumasim_exp.io import ROOT, PUMASIM
 SCENE = os.path.join(ROOT, "experiments", "scenes", "planning.toml")
 PAPER_PROFILE = "[[0.0, 0.0], [0.08, 1.0], [0.3, 1.0], [0.4, 0.5], [0.55, 0.8], [0.75, 0.8], [0.9, 0.3], [1.0, 0.0]]"
@@ -114,8 +116,9 @@ def run_all(runs, reduced):
 
 
 def plot_errors(plt, rows, colors, t_opt, path):
-    """planning.png: max tracking error and max distance to the path against
-    the traversal time, one line per method (colors: {method: color})."""
+    """planning.png (and planning.pdf beside it): max tracking error and max
+    distance to the path against the traversal time, one line per method
+    (colors: {method: color}; a method run at one T only is a star)."""
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, key, lab in ((axes[0], "max_tracking_error_mm", "max tracking error [mm]"),
                          (axes[1], "max_path_deviation_mm", "max distance to the path [mm]")):
@@ -125,18 +128,18 @@ def plot_errors(plt, rows, colors, t_opt, path):
                 ax.plot(*zip(*pts), "o-" if len(pts) > 1 else "*", ms=5 if len(pts) > 1 else 12, lw=1,
                         color=colors[m], label=m)
         ax.set(xscale="log", yscale="log", xlabel="traversal time T [s]", ylabel=lab)
-        ax.axvline(t_opt, color="k", lw=0.6, ls=":")
+        ax.axvline(t_opt, color="0.35", lw=0.6, ls=":")
         ax.grid(True, which="major", lw=0.3)
-    axes[1].legend(fontsize=7)
+    style.legend_right(axes[1])
     fig.suptitle("Planning methods on the paper's path (3 joints, RK4 0.5 ms); dotted: the time-optimal T", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    style.save(fig, path)
 
 
 def plot_along_path(plt, traces, colors, shown, path):
-    """planning_along_path.png: the distance to the path along it, one panel
-    per traversal time in shown, one line per method (colors: {method: color})."""
+    """planning_along_path.png (and planning_along_path.pdf beside it): the
+    distance to the path along it, one panel per traversal time in shown, one
+    line per method (colors: {method: color}), one legend below the panels."""
     fig, axes = plt.subplots(len(shown), 1, figsize=(10, 3.4 * len(shown)), squeeze=False)
     for ax, T in zip(axes[:, 0], shown):
         for m in colors:
@@ -145,10 +148,13 @@ def plot_along_path(plt, traces, colors, shown, path):
                 ax.plot([x / T for x in t], [max(y, 1e-6) for y in d], lw=0.8, color=colors[m], label=m)
         ax.set(yscale="log", xlabel="t / T", ylabel="distance to the path [mm]", title=f"T = {T:.3g} s")
         ax.grid(True, which="major", lw=0.3)
-    axes[0, 0].legend(fontsize=7, ncol=4)
+    entries = {}
+    for ax in axes[:, 0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(lab, h)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    style.legend_below(fig, list(entries.values()), list(entries), ncol=4)
+    style.save(fig, path)
 
 
 def main():
@@ -159,16 +165,14 @@ def main():
     out = a.out or os.path.join(ROOT, *(("build", "planning-reduced") if a.reduced else ("results", "planning")))
     os.makedirs(out, exist_ok=True)
     runs = os.path.join(ROOT, "build", "planning-reduced-runs" if a.reduced else "planning-runs")  # not committed
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = style.pyplot()
 
     rows, traces, t_opt, times = run_all(runs, a.reduced)
     pumasim_io.write_table(os.path.join(out, "planning.csv"), rows, columns=list(rows[0].keys()),
                            comments=[f"experiments/planning.py on experiments/scenes/planning.toml; "
                                      f"time-optimal T_opt = {t_opt:.6g} s"], fmt=pumasim_io.fmt_6g)
     # The methods plotted (the 100 % time-optimal run is in the table only), each with its color.
-    colors = {m: plt.cm.tab10(k) for k, m in enumerate(list(METHODS) + ["time-optimal"])}
+    colors = style.colors(list(METHODS) + ["time-optimal"])
     plot_errors(plt, rows, colors, t_opt, os.path.join(out, "planning.png"))
     shown = [T for T in ([6.0, t_opt] if not a.reduced else [t_opt])]
     plot_along_path(plt, traces, colors, shown, os.path.join(out, "planning_along_path.png"))

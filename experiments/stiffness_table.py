@@ -8,10 +8,12 @@ feedback gains x1, x10, x100): the largest spectral radius of the plant
 Jacobian along 0.2 s of the run, the stiffness ratio, the fastest mode, and
 for each explicit fixed-step method the largest stable step predicted by its
 stability region beside the one found by bisection. Writes DIR/<table>.csv
-and DIR/<table>.png (default DIR = results/stiffness). Then the conditioning
+and DIR/<table>.png with DIR/<table>.pdf beside it (default DIR =
+results/stiffness). Then the conditioning
 table: `pumasim conditioning` along the paper's path, the path moved out to a
 nearly stretched arm, and the six-joint path through the wrist singularity,
-each with and without rotor inertia: DIR/conditioning.csv and .png. --reduced: one case per
+each with and without rotor inertia: DIR/conditioning.csv, .png and .pdf. The
+plots are in the house style (pumasim_exp/style.py). --reduced: one case per
 table, into build/stiffness-reduced (CI). Last, DIR/scenes.csv: every shipped
 scene over its whole run, its spectral radius and stiffness ratio (median over
 40 samples, and the range), and whether it is stiff (median >= 100).
@@ -23,6 +25,8 @@ import os
 import subprocess
 import sys
 import tempfile
+
+from pumasim_exp import style
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 PUMASIM = os.environ.get("PUMASIM", os.path.join(ROOT, "build", "release", "bin", "pumasim"))
@@ -141,15 +145,17 @@ def conditioning(out, reduced, plt):
         w.writeheader()
         w.writerows(rows)
     os.replace(path + ".tmp", path)
+    # conditioning.png and .pdf: a case's colour from the palette (the dash
+    # pattern too beyond eight cases; no markers on the dense curves).
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    for case, t, c in curves:
-        ax.plot(t, c, lw=1, label=case)
+    for k, (case, t, c) in enumerate(curves):
+        st = style.series(k)
+        ax.plot(t, c, lw=1, color=st["color"], ls=st["ls"], label=case)
     ax.set(xlabel="t [s]", ylabel="cond(H)", yscale="log", title="Conditioning of H along the paths")
     ax.grid(True, lw=0.3)
-    ax.legend(fontsize=6)
+    style.legend_right(ax)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "conditioning.png"), dpi=80)
-    plt.close(fig)
+    style.save(fig, os.path.join(out, "conditioning.png"))
 
 
 def scene_stiffness(out, reduced):
@@ -211,9 +217,7 @@ def main():
     out = args.out or os.path.join(ROOT, "build", "stiffness-reduced") if args.reduced else \
         (args.out or os.path.join(ROOT, "results", "stiffness"))
     os.makedirs(out, exist_ok=True)
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = style.pyplot()
     for scene, cases in TABLES.items():
         rows = []
         for case, sets in (cases[:1] if args.reduced else cases):
@@ -233,22 +237,24 @@ def main():
             w.writeheader()
             w.writerows(rows)
         os.replace(path + ".tmp", path)
+        # <table>.png and .pdf: line = predicted, markers = measured, a colour
+        # per integrator (the palette; beyond eight the dash and marker too).
         fig, ax = plt.subplots(figsize=(6.5, 4.5))
         for k, m in enumerate(sorted({r["integrator"] for r in rows})):
             rm = [r for r in rows if r["integrator"] == m]
-            c = plt.cm.tab10(k)
+            st = style.series(k)
+            c = st["color"]
             x = [float(r["spectral_radius"]) for r in rm]
-            ax.plot(x, [float(r["predicted_s"]) for r in rm], "-", color=c, lw=1, label=f"{m} predicted")
+            ax.plot(x, [float(r["predicted_s"]) for r in rm], ls=st["ls"], color=c, lw=1, label=f"{m} predicted")
             meas = [(xx, float(r["measured_s"])) for xx, r in zip(x, rm) if float(r["measured_s"]) > 0]
             if meas:
-                ax.plot(*zip(*meas), "o", color=c, ms=4, label=f"{m} measured")
+                ax.plot(*zip(*meas), st["marker"], color=c, ms=4, label=f"{m} measured")
         ax.set(xscale="log", yscale="log", xlabel="largest |eigenvalue| of the Jacobian [1/s]",
                ylabel="largest stable step [s]", title=f"{scene}: stable step against spectral radius")
         ax.grid(True, lw=0.3)
-        ax.legend(fontsize=6, ncol=2)
+        style.legend_right(ax)
         fig.tight_layout()
-        fig.savefig(os.path.join(out, scene + ".png"), dpi=80)
-        plt.close(fig)
+        style.save(fig, os.path.join(out, scene + ".png"))
     conditioning(out, args.reduced, plt)
     scene_stiffness(out, args.reduced)
     print(f"stiffness tables: {os.path.relpath(out, ROOT)}/")

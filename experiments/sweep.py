@@ -2,7 +2,7 @@
 """Sweeps: variants of a scene x integrators x settings, as independent runs.
 
     /usr/bin/python3 experiments/sweep.py experiments/sweeps/<name>.toml
-        [--jobs N] [--shard K/N] [--merge] [--reduced] [--out DIR] [--work DIR]
+        [--jobs N] [--shard K/N] [--merge | --replot] [--reduced] [--out DIR] [--work DIR]
 
 A sweep file (experiments/sweeps/README.md has the format) names a base scene,
 its variants (scene overrides, as `pumasim run --set`), a reference and a
@@ -81,6 +81,7 @@ import sys
 
 from pumasim_exp.io import ROOT
 from pumasim_exp.merge import merge
+from pumasim_exp import report
 from pumasim_exp.runner import run_share
 from pumasim_exp.specs import SweepError, load_sweep, run_list, select_shard
 # The measures' functions scripts/check_sweep_pipeline.sh checks as sweep.<name>.
@@ -94,6 +95,8 @@ def main():
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--shard", default=None, help="K/N: run only the K-th of N shares of the runs")
     ap.add_argument("--merge", action="store_true", help="only merge finished runs into results/")
+    ap.add_argument("--replot", action="store_true",
+                    help="only redraw the plots from the table and summary in results/ (no run, no merge)")
     ap.add_argument("--reduced", action="store_true", help="CI: a small version, results outside results/")
     ap.add_argument("--out", default=None, help="results folder (default results/<sweep>)")
     ap.add_argument("--work", default=None, help="the runs' folder (default build/sweeps/<sweep>, "
@@ -108,6 +111,10 @@ def main():
         work = args.work or os.path.join(ROOT, "build", "sweeps-reduced" if args.reduced else "sweeps", s["name"])
         out_dir = args.out or os.path.join(ROOT, "build", "sweeps-reduced", "results", s["folder"]) \
             if args.reduced else (args.out or os.path.join(ROOT, "results", s["folder"]))
+        if args.replot:
+            report.replot(s, out_dir)
+            print(f"{s['name']}: plots redrawn -> {os.path.relpath(out_dir, ROOT)}/")
+            return 0
         runs = run_list(s)
         if not args.merge:
             if args.shard:

@@ -21,7 +21,9 @@ published reference value. Writes, into --out:
                         log10(RHS evaluations) over every run that succeeded (reached the end
                         point with a mixed error below 1), which is not an order
   <problem>.png         work-precision: error against RHS evaluations, one line per
-                        integrator, the failed runs named in the title
+                        integrator (solid, circles: adaptive; dashed, squares: fixed
+                        step), the failed runs named in the title; the same as
+                        <problem>.pdf beside it (the house style, pumasim_exp/style.py)
   README.md             tables per problem and the methods whose error does not fall
                         with their tolerance; every number read from the CSVs above
 
@@ -39,6 +41,7 @@ from collections import OrderedDict, defaultdict
 
 import order_fit
 from pumasim_exp import io as pumasim_io
+from pumasim_exp import style
 from pumasim_exp.io import ROOT
 
 # An error that rises by more than this factor when the setting tightens is a
@@ -157,27 +160,47 @@ def analyse(groups):
     return out
 
 
+# The line and the marker say the kind (solid with circles: adaptive, dashed
+# with squares: fixed step); the colour, from the palette, the integrator
+# within its kind; past the palette's eight colours the next marker of the
+# kind's list keeps the series apart.
+KIND_STYLE = {"adaptive": ("-", ["o", "^", "v", "<"]), "fixed": ("--", ["s", "D", "P", "X"])}
+
+
+def integrator_styles(names, kinds):
+    """{name: {color, ls, marker}}: the names in the order given, numbered
+    within their kind (KIND_STYLE)."""
+    out, count, n = {}, defaultdict(int), len(style.PALETTE)
+    for name in names:
+        kind = "adaptive" if kinds[name] == "adaptive" else "fixed"
+        ls, markers = KIND_STYLE[kind]
+        k = count[kind]
+        count[kind] += 1
+        out[name] = {"color": style.PALETTE[k % n], "ls": ls, "marker": markers[(k // n) % len(markers)]}
+    return out
+
+
 def plot(problem, info, kinds, failed, path, title_extra):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """path (<problem>.png) and the same as .pdf beside it: error against RHS
+    evaluations, one line per integrator (integrator_styles), the legend to
+    the right of the data."""
+    plt = style.pyplot()
 
     fig, ax = plt.subplots(figsize=(8.5, 6.2))
-    cmap = plt.get_cmap("tab20")
     names = sorted(info)
-    for i, name in enumerate(names):
+    styles = integrator_styles(names, kinds)
+    for name in names:
         ok = info[name]["ok"]
         if not ok:
             continue
         xs = [fnum(r["rhs_evaluations"]) for r in ok]
         ys = [fnum(r["mixed_error"]) for r in ok]
-        ax.loglog(xs, ys, "-o" if kinds[name] == "adaptive" else "--s", color=cmap(i % 20), ms=4,
-                  label=f"{name} ({kinds[name]})")
+        ax.loglog(xs, ys, ms=4, label=f"{name} ({kinds[name]})", **styles[name])
     ax.set_xlabel("right-hand side evaluations")
     ax.set_ylabel("mixed error at the end point, max |y - y_ref| / (|y_ref| + atol/rtol)")
     ax.grid(True, which="both", alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7, loc="best")
+        style.legend_right(ax)
     title = f"{problem}: error against work" + title_extra
     if failed:
         title += "\nfailed or error >= 1 (runs of the ladder): " + "; ".join(failed)
@@ -196,8 +219,7 @@ def plot(problem, info, kinds, failed, path, title_extra):
     lines.append(line)
     ax.set_title("\n".join(lines), fontsize=7 if len(lines) > 2 else 9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    style.save(fig, path)
 
 
 def failed_label(name, runs):
@@ -331,7 +353,7 @@ def problem_sections(problems, analysis):
     for p in problems:
         prob = p["problem"]
         L += [f"## `{prob}`", "", f"{p['description']}. Reference: {p['reference_source']}. "
-              f"Plot: `{prob}.png`.", "",
+              f"Plot: `{prob}.png` (and the same as `{prob}.pdf`).", "",
               "| integrator | kind | runs ok | ladder | loosest → tightest setting that succeeded | scd there "
               "| RHS evaluations there | best scd (RHS) | observed order (runs in range) | wall time, s (all runs) "
               "| first failure |",
@@ -370,7 +392,7 @@ def write_slopes(path, analysis):
 
 
 def plot_problems(problems, analysis, out_dir, title_extra):
-    """<problem>.png in out_dir for every problem."""
+    """<problem>.png and <problem>.pdf in out_dir for every problem."""
     for p in problems:
         prob = p["problem"]
         info = {name: a for (pr, name), a in analysis.items() if pr == prob}

@@ -1,26 +1,30 @@
 #!/usr/bin/python3
-"""PNG plots of one `pumasim run` directory (the paper's Figs. 6-11).
+"""PNG plots of one `pumasim run` directory (the paper's Figs. 6-11), each
+with the same plot as a PDF beside it (<name>.pdf), in the house style
+(experiments/pumasim_exp/style.py: the colour-blind-safe palette, legends
+beside the data, the reference in grey dashes under it).
 
 Usage: plot_run.py <run dir> [<out dir>] [--prefix NAME]
 
-Reads only <run dir>/trajectory.csv and stats.json, and writes:
+Reads only <run dir>/trajectory.csv and stats.json, and writes (each also as .pdf):
   <prefix>path_xy.png        path in the xy plane, reference and simulated (Fig. 6)
   <prefix>speed.png          speed along the path, reference and simulated (Figs. 7, 10, 12)
-  <prefix>joints.png         joint trajectories (Fig. 8)
+  <prefix>joints.png         joint trajectories, each with its reference q_ref<j>
+                             dashed in its colour where the run has it (Fig. 8)
   <prefix>path_error.png     path error along the path (Figs. 9, 11)
+Written into a run folder, they are listed in its marker (`pumasim run
+--force` may then replace the folder with them).
 """
 import argparse
 import math
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
 from pumasim_exp import io as pumasim_io  # noqa: E402
+from pumasim_exp import style  # noqa: E402
+
+PLOTS = ("path_xy.png", "speed.png", "joints.png", "path_error.png")
 
 
 def load(run_dir):
@@ -52,6 +56,8 @@ def main():
     ap.add_argument("out_dir", nargs="?")
     ap.add_argument("--prefix", default="")
     a = ap.parse_args()
+    plt = style.pyplot()
+    from matplotlib.lines import Line2D
     out = a.out_dir or a.run_dir
     os.makedirs(out, exist_ok=True)
     c, st = load(a.run_dir)
@@ -59,50 +65,62 @@ def main():
     title = f"{st['scene']}: {st['integrator']}, backend {st['backend']}"
     has_ref = "x_ref" in c
 
+    simulated = style.PALETTE[0]
+
     fig, ax = plt.subplots(figsize=(6, 5))
     if has_ref:
-        ax.plot(c["x_ref"], c["y_ref"], "k--", lw=1, label="reference")
-    ax.plot(c["x"], c["y"], lw=1, label="simulated")
+        ax.plot(c["x_ref"], c["y_ref"], **style.REFERENCE)
+    ax.plot(c["x"], c["y"], lw=1, color=simulated, label="simulated")
     ax.set(xlabel="x [m]", ylabel="y [m]", title=title, aspect="equal")
-    ax.legend()
+    style.legend_right(ax)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, a.prefix + "path_xy.png"), dpi=110)
-    plt.close(fig)
+    style.save(fig, os.path.join(out, a.prefix + "path_xy.png"))
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     if has_ref:
-        ax.plot(t, speed(t, c["x_ref"], c["y_ref"]), "k--", lw=1, label="reference")
-    ax.plot(t, speed(t, c["x"], c["y"]), lw=0.8, label="simulated")
+        ax.plot(t, speed(t, c["x_ref"], c["y_ref"]), **style.REFERENCE)
+    ax.plot(t, speed(t, c["x"], c["y"]), lw=0.8, color=simulated, label="simulated")
     ax.set(xlabel="t [s]", ylabel="speed in the xy plane [m/s]", title=title)
-    ax.legend()
+    style.legend_right(ax)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, a.prefix + "speed.png"), dpi=110)
-    plt.close(fig)
+    style.save(fig, os.path.join(out, a.prefix + "speed.png"))
 
+    # Joint j in the palette's j-th colour; its reference q_ref<j> (where the
+    # run has one) thin and dashed in the same colour, under the data.
     fig, ax = plt.subplots(figsize=(7, 3.5))
-    j = 1
-    while f"q{j}" in c:
-        ax.plot(t, c[f"q{j}"], lw=1, label=f"q{j}")
-        j += 1
+    joints = []
+    while f"q{len(joints) + 1}" in c:
+        joints.append(len(joints) + 1)
+    colors = style.colors(joints)
+    any_ref = False
+    for j in joints:
+        if f"q_ref{j}" in c:
+            ax.plot(t, c[f"q_ref{j}"], color=colors[j], lw=0.8, ls="--", zorder=1)
+            any_ref = True
+        ax.plot(t, c[f"q{j}"], color=colors[j], lw=1, zorder=2, label=f"q{j}")
     ax.set(xlabel="t [s]", ylabel="joint angle [rad]", title=title)
-    ax.legend(ncol=3)
+    handles, labels = ax.get_legend_handles_labels()
+    if any_ref:
+        handles.append(Line2D([], [], color=style.REFERENCE["color"], lw=0.8, ls="--"))
+        labels.append("dashed: reference")
+    if handles:
+        style.legend_right(ax, handles, labels)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, a.prefix + "joints.png"), dpi=110)
-    plt.close(fig)
+    style.save(fig, os.path.join(out, a.prefix + "joints.png"))
 
     if has_ref:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         s = arc_length(c["x_ref"], c["y_ref"])
-        ax.plot(s, c["path_error"], lw=0.8)
+        ax.plot(s, c["path_error"], lw=0.8, color=simulated)
         ax.set(xlabel="arc length along the path [m]", ylabel="path error [mm]",
                title=f"{title}; max {st['max_path_error_mm']:.3f} mm")
         fig.tight_layout()
-        fig.savefig(os.path.join(out, a.prefix + "path_error.png"), dpi=110)
-        plt.close(fig)
+        style.save(fig, os.path.join(out, a.prefix + "path_error.png"))
     # Plots written into a pumasim run folder are listed in its marker, so that
-    # `pumasim run --force` may replace the folder with them (and nothing else).
-    pumasim_io.list_in_marker(out, [a.prefix + n for n in ("path_xy.png", "speed.png", "joints.png", "path_error.png")
-                                    if os.path.exists(os.path.join(out, a.prefix + n))])
+    # `pumasim run --force` may replace the folder with them (and nothing else):
+    # every .png written and the .pdf beside it.
+    written = [a.prefix + n[:-len(".png")] + ext for n in PLOTS for ext in (".png", ".pdf")]
+    pumasim_io.list_in_marker(out, [n for n in written if os.path.exists(os.path.join(out, n))])
 
 
 if __name__ == "__main__":

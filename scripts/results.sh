@@ -26,14 +26,14 @@
 #               (experiments/partitioned.py; long: rk4 references at 1e-5 s)
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
-#   bench       the dynamics back-end benchmark (scripts/bench_dynamics.sh)
+#   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
 #               results/fuzz/long_run.json). About half an hour for the six harnesses on
 #               2 cores, hence not in the default run; FUZZ_HARNESSES="urdf joint_csv"
 #               runs only those (their entries replaced, the others' kept).
-#   cost        only when named: where a run's wall time goes (scripts/cost_breakdown.py,
+#   cost        only when named: where a run's wall time goes (experiments/cost_breakdown.py,
 #               the release build against the profiled one, preset profile, which it
 #               builds); records the label COST_LABEL (default main) in
 #               results/cost_breakdown.json, the other labels kept.
@@ -79,6 +79,7 @@ full=0
 if [ ${#stages[@]} -eq 0 ]; then stages=("${all[@]}"); full=1; fi
 
 # writes: results/{folder}/{name}.csv results/{folder}/{name}.png results/{folder}/{name}_cost.png
+# writes: results/{folder}/{name}.pdf results/{folder}/{name}_cost.pdf
 # writes: results/{folder}/{name}_precision.md results/{folder}/{name}_modes.md results/{folder}/{name}_summary.json
 stage_sweeps() {
   # The work-precision sweeps (wall time is their headline) run one at a time,
@@ -95,13 +96,14 @@ stage_stiffness() { /usr/bin/python3 experiments/stiffness_table.py; }
 stage_planning() { /usr/bin/python3 experiments/planning.py; }
 # writes: results/observed_order/README.md results/observed_order/observed_order.csv
 # writes: results/observed_order/ladder.csv results/observed_order/references.csv results/observed_order/*.png
+# writes: results/observed_order/*.pdf
 # writes: results/observed_order/rounding_spread.csv results/observed_order/rounding_spread.md
 stage_order() {
   /usr/bin/python3 experiments/observed_order.py
   /usr/bin/python3 experiments/rounding_spread.py   # steps of the same run over the back-ends (rounding-level changes of f)
 }
 # writes: results/testset/README.md results/testset/testset.csv results/testset/problems.csv
-# writes: results/testset/observed_slopes.csv results/testset/*.png
+# writes: results/testset/observed_slopes.csv results/testset/*.png results/testset/*.pdf
 stage_testset() { /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"; }
 # writes: results/output_grid/
 stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
@@ -126,6 +128,7 @@ stage_buildspread() {
   /usr/bin/python3 experiments/build_spread.py --native "$PUMASIM_BIN/pumasim-native" --portable "$PUMASIM"
 }
 # writes: results/paper/README.md results/paper/paper_fast/ results/paper/paper_slow/ results/paper/paper_*.png
+# writes: results/paper/paper_*.pdf
 stage_paper() { /usr/bin/python3 experiments/paper_experiment.py --out results/paper; }
 # writes: results/paper/sensitivity.csv results/paper/sensitivity.md
 stage_sensitivity() { /usr/bin/python3 experiments/sensitivity.py --jobs "$jobs"; }
@@ -136,7 +139,8 @@ stage_filippov() { /usr/bin/python3 experiments/filippov.py --out results/stick_
 # writes: results/panda/authors_code_difference.md results/panda/authors_code_difference.json
 stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --out results/panda/authors_code_difference.md; }
 # writes: results/bench/dynamics.json results/dynamics_backends.md results/dynamics_cost_vs_n.png
-stage_bench() { scripts/bench_dynamics.sh --out results; }
+# writes: results/dynamics_cost_vs_n.pdf
+stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
@@ -144,7 +148,7 @@ stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
 stage_cost() {
   cmake --preset profile > /dev/null   # the timers (PUMASIM_PROFILE) beside scripts/build.sh's release build
   cmake --build --preset profile --target pumasim -j "$(nproc)" > /dev/null
-  /usr/bin/python3 scripts/cost_breakdown.py --label "${COST_LABEL:-main}" \
+  /usr/bin/python3 experiments/cost_breakdown.py --label "${COST_LABEL:-main}" \
     --revision "release and profiled builds of $(git rev-parse --short HEAD)"
 }
 # writes: results/reliability/ci_phases.txt

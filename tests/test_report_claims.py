@@ -142,7 +142,7 @@ def test_the_report_exits_non_zero_and_writes_nothing_when_a_table_contradicts_a
     res = tmp_path / "results"
     folder = res / "work_precision"
     folder.mkdir(parents=True)
-    for ext in (".csv", ".png", "_summary.json", "_precision.md"):
+    for ext in (".csv", ".png", ".pdf", "_summary.json", "_precision.md"):
         shutil.copy(os.path.join(RESULTS, "work_precision", HYBRID + ext), folder)
     csv = folder / (HYBRID + ".csv")
     text = csv.read_text()
@@ -361,7 +361,7 @@ def test_the_report_on_the_hybrid_sweep_with_a_current_target_names_the_current_
     corrected finding (AB2 and AB3 only from 0.25 ms) then fails."""
     folder = tmp_path / "results" / "work_precision"
     folder.mkdir(parents=True)
-    for ext in (".csv", ".png", "_summary.json", "_precision.md"):
+    for ext in (".csv", ".png", ".pdf", "_summary.json", "_precision.md"):
         shutil.copy(os.path.join(RESULTS, "work_precision", HYBRID + ext), folder)
     with_current_target(str(folder), HYBRID, 0.05)
     out = tmp_path / "README.md"

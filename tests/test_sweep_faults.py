@@ -253,7 +253,7 @@ def finish_merge(sw):
     """A last merge completes: table and summary agree, no temporary is left, notes.txt untouched."""
     assert sw.run("--merge", fake=False).returncode == 0
     assert outputs_agree(sw.out, sw.name)
-    assert sorted(os.listdir(sw.out)) == sorted(["notes.txt", sw.name + ".csv", sw.name + ".png",
+    assert sorted(os.listdir(sw.out)) == sorted(["notes.txt", sw.name + ".csv", sw.name + ".png", sw.name + ".pdf",
                                                  sw.name + "_precision.md", sw.name + "_summary.json"]), \
         "leftover temporaries"
     with open(os.path.join(sw.out, "notes.txt")) as f:
@@ -304,14 +304,14 @@ def test_a_merge_killed_between_its_renames_leaves_no_undetected_mismatch(sw):
     """The instants a random kill rarely hits: after the table is in place
     and before the summary is, and so on for every rename into the folder."""
     assert sw.run(fake=False).returncode == 0
-    for k in (1, 2, 3, 4):  # the table, the plot, the precision table, the summary
+    for k in (1, 2, 3, 4, 5):  # the table, the precision table, the plot (.png, .pdf), the summary
         sw.write(target=1.0 + k)  # each merge's files differ from every earlier one's
         code = KILL_AT_RENAME.format(experiments=os.path.join(ROOT, "experiments"), out=sw.out, k=k,
                                      argv=sw.args("--merge")[1:])
         p = subprocess.run([PY, "-c", code], capture_output=True, text=True, env=sw.env(fake=False))
         no_traceback(p)
         outcome = report_after_kill(sw, f"killed after rename {k}")
-        assert outcome == ("agree" if k == 4 else "refused"), f"killed after rename {k}: {outcome}"
+        assert outcome == ("agree" if k == 5 else "refused"), f"killed after rename {k}: {outcome}"
     finish_merge(sw)
 
 

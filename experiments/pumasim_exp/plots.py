@@ -1,18 +1,17 @@
 """A sweep's plots: <sweep>.png (the ranking error against wall time and
 against right-hand-side evaluations, a line per integrator, a panel row per
 variant) and <sweep>_cost.png (the cheapest run within every target against
-the variant value), from the merged rows only."""
+the variant value), from the merged rows only; each also as .pdf, in the
+house style (style.py)."""
 import math
 
+from . import style
 from .measures import BELOW_REFERENCE_FACTOR, ranking
 
 
 def pyplot():
-    """matplotlib.pyplot on the Agg back-end (files only, no display)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+    """matplotlib.pyplot on the Agg back-end, in the house style (style.py)."""
+    return style.pyplot()
 
 
 def usable(x):
@@ -21,25 +20,27 @@ def usable(x):
 
 
 def integrator_colors(plt, integrators):
-    """{integrator: colour}, the integrators sorted by name, one colour each (tab20, cycling)."""
-    return {n: plt.cm.tab20(k % 20) for k, n in enumerate(integrators)}
+    """{integrator: {color, ls}}, the integrators sorted by name: the
+    colour-blind-safe palette, then the same colours dashed (style.series;
+    the marker is the plot's: hollow means below the reference's accuracy)."""
+    return {n: {k: v for k, v in style.series(i).items() if k != "marker"} for i, n in enumerate(integrators)}
 
 
-def _plot_lines(ax, pts, color, label):
-    """One integrator's line through pts = [(x, y, hollow)], its markers
-    hollow where hollow is True."""
-    ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", lw=1, color=color, label=label)
+def _plot_lines(ax, pts, line, label):
+    """One integrator's line through pts = [(x, y, hollow)] in its style
+    `line` ({color, ls}), its markers hollow where hollow is True."""
+    ax.plot([p[0] for p in pts], [p[1] for p in pts], lw=1, label=label, **line)
     for hollow in (False, True):
         sel = [p for p in pts if p[2] == hollow]
         if sel:
-            ax.plot([p[0] for p in sel], [p[1] for p in sel], "o", ms=4, color=color,
-                    mfc="none" if hollow else color)
+            ax.plot([p[0] for p in sel], [p[1] for p in sel], "o", ms=4, color=line["color"],
+                    mfc="none" if hollow else line["color"])
 
 
-def plot_work_precision(plt, s, rows, agreement, colors, path):
+def plot_work_precision(plt, s, rows, agreement, colors, path, fmt="png"):
     """<sweep>.png: the ranking error against wall time and against RHS
-    evaluations, one line per integrator (colors: {integrator: color}, sorted
-    by name), a panel row per variant."""
+    evaluations, one line per integrator (colors: integrator_colors), a panel
+    row per variant; written to path in format fmt."""
     from matplotlib.lines import Line2D
     rcol, runit, rlabel, rtarget = ranking(s)
     nv = len(s["variants"])
@@ -56,7 +57,7 @@ def plot_work_precision(plt, s, rows, agreement, colors, path):
                 if pts:
                     _plot_lines(ax, pts, colors[n], n)
             if math.isfinite(a[rcol]):
-                ax.axhline(max(a[rcol], 1e-300), color="k", lw=0.8, ls=":", label="reference vs check")
+                ax.axhline(max(a[rcol], 1e-300), color="0.35", lw=0.8, ls=":", label="reference vs check")
             ax.axhline(rtarget, color="0.5", lw=0.8, ls="--", label=f"target {rtarget:g} {runit}")
             nfail = sum(1 for r in rows if r["variant"] == v["label"] and not r["ok"])
             ax.set(xscale="log", yscale="log", xlabel=label, ylabel=f"{rlabel} [{runit}]",
@@ -66,14 +67,14 @@ def plot_work_precision(plt, s, rows, agreement, colors, path):
     handles, labels = axes[0][1].get_legend_handles_labels()
     handles.append(Line2D([], [], ls="none", marker="o", ms=4, color="k", mfc="none"))
     labels.append(f"hollow: within {BELOW_REFERENCE_FACTOR}× of reference vs check (below its accuracy)")
-    axes[0][1].legend(handles, labels, fontsize=6, ncol=2)
+    style.legend_right(axes[0][1], handles, labels)
     fig.suptitle(f"{s['title']} — ranked by {rlabel}", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=80, format="png")  # path: a temporary (.tmp)
+    style.write(fig, path, fmt)  # path: a temporary (.tmp)
     plt.close(fig)
 
 
-def plot_cost(plt, s, plottable, colors, path):
+def plot_cost(plt, s, plottable, colors, path, fmt="png"):
     """<sweep>_cost.png: the RHS evaluations of each integrator's cheapest run
     within every target, against the variant value."""
     _, runit, rlabel, rtarget = ranking(s)
@@ -88,7 +89,7 @@ def plot_cost(plt, s, plottable, colors, path):
     ax.set_title(f"{s['title']}\ncost to reach {rlabel} ≤ {rtarget:g} {runit} (ranking measure)"
                  + (" and every other target" if len(s["targets"]) > 1 else ""), fontsize=8)
     ax.grid(True, which="major", lw=0.3)
-    ax.legend(fontsize=6, ncol=2)
+    style.legend_right(ax)
     fig.tight_layout()
-    fig.savefig(path, dpi=80, format="png")  # path: a temporary (.tmp)
+    style.write(fig, path, fmt)  # path: a temporary (.tmp)
     plt.close(fig)

@@ -108,6 +108,67 @@ def _write_csv(path, text):
         f.write(text)
 
 
+def plot_files(plt, s, rows, agreement, plottable):
+    """{file name: writer} of a sweep's plots, each as .png and .pdf:
+    <sweep> (work-precision) and, given plottable (None: not drawn),
+    <sweep>_cost."""
+    name = s["name"]
+    colors = plots.integrator_colors(plt, sorted({r["integrator"] for r in rows}))
+    files = {}
+    for fmt in ("png", "pdf"):
+        files[f"{name}.{fmt}"] = lambda p, f=fmt: plots.plot_work_precision(plt, s, rows, agreement, colors, p, f)
+        if plottable is not None:
+            files[f"{name}_cost.{fmt}"] = lambda p, f=fmt: plots.plot_cost(plt, s, plottable, colors, p, f)
+    return files
+
+
+def _typed(row):
+    """A row of a committed sweep table (strings) with what the plots read
+    typed: numbers as floats, ok as a bool, below_reference_accuracy as
+    True, False or None (not judged)."""
+    out = dict(row)
+    for k, v in row.items():
+        if k in ("variant", "integrator", "setting", "failure", "disqualified_by", "wall_times_s"):
+            continue
+        try:
+            out[k] = float(v)
+        except (TypeError, ValueError):
+            pass
+    out["ok"] = row["ok"] == "True"
+    out["below_reference_accuracy"] = {"True": True, "False": False}.get(row["below_reference_accuracy"])
+    return out
+
+
+def replot(s, out_dir):
+    """Redraws a sweep's plots (.png and .pdf) from its committed table and
+    summary in out_dir, runs nothing: for a change of the plot style. The set
+    must be whole (check_outputs); the table, precision table and modes are
+    kept byte for byte, the summary's hashes renewed. The table holds six
+    significant digits, which no plot can show the difference of. Returns the
+    summary; SweepError if the set is missing or not whole."""
+    name = s["name"]
+    summary_path = os.path.join(out_dir, name + "_summary.json")
+    try:
+        summary = pumasim_io.read_json(summary_path)
+        pumasim_io.check_outputs(out_dir, summary)
+    except (OSError, ValueError, pumasim_io.OutputsMismatch) as e:
+        raise SweepError(f"replot: {summary_path}: {e}")
+    rows = [_typed(r) for r in pumasim_io.read_table(os.path.join(out_dir, name + ".csv")).rows]
+    kept = {}
+    for n in summary["outputs"]:
+        if not n.endswith((".png", ".pdf")):
+            with open(os.path.join(out_dir, n), newline="") as f:
+                kept[n] = f.read()
+    files = {n: (lambda p, t=t: _write_csv(p, t)) for n, t in kept.items()}
+    plottable = None
+    if summary["has_cost_plot"]:
+        plottable = {n: [p for p in pts if plots.usable(p["value"])] for n, pts in summary["cost_to_target"].items()}
+    files.update(plot_files(plots.pyplot(), s, rows, summary["agreement"], plottable))
+    pumasim_io.remove_dead_temporaries(out_dir, [*files, name + "_summary.json"])
+    return pumasim_io.write_output_set(out_dir, files, name + "_summary.json",
+                                       {k: v for k, v in summary.items() if k != "outputs"})
+
+
 def write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning, modes=None):
     """Writes out_dir/<sweep>.csv, <sweep>.png, <sweep>_precision.md,
     <sweep>_cost.png (several variants only) and <sweep>_summary.json together
@@ -120,18 +181,14 @@ def write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_cree
     comments = _table_comments(s, agreement, weak, limit, held_creep, pinning) + _mode_comments(s, modes)
     text = pumasim_io.table_text(rows, comments=comments, fmt=pumasim_io.fmt_6g)
     integrators = sorted({r["integrator"] for r in rows})
-    colors = plots.integrator_colors(plt, integrators)
     cost = cost_to_target(s, rows, agreement, integrators)
     disqualified = disqualified_cheapest(s, rows, integrators)
     slopes = precision_table.tolerance_slopes(rows, agreement, BELOW_REFERENCE_FACTOR)
     precision = precision_table.markdown(s, rows, slopes, cost, disqualified, MEASURES, BELOW_REFERENCE_FACTOR)
     plottable = {n: [p for p in pts if plots.usable(p["value"])] for n, pts in cost.items()}
     has_cost_plot = len(s["variants"]) > 1 and any(len(p) > 1 for p in plottable.values())
-    files = {name + ".csv": lambda p: _write_csv(p, text),
-             name + ".png": lambda p: plots.plot_work_precision(plt, s, rows, agreement, colors, p),
-             name + "_precision.md": lambda p: _write_csv(p, precision)}
-    if has_cost_plot:
-        files[name + "_cost.png"] = lambda p: plots.plot_cost(plt, s, plottable, colors, p)
+    files = {name + ".csv": lambda p: _write_csv(p, text), name + "_precision.md": lambda p: _write_csv(p, precision)}
+    files.update(plot_files(plt, s, rows, agreement, plottable if has_cost_plot else None))
     summary = _summary(s, rows, agreement, weak, limit, held_creep, pinning, cost, has_cost_plot)
     summary["disqualified_cheapest"] = disqualified
     summary["tolerance_slopes"] = [{k: m[k] for k in ("variant", "integrator", "options", "slope", "used", "mark")}

@@ -14,7 +14,7 @@
 //
 // The timers read the steady clock twice per scope (some 20-40 ns each on
 // this kind of machine): a profiled run is slower than a normal one, which
-// scripts/cost_breakdown.py reports beside the normal build's wall time.
+// experiments/cost_breakdown.py reports beside the normal build's wall time.
 #pragma once
 
 #ifdef PUMASIM_PROFILE
