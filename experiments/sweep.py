@@ -111,8 +111,10 @@ def main():
         work = args.work or os.path.join(ROOT, "build", "sweeps-reduced" if args.reduced else "sweeps", s["name"])
         out_dir = args.out or os.path.join(ROOT, "build", "sweeps-reduced", "results", s["folder"]) \
             if args.reduced else (args.out or os.path.join(ROOT, "results", s["folder"]))
+        if args.replot and (args.merge or args.shard):
+            raise SweepError("--replot draws from the committed table alone: not with --merge or --shard")
         if args.replot:
-            report.replot(s, out_dir)
+            report.replot(s, work, out_dir)
             print(f"{s['name']}: plots redrawn -> {os.path.relpath(out_dir, ROOT)}/")
             return 0
         runs = run_list(s)

@@ -102,7 +102,7 @@ def main():
     handles, labels = ax.get_legend_handles_labels()
     if any_ref:
         handles.append(Line2D([], [], color=style.REFERENCE["color"], lw=0.8, ls="--"))
-        labels.append("dashed: reference")
+        labels.append("dashed: its reference q_ref")
     if handles:
         style.legend_right(ax, handles, labels)
     fig.tight_layout()

@@ -288,13 +288,14 @@ TEST(SceneKeyDocs, EveryShippedSceneKeyIsListed) {
   const std::vector<SceneKeyDoc> docs = scene_key_docs();
   for (const std::string& file : shipped_scenes()) {
     const toml::table doc = parse_toml_file(file);
-    for (const auto& [section, node] : doc) {
-      ASSERT_TRUE(node.is_table()) << file << ": " << section.str();
-      for (const auto& [key, value] : *node.as_table()) {
-        const bool listed = std::any_of(docs.begin(), docs.end(), [&](const SceneKeyDoc& d) {
-          return d.section == section.str() && d.key == key.str();
-        });
-        EXPECT_TRUE(listed) << file << ": " << section.str() << "." << key.str();
+    for (const auto& [section_key, node] : doc) {
+      const std::string section(section_key.str());  // a copy: clang 14 cannot capture a binding (P1091)
+      ASSERT_TRUE(node.is_table()) << file << ": " << section;
+      for (const auto& entry : *node.as_table()) {
+        const std::string key(entry.first.str());
+        const bool listed = std::any_of(docs.begin(), docs.end(),
+                                        [&](const SceneKeyDoc& d) { return d.section == section && d.key == key; });
+        EXPECT_TRUE(listed) << file << ": " << section << "." << key;
       }
     }
   }

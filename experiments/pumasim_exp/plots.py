@@ -57,8 +57,8 @@ def plot_work_precision(plt, s, rows, agreement, colors, path, fmt="png"):
                 if pts:
                     _plot_lines(ax, pts, colors[n], n)
             if math.isfinite(a[rcol]):
-                ax.axhline(max(a[rcol], 1e-300), color="0.35", lw=0.8, ls=":", label="reference vs check")
-            ax.axhline(rtarget, color="0.5", lw=0.8, ls="--", label=f"target {rtarget:g} {runit}")
+                ax.axhline(max(a[rcol], 1e-300), color="0.35", lw=0.8, ls=":", zorder=1, label="reference vs check")
+            ax.axhline(rtarget, color="0.5", lw=0.8, ls="--", zorder=1, label=f"target {rtarget:g} {runit}")
             nfail = sum(1 for r in rows if r["variant"] == v["label"] and not r["ok"])
             ax.set(xscale="log", yscale="log", xlabel=label, ylabel=f"{rlabel} [{runit}]",
                    title=f"{v['label']}" + (f" ({nfail} failed runs, see CSV)" if nfail else "")

@@ -139,13 +139,15 @@ def _typed(row):
     return out
 
 
-def replot(s, out_dir):
+def replot(s, work, out_dir):
     """Redraws a sweep's plots (.png and .pdf) from its committed table and
     summary in out_dir, runs nothing: for a change of the plot style. The set
     must be whole (check_outputs); the table, precision table and modes are
     kept byte for byte, the summary's hashes renewed. The table holds six
     significant digits, which no plot can show the difference of. Returns the
-    summary; SweepError if the set is missing or not whole."""
+    summary; SweepError if the set is missing or not whole, or the sweep
+    file's variants, ranking or title are no longer those merged. Under the
+    sweep's merge lock (work: its runs' folder), as a merge."""
     name = s["name"]
     summary_path = os.path.join(out_dir, name + "_summary.json")
     try:
@@ -153,6 +155,14 @@ def replot(s, out_dir):
         pumasim_io.check_outputs(out_dir, summary)
     except (OSError, ValueError, pumasim_io.OutputsMismatch) as e:
         raise SweepError(f"replot: {summary_path}: {e}")
+    drawn = {k: summary.get(k) for k in ("title", "rank_by", "skipped_variants")}
+    drawn["variants"] = [v["label"] for v in summary.get("variants", [])]
+    wanted = {k: s.get(k) for k in ("title", "rank_by", "skipped_variants")}
+    wanted["variants"] = [v["label"] for v in s["variants"]]
+    if drawn != wanted:
+        changed = ", ".join(k for k in wanted if wanted[k] != drawn[k])
+        raise SweepError(f"replot: {summary_path}: the sweep file now differs from the one merged ({changed}); "
+                         "re-run the sweep, or merge, instead of redrawing")
     rows = [_typed(r) for r in pumasim_io.read_table(os.path.join(out_dir, name + ".csv")).rows]
     kept = {}
     for n in summary["outputs"]:
@@ -164,9 +174,16 @@ def replot(s, out_dir):
     if summary["has_cost_plot"]:
         plottable = {n: [p for p in pts if plots.usable(p["value"])] for n, pts in summary["cost_to_target"].items()}
     files.update(plot_files(plots.pyplot(), s, rows, summary["agreement"], plottable))
-    pumasim_io.remove_dead_temporaries(out_dir, [*files, name + "_summary.json"])
-    return pumasim_io.write_output_set(out_dir, files, name + "_summary.json",
-                                       {k: v for k, v in summary.items() if k != "outputs"})
+    lock = _merge_lock(work)
+    try:
+        pumasim_io.remove_dead_temporaries(out_dir, [*files, name + "_summary.json"])
+        return pumasim_io.write_output_set(out_dir, files, name + "_summary.json",
+                                           {k: v for k, v in summary.items() if k != "outputs"})
+    except OSError as e:
+        raise SweepError(f"replot: cannot write {e.filename}: {e.strerror}")
+    finally:
+        if lock:
+            lock.release()
 
 
 def write_outputs(s, work, out_dir, plt, rows, agreement, weak, limit, held_creep, pinning, modes=None):

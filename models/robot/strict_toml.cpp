@@ -13,10 +13,13 @@
 namespace pumasim {
 namespace {
 
-// The shortest text that reads back as x (0.1, not 0.10000000000000001).
+// The shortest text that reads back as x (0.1, not 0.10000000000000001); a
+// whole number below 1e15 in full (100000, not 1e+05).
 std::string format_number(double x) {
   char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  const bool whole = x == std::floor(x) && std::abs(x) < 1e15;
+  const auto r = whole ? std::to_chars(buf, buf + sizeof buf, x, std::chars_format::fixed)
+                       : std::to_chars(buf, buf + sizeof buf, x);
   return std::string(buf, r.ptr);
 }
 

@@ -13,6 +13,7 @@
 // per-joint and shared entries (0 otherwise); PUMASIM_AT(expr) writes one.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <sstream>
@@ -22,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/invariant.hpp"
 #include "models/robot/strict_toml.hpp"
 #include "models/scene/key_doc.hpp"
 
@@ -325,40 +327,51 @@ inline std::string need_name(Need n) {
 
 // When entry e means something: its `when`; else the values of the entry it
 // is decided by (decided_by) for which its fn holds, each read into a copy of
-// `prototype` (the section's struct at its defaults, sized for one joint) by
-// that entry's own codec; a decider that is not a choice (a file, a pose):
-// whether it is given. Empty: always.
+// every one of `prototypes` (the section's struct at its defaults, sized for
+// one joint, in each of its shapes: a Cartesian path and a joint-space
+// reference) by that entry's own codec; a decider that is not a choice (a
+// file, a pose): whether it is given. Where the answer differs between the
+// prototypes, fn reads more than its decider, and the entry must say its
+// condition in words (`when`): an InternalError until it does. Empty: always.
 template <class T>
-std::string applies_text(const std::vector<Entry<T>>& entries, const Entry<T>& e, const T& prototype) {
+std::string applies_text(const std::vector<Entry<T>>& entries, const Entry<T>& e, const std::vector<T>& prototypes) {
   if (!e.applies.fn) return "";
   if (!e.applies.when.empty()) return std::string(e.applies.when);
+  const std::string key(e.key), by(e.applies.decided_by);
   const Entry<T>* decider = nullptr;
   for (const Entry<T>& d : entries) {
     if (d.key == e.applies.decided_by && !decider) decider = &d;
   }
-  const std::string by(e.applies.decided_by);
-  if (!decider)
-    throw std::logic_error("scene entry " + std::string(e.key) + ": decided by '" + by + "', no such entry");
-  if (decider->codec.names.empty()) return by + (e.applies.fn(prototype) ? " not given" : " given");
+  PUMASIM_DEMAND(decider != nullptr, "scene entry " + key + ": decided by '" + by + "', no such entry");
+  const auto holds = [&](const auto& set) -> bool {  // fn on each prototype after set(obj): the same on all
+    std::vector<bool> r;
+    for (T obj : prototypes) r.push_back((set(obj), e.applies.fn(obj)));
+    PUMASIM_DEMAND(std::all_of(r.begin(), r.end(), [&](bool b) { return b == r[0]; }),
+                   "scene entry " + key + ": its condition reads more than '" + by + "'; give it applies.when");
+    return r[0];
+  };
+  if (decider->codec.names.empty()) return by + (holds([](T&) {}) ? " not given" : " given");
   std::string yes;
   for (const std::string& name : decider->codec.names) {
-    T obj = prototype;
-    toml::table doc;
-    doc.insert(by, name);
-    StrictTable t(doc, "(reference)", "");
-    decider->codec.read(t, by, obj, 1);
-    if (e.applies.fn(obj)) yes += (yes.empty() ? "" : " or ") + ("\"" + name + "\"");
+    const bool applies = holds([&](T& obj) {
+      toml::table doc;
+      doc.insert(by, name);
+      StrictTable t(doc, "(reference)", "");
+      decider->codec.read(t, by, obj, 1);
+    });
+    if (applies) yes += (yes.empty() ? "" : " or ") + ("\"" + name + "\"");
   }
+  PUMASIM_DEMAND(!yes.empty(), "scene entry " + key + ": applies under no value of '" + by + "'");
   return by + " = " + yes;
 }
 
 // The reference's rows for one section's table.
 template <class T>
 void add_key_docs(std::vector<SceneKeyDoc>& out, std::string_view section, const std::vector<Entry<T>>& entries,
-                  const T& prototype) {
+                  const std::vector<T>& prototypes) {
   for (const Entry<T>& e : entries) {
     out.push_back({std::string(section), std::string(e.key), need_name(e.need), e.codec.what, std::string(e.meaning),
-                   applies_text(entries, e, prototype)});
+                   applies_text(entries, e, prototypes)});
   }
 }
 

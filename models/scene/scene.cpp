@@ -256,27 +256,54 @@ void need_kinetic(StrictTable& t, PlantConfig& pc) { need_level(t, pc, "kinetic_
 
 // Keys that mean nothing for the model are unknown keys.
 const std::vector<Entry<PlantConfig>> kFrictionEntries = {
-    {"model", scene_io::shared_choice(friction_model_choices(), PUMASIM_AT(s.friction[j].model)),
-     friction_model_names(), Need::kRequired, {}, default_band},
-    {"viscous", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
-     "B [N m s/rad] (every model but none; default: the robot file's damping / Z^2, else 0)", Need::kOptional,
+    {"model",
+     scene_io::shared_choice(friction_model_choices(), PUMASIM_AT(s.friction[j].model)),
+     friction_model_names(),
+     Need::kRequired,
+     {},
+     default_band},
+    {"viscous",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].viscous)),
+     "B [N m s/rad] (every model but none; default: the robot file's damping / Z^2, else 0)",
+     Need::kOptional,
      {dissipative, "model"}},
-    {"static_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
-     "Fs [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|)", Need::kOptional,
-     {coulomb, "model"}, need_static},
-    {"kinetic_torque", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|)", Need::kOptional,
-     {coulomb, "model"}, need_kinetic},
-    {"zero_speed", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].zero_speed)),
-     "[rad/s] \"zero\" speed (paper), band (karnopp)", Need::kOptional, {banded, "model"}},
-    {"speed_scale", scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
-     "[rad/s] tanh(w / speed_scale) (tanh)", Need::kOptional, {smooth, "model"}},
-    {"sigmoid_level", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
-     "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)", Need::kRequired, {sigmoid, "model"}},
-    {"sigmoid_slope", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_slope)),
-     "phi2 [s/rad] (sigmoid: the slope, motor side)", Need::kRequired, {sigmoid, "model"}},
-    {"sigmoid_offset", scene_io::per_joint(kAny, PUMASIM_AT(s.friction[j].sigmoid_offset)),
-     "phi3 [rad/s] (sigmoid: the speed offset, motor side)", Need::kRequired, {sigmoid, "model"}},
+    {"static_torque",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
+     "Fs [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|; required when it gives none)",
+     Need::kOptional,
+     {coulomb, "model"},
+     need_static},
+    {"kinetic_torque",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
+     "Fk [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|; required when it gives none)",
+     Need::kOptional,
+     {coulomb, "model"},
+     need_kinetic},
+    {"zero_speed",
+     scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].zero_speed)),
+     "[rad/s] \"zero\" speed (paper), band (karnopp)",
+     Need::kOptional,
+     {banded, "model"}},
+    {"speed_scale",
+     scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
+     "[rad/s] tanh(w / speed_scale) (tanh)",
+     Need::kOptional,
+     {smooth, "model"}},
+    {"sigmoid_level",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
+     "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)",
+     Need::kRequired,
+     {sigmoid, "model"}},
+    {"sigmoid_slope",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_slope)),
+     "phi2 [s/rad] (sigmoid: the slope, motor side)",
+     Need::kRequired,
+     {sigmoid, "model"}},
+    {"sigmoid_offset",
+     scene_io::per_joint(kAny, PUMASIM_AT(s.friction[j].sigmoid_offset)),
+     "phi3 [rad/s] (sigmoid: the speed offset, motor side)",
+     Need::kRequired,
+     {sigmoid, "model"}},
 };
 
 // The robot file's joint friction as the motor-side defaults of [friction]
@@ -653,6 +680,7 @@ Codec<ReferenceSettings> via_points_codec() {
 bool no_joints_file(const ReferenceSettings& r) { return r.joints_file.empty(); }
 bool cartesian_path(const ReferenceSettings& r) { return !r.joint_source(); }
 constexpr std::string_view kCartesianPath = "a Cartesian path (neither joints nor via_points given)";
+constexpr std::string_view kClosedFormIk = "ik = \"closed-form\" on a Cartesian path";
 bool numerical_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kNumerical; }
 bool closed_form_ik(const ReferenceSettings& r) { return cartesian_path(r) && r.ik == IkMethod::kClosedForm; }
 
@@ -723,7 +751,7 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"joints", joints_csv_codec(), "a CSV file of rows t, q1 ... qn (relative to the scene)", Need::kIfSet, {},
      joint_defaults},
     {"via_points", via_points_codec(), "rows [t, q1, ..., qn]: the points in the scene", Need::kIfSet,
-     {no_joints_file, "joints"}, joint_defaults},
+     {no_joints_file, "joints", "joints not given"}, joint_defaults},
     {"height", scene_io::number(kAny, PUMASIM_AT(s.height)), "plane z [m]", Need::kRequired, {cartesian_path, {}, kCartesianPath}},
     {"start", scene_io::numbers([](const ReferenceSettings&, int) { return 2; }, kAny,
                                 [](const ReferenceSettings& r, int) { return std::vector<double>{r.start.x(), r.start.y()}; },
@@ -736,9 +764,10 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
      "the timing law s(t)", Need::kOptional, {}, timing_of_source},
     {"profile", profile_codec(), "table: (t/T, v/v_max) rows", Need::kRequired, {table_timing, "timing"}},
     {"max_speed", scene_io::number(kPositive, PUMASIM_AT(s.max_speed)), "table: [m/s] peak path speed",
-     Need::kIfSet, {table_speed, "timing"}},
+     Need::kIfSet, {table_speed, "timing", "timing = \"table\" on a Cartesian path"}},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)),
-     "table: [s] the duration instead of max_speed", Need::kIfSet, {table_timing, "timing"}, one_table_duration},
+     "table: [s] the duration instead of max_speed (required for a joint-space reference)", Need::kIfSet,
+     {table_timing, "timing"}, one_table_duration},
     {"traversal_time", scene_io::number(kPositive, PUMASIM_AT(s.traversal_time)), "[s] the duration",
      Need::kRequired, {shaped_timing, "timing"}},
     {"blend", scene_io::number(kRampShare, PUMASIM_AT(s.blend)), "each acceleration phase's share of T",
@@ -748,7 +777,8 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"interpolation", scene_io::choice(interpolations(), PUMASIM_AT(s.interpolation)),
      "cartesian | joint-cubic | joint-quintic", Need::kOptional, {}, interpolation_of_source},
     {"via_segments", scene_io::whole({1.0, 1e5}, "a whole number >= 1", PUMASIM_AT(s.via_segments)),
-     "joint space: the via-points cut the path into this many pieces", Need::kOptional, {via_segmented, "interpolation"}},
+     "joint space: the via-points cut the path into this many pieces", Need::kOptional, {via_segmented, "interpolation",
+     "interpolation = \"joint-cubic\" or \"joint-quintic\" of a Cartesian path"}},
     {"ik", scene_io::choice<IkMethod>({{"closed-form", IkMethod::kClosedForm}, {"numerical", IkMethod::kNumerical}},
                                       PUMASIM_AT(s.ik)),
      "inverse kinematics: closed-form (the PUMA; its default) | numerical (any arm)", Need::kOptional,
@@ -756,13 +786,13 @@ const std::vector<Entry<ReferenceSettings>> kReferenceEntries = {
     {"ik_guess", scene_io::numbers([](const ReferenceSettings&, int n) { return n; }, kJointAngle,
                                    [](const ReferenceSettings& r, int) { return r.ik_guess; },
                                    [](ReferenceSettings& r, const std::vector<double>& v) { r.ik_guess = v; }),
-     "numerical: [rad] the guess at the path's start (default: mid-range)", Need::kIfSet, {numerical_ik, "ik"}},
+     "numerical: [rad] the guess at the path's start (default: mid-range)", Need::kIfSet, {numerical_ik, "ik", "ik = \"numerical\" on a Cartesian path"}},
     {"arm", scene_io::choice<bool>({{"right", true}, {"left", false}}, PUMASIM_AT(s.config.right_arm)),
-     "inverse kinematics branch: shoulder", Need::kOptional, {closed_form_ik, "ik"}},
+     "inverse kinematics branch: shoulder", Need::kOptional, {closed_form_ik, "ik", kClosedFormIk}},
     {"elbow", scene_io::choice<bool>({{"up", true}, {"down", false}}, PUMASIM_AT(s.config.elbow_up)),
-     "inverse kinematics branch: elbow", Need::kOptional, {closed_form_ik, "ik"}},
+     "inverse kinematics branch: elbow", Need::kOptional, {closed_form_ik, "ik", kClosedFormIk}},
     {"wrist", scene_io::choice<bool>({{"noflip", false}, {"flip", true}}, PUMASIM_AT(s.config.wrist_flip)),
-     "inverse kinematics branch: wrist", Need::kOptional, {closed_form_ik, "ik"}},
+     "inverse kinematics branch: wrist", Need::kOptional, {closed_form_ik, "ik", kClosedFormIk}},
     {"orientation", orientation_codec(), "6 joints or more: the flange's fixed orientation (rows)", Need::kOptional,
      {cartesian_path, {}, kCartesianPath}},
 };
@@ -1045,15 +1075,17 @@ std::vector<SceneKeyDoc> scene_key_docs() {
   pc.motor.resize(1);
   pc.friction.resize(1);
   std::vector<SceneKeyDoc> out;
-  add_key_docs(out, "scene", kSceneEntries, Scene{});
-  add_key_docs(out, "integrator", kIntegratorEntries, IntegratorSettings{});
-  add_key_docs(out, "amplifier", kAmplifierEntries, pc);
-  add_key_docs(out, "motor", kMotorEntries, pc);
-  add_key_docs(out, "friction", kFrictionEntries, pc);
-  add_key_docs(out, "controller", controller_entries(), pc);
-  add_key_docs(out, "reference", kReferenceEntries, ReferenceSettings{});
-  add_key_docs(out, "planning", kPlanningEntries, ReferenceSettings{});
-  add_key_docs(out, "initial", kInitialEntries, InitialPose{});
+  ReferenceSettings joint_space;  // the other shape of a reference (a CSV file's name suffices here)
+  joint_space.joints_file = "joints.csv";
+  add_key_docs(out, "scene", kSceneEntries, {Scene{}});
+  add_key_docs(out, "integrator", kIntegratorEntries, {IntegratorSettings{}});
+  add_key_docs(out, "amplifier", kAmplifierEntries, {pc});
+  add_key_docs(out, "motor", kMotorEntries, {pc});
+  add_key_docs(out, "friction", kFrictionEntries, {pc});
+  add_key_docs(out, "controller", controller_entries(), {pc});
+  add_key_docs(out, "reference", kReferenceEntries, {ReferenceSettings{}, joint_space});
+  add_key_docs(out, "planning", kPlanningEntries, {ReferenceSettings{}});
+  add_key_docs(out, "initial", kInitialEntries, {InitialPose{}});
   return out;
 }
 
