@@ -19,7 +19,7 @@ def usable(x):
     return isinstance(x, (int, float)) and math.isfinite(x) and x > 0
 
 
-def integrator_colors(plt, integrators):
+def integrator_colors(integrators):
     """{integrator: {color, ls}}, the integrators sorted by name: the
     colour-blind-safe palette, then the same colours dashed (style.series;
     the marker is the plot's: hollow means below the reference's accuracy)."""

@@ -113,7 +113,7 @@ def plot_files(plt, s, rows, agreement, plottable):
     <sweep> (work-precision) and, given plottable (None: not drawn),
     <sweep>_cost."""
     name = s["name"]
-    colors = plots.integrator_colors(plt, sorted({r["integrator"] for r in rows}))
+    colors = plots.integrator_colors(sorted({r["integrator"] for r in rows}))
     files = {}
     for fmt in ("png", "pdf"):
         files[f"{name}.{fmt}"] = lambda p, f=fmt: plots.plot_work_precision(plt, s, rows, agreement, colors, p, f)

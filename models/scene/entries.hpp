@@ -64,12 +64,21 @@ struct Entry {
     bool (*fn)(const T&) = nullptr;
     std::string_view decided_by;
     // The condition in words, for the reference, where fn reads more than
-    // one key (empty: derived from decided_by's values, see key_docs).
+    // one key (empty: derived from decided_by's values, see applies_text).
     std::string_view when;
   } applies{};
   // After the entry is read (its value or its default): checks and derived values.
   void (*then)(StrictTable&, T&) = nullptr;
 };
+
+// The first entry of the table with this key (nullptr: none).
+template <class T>
+const Entry<T>* find_entry(const std::vector<Entry<T>>& entries, std::string_view key) {
+  for (const Entry<T>& e : entries) {
+    if (e.key == key) return &e;
+  }
+  return nullptr;
+}
 
 // '"piv"', or '"piv" (the default)' when the file does not give it: the value
 // of the entry `key` as read into obj ("" if no entry has it, or it is an
@@ -78,25 +87,23 @@ struct Entry {
 template <class T>
 std::string decider_value(StrictTable& t, const std::vector<Entry<T>>& entries, std::string_view key,
                           const T& obj, int n) {
-  for (const Entry<T>& d : entries) {
-    if (d.key != key) continue;
-    toml::table tmp;
-    d.codec.write(tmp, key, obj, n);
-    const toml::node* v = tmp.get(key);
-    if (!v) return "";
-    std::ostringstream out;
-    if (const auto str = v->value<std::string>()) {
-      out << '"' << *str << '"';
-    } else if (v->is_boolean()) {
-      out << (*v->value<bool>() ? "true" : "false");
-    } else if (const auto x = v->value<double>()) {
-      out << *x;
-    } else {
-      return "";  // an array or a table: named by the entries above it instead
-    }
-    return out.str() + (t.has(key) ? "" : " (the default)");
+  const Entry<T>* d = find_entry(entries, key);
+  if (!d) return "";
+  toml::table tmp;
+  d->codec.write(tmp, key, obj, n);
+  const toml::node* v = tmp.get(key);
+  if (!v) return "";
+  std::ostringstream out;
+  if (const auto str = v->value<std::string>()) {
+    out << '"' << *str << '"';
+  } else if (v->is_boolean()) {
+    out << (*v->value<bool>() ? "true" : "false");
+  } else if (const auto x = v->value<double>()) {
+    out << *x;
+  } else {
+    return "";  // an array or a table: named by the entries above it instead
   }
-  return "";
+  return out.str() + (t.has(key) ? "" : " (the default)");
 }
 
 // Reads every entry that applies, in table order, then rejects unknown keys.
@@ -338,10 +345,7 @@ std::string applies_text(const std::vector<Entry<T>>& entries, const Entry<T>& e
   if (!e.applies.fn) return "";
   if (!e.applies.when.empty()) return std::string(e.applies.when);
   const std::string key(e.key), by(e.applies.decided_by);
-  const Entry<T>* decider = nullptr;
-  for (const Entry<T>& d : entries) {
-    if (d.key == e.applies.decided_by && !decider) decider = &d;
-  }
+  const Entry<T>* decider = find_entry(entries, e.applies.decided_by);
   PUMASIM_DEMAND(decider != nullptr, "scene entry " + key + ": decided by '" + by + "', no such entry");
   const auto holds = [&](const auto& set) -> bool {  // fn on each prototype after set(obj): the same on all
     std::vector<bool> r;
