@@ -643,6 +643,7 @@ Json integrator_json(const IntegratorInfo& i) {
   j["implicit"] = i.implicit;
   j["rhs_per_step"] = i.rhs_per_step;
   j["real_stability"] = std::isfinite(i.real_stability) ? Json(i.real_stability) : Json("infinity");
+  j["stability_region"] = i.stable_at != nullptr;
   j["dense_order"] = i.dense_order;
   j["starter_steps"] = i.starter_steps;
   j["uses_jacobian"] = i.uses_jacobian;

@@ -145,7 +145,17 @@ StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bo
   for (const auto& l : all) {
     if (l.real() < 0) decaying.push_back(l);
   }
-  for (const char* name : {"euler", "ab2", "ab3", "ab4", "rk4"}) {
+  // Every method with a stability region in its registry entry, by order
+  // then name (euler, ab2, ab3, ab4, rk4 today).
+  std::vector<const IntegratorInfo*> explicit_methods;
+  for (const IntegratorInfo& i : integrators()) {
+    if (i.stable_at) explicit_methods.push_back(&i);
+  }
+  std::stable_sort(explicit_methods.begin(), explicit_methods.end(), [](const auto* a, const auto* b) {
+    return a->order != b->order ? a->order < b->order : std::string_view(a->name) < std::string_view(b->name);
+  });
+  for (const IntegratorInfo* m : explicit_methods) {
+    const char* name = m->name;
     StepBound b;
     b.integrator = name;
     b.predicted = *max_stable_step(name, decaying);

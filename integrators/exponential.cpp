@@ -32,7 +32,6 @@
 
 #include "integrators/adams_bashforth.hpp"
 #include "integrators/fixed_step.hpp"
-#include "integrators/registry_entries.hpp"
 
 namespace pumasim {
 namespace {

@@ -11,7 +11,7 @@
 // Roots: fixed-step methods do not locate them; after each step they compare
 // the signs of the root functions and report the first that changed, at the
 // step's end ("the friction rule applied per step").
-// Dense output (outputs between steps; the driver no longer stops at them):
+// Dense output (outputs between steps, where the driver does not stop):
 // each method's own continuous extension over the last step, which costs no
 // right-hand side: forward Euler the straight line (order 1); RK4 the
 // extension from its four stages, b1 = th - 3/2 th^2 + 2/3 th^3,
@@ -27,7 +27,6 @@
 #include "integrators/adams_bashforth.hpp"
 #include "integrators/fixed_step.hpp"
 #include "integrators/integrator.hpp"
-#include "integrators/registry_entries.hpp"
 
 namespace pumasim {
 namespace {

@@ -42,7 +42,6 @@
 #include <Eigen/LU>
 
 #include "integrators/fixed_step.hpp"
-#include "integrators/registry_entries.hpp"
 
 namespace pumasim::detail {
 namespace {

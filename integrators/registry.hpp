@@ -1,6 +1,7 @@
 // The integrator registry: one sorted name -> factory table.
 #pragma once
 
+#include <complex>
 #include <memory>
 #include <span>
 #include <string>
@@ -27,6 +28,11 @@ struct IntegratorInfo {
   int rhs_per_step;          // right-hand sides per step (fixed-step methods; 0: varies)
   double real_stability;     // explicit methods: the stability interval on the negative real axis,
                              // h lambda in [-real_stability, 0] (closed forms); 0: implicit, or not one number
+  // Explicit fixed-step methods: is z = h lambda in the (closed) region of
+  // absolute stability (y' = lambda y stays bounded)? nullptr: no region here
+  // (adaptive, implicit and exponential methods). stability.hpp's
+  // max_stable_step reads it; a test checks it against real_stability.
+  bool (*stable_at)(std::complex<double> z);
   int dense_order;           // order of the dense output (continuous extension) over a step
   int starter_steps;         // multistep methods: steps of the RK4 (etd-ab: ETDRK4) starter after every (re)start (k - 1)
   // What IntegratorCapabilities says of an instance (integrator.hpp), known

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "integrators/adams_bashforth.hpp"
+#include "integrators/registry.hpp"
 
 namespace pumasim {
 namespace {
@@ -33,12 +34,16 @@ bool ab_stable(int k, C z) {
 
 }  // namespace
 
+bool stable_euler(C z) { return std::abs(1.0 + z) <= 1.0 + 1e-12; }
+bool stable_rk4(C z) { return std::abs(1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0) <= 1.0 + 1e-12; }
+bool stable_ab2(C z) { return ab_stable(2, z); }
+bool stable_ab3(C z) { return ab_stable(3, z); }
+bool stable_ab4(C z) { return ab_stable(4, z); }
+
 std::optional<bool> in_stability_region(std::string_view method, C z) {
-  if (method == "euler") return std::abs(1.0 + z) <= 1.0 + 1e-12;
-  if (method == "rk4") return std::abs(1.0 + z + z * z / 2.0 + z * z * z / 6.0 + z * z * z * z / 24.0) <= 1.0 + 1e-12;
-  if (method == "ab2") return ab_stable(2, z);
-  if (method == "ab3") return ab_stable(3, z);
-  if (method == "ab4") return ab_stable(4, z);
+  for (const IntegratorInfo& i : integrators()) {
+    if (i.name == method) return i.stable_at ? std::optional<bool>(i.stable_at(z)) : std::nullopt;
+  }
   return std::nullopt;
 }
 

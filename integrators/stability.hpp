@@ -11,11 +11,20 @@
 
 namespace pumasim {
 
-// Is z = h lambda in the method's (closed) region of absolute stability?
-// Runge-Kutta: |R(z)| <= 1 with R the stability polynomial (Euler 1 + z,
-// RK4 the degree-4 Taylor polynomial). Adams-Bashforth k: every root of
-// rho(zeta) - z sigma(zeta) in the closed unit disc. nullopt for a method with
-// no such table here (the adaptive ones).
+// The regions of absolute stability of the fixed-step explicit methods, the
+// registry entries' stable_at (integrators/registry.hpp): is z = h lambda in
+// the closed region? Runge-Kutta: |R(z)| <= 1 with R the stability
+// polynomial (Euler 1 + z, RK4 the degree-4 Taylor polynomial).
+// Adams-Bashforth k: every root of rho(zeta) - z sigma(zeta) in the closed
+// unit disc.
+bool stable_euler(std::complex<double> z);
+bool stable_rk4(std::complex<double> z);
+bool stable_ab2(std::complex<double> z);
+bool stable_ab3(std::complex<double> z);
+bool stable_ab4(std::complex<double> z);
+
+// The registry entry `method`'s region: nullopt for a method with none (the
+// adaptive, implicit and exponential ones) or a name not in the registry.
 std::optional<bool> in_stability_region(std::string_view method, std::complex<double> z);
 
 // The largest h such that h lambda stays in the region for every lambda of

@@ -2,9 +2,9 @@
 //   arkode-erk   explicit additive Runge-Kutta (ARKODE's default order-4 table)
 //   arkode-dirk  diagonally implicit, the implicit table of ARK4(3)6L[2]SA
 //                (ARK436L2SA_DIRK_6_3_4), Newton + dense. Not the default
-//                SDIRK-5-3-4: measured with the Newton settings below, it
-//                still failed OREGO at 6 of 8 tolerances and took up to 57x
-//                the steps on ROBER (424,612 at rtol 1e-10 against 7,493).
+//                SDIRK-5-3-4: with the Newton settings below it still
+//                failed OREGO at most tolerances and took many times the
+//                steps on ROBER (measured: commit e401e49).
 //   arkode-imex  additive IMEX (default ARK 4(3)): the system's rhs_split puts
 //                its stiff part implicit -- for the plant, the armature current
 //                equation and the friction torques; the rigid body explicit.
@@ -20,8 +20,8 @@
 //     error by about h*L (the Lipschitz constant), so the embedded error
 //     estimate stops falling with h: at the default 7 error-test failures,
 //     ARK_ERR_FAILURE on ROBER, OREGO and VDPOL at every tolerance; with 20
-//     allowed, a step count independent of the tolerance (VDPOL about 10,000
-//     steps, 30% of them rejected, at every rtol from 1e-3 to 1e-10).
+//     allowed, a step count independent of the tolerance, many of the steps
+//     rejected (VDPOL; measured: commit e401e49).
 //     ARKStepSetDeduceImplicitRhs takes f_i = (z_i - a_i) / (h A_ii) instead,
 //     which the ARKODE 6.x user guide (Mathematical Considerations,
 //     "Nonlinear solver methods") says may be more accurate when h A_ii L > 1.
@@ -31,25 +31,25 @@
 //     error control"); by default that is every 20 steps ("Updating the
 //     linear solver", msbp = 20), so in between a stale, small crate can
 //     accept single corrections unchecked. With (1) alone OREGO still failed
-//     at 6 of 8 tolerances (its error estimate stuck near 6 while h fell
-//     400-fold). ARKStepSetLSetupFrequency(1) rebuilds and refactors
+//     at most tolerances, its error estimate stuck as h fell (measured:
+//     commit e401e49). ARKStepSetLSetupFrequency(1) rebuilds and refactors
 //     I - gamma J every step -- cheap for these dense systems of at most a
 //     dozen equations; J itself is still re-evaluated only every msbj = 50
 //     steps or after a convergence failure. The guide ("Updating the linear
 //     solver") allows updating more often than its heuristics where the
-//     setup is cheap. On the plant (rtol 1e-6, arkode-dirk) it raised the
-//     Newton iterations from 20,431 to 33,101, as expected if corrections
-//     had been accepted on a stale rate.
-// Each alone is not enough (ROBER, OREGO, VDPOL ok/8 for arkode-dirk: neither
-// 0/0/0, (1) 8/2/8, (2) 0/0/1, both 8/8/8). The earlier symptom -- the DIRK
-// error on Prothero-Robinson not falling with rtol under the trivial
-// predictor (2.1e-3 at rtol 1e-7, 1.6e-4 at 1e-8) -- goes away with both
+//     setup is cheap. On the plant (arkode-dirk) it raised the Newton
+//     iterations, as expected if corrections had been accepted on a stale
+//     rate (measured: commit e401e49).
+// Each alone is not enough: only both let arkode-dirk solve ROBER, OREGO and
+// VDPOL at every tolerance (measured: commit e401e49). The earlier symptom --
+// the DIRK error on Prothero-Robinson not falling with rtol under the trivial
+// predictor (measured: commit 40c54a3) -- goes away with both
 // settings: predictor 0 then passes the conformance tests too (with (1)
 // alone it did not). The maximum-order predictor (1) is kept because it
-// costs fewer RHS evaluations (measured over the test set's 8-tolerance
-// ladder: ROBER 151,597 against 258,394, OREGO 199,278 against 454,542,
-// VDPOL 191,661 against 363,190), although the guide calls the trivial one
-// often the most robust for highly stiff problems ("Implicit predictors").
+// costs fewer RHS evaluations on ROBER, OREGO and VDPOL over the test set's
+// 8-tolerance ladder (measured: commit e401e49), although the guide calls the
+// trivial one often the most robust for highly stiff problems ("Implicit
+// predictors").
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -62,7 +62,6 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/integrator.hpp"
-#include "integrators/registry_entries.hpp"
 #include "integrators/sundials_common.hpp"
 #include "integrators/sundials_dense_lu.hpp"
 

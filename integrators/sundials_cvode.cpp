@@ -21,7 +21,6 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/integrator.hpp"
-#include "integrators/registry_entries.hpp"
 #include "integrators/sundials_common.hpp"
 #include "integrators/sundials_dense_lu.hpp"
 

@@ -6,8 +6,8 @@
 // (the Newton matrix I - gamma J from the saved Jacobian at every set-up) run
 // as Eigen expressions (copy, zero and c A + I with the same arithmetic
 // element by element; c A + B, used with a mass matrix only, may be fused). On the
-// 24-state plant the LU and its solves were about 40 % of CVODE's own work and
-// the copies and scale-adds about 15 % (results/cost_breakdown.md, perf).
+// 24-state plant the LU and its solves were the largest share of CVODE's own
+// work, the copies and scale-adds a sizeable one (results/cost_breakdown.md, perf).
 // Private to the SUNDIALS adapters.
 #pragma once
 

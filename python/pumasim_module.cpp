@@ -508,8 +508,9 @@ class PyScene {
 
 // Ctrl-C during pumasim.run. The run releases the GIL, so that other Python
 // threads go on; but Python runs its signal handlers only on the main thread
-// and with the GIL, so a run used to notice Ctrl-C only when it ended (never,
-// with max_wall=0). The simplest design found that reaches every run:
+// and with the GIL, so by themselves they let a run notice Ctrl-C only when
+// it ends (never, with max_wall=0; history: commit fa21494). The simplest
+// design found that reaches every run:
 // - The driver reads each run's cancel flag at every clock read (every few
 //   ms) and calls the run's poll about every 50 ms (driver.hpp, ProgressHook).
 // - g_interrupts counts the process's interrupts. A run notes it when it

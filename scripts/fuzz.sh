@@ -9,7 +9,7 @@
 # libFuzzer writes the input to build/asan/fuzz/artifacts/<harness>/.
 #
 #   scripts/fuzz.sh --smoke                 CI: 10 s per harness (six harnesses, two at a
-#                                           time: about 35 s on 2 cores); that the harnesses
+#                                           time; its total: commit 5f5797c); that the harnesses
 #                                           build and run, not a search (the long runs are)
 #   scripts/fuzz.sh --time 3600             a long run, an hour per harness
 #   scripts/fuzz.sh --runs 1000000 robot    one million inputs, the robot harness only

@@ -44,6 +44,8 @@ INTEGRATOR_TABLES = [
         ("rhs_per_step", "RHS per step", "right-hand sides per step of a fixed-step method (`0`: varies)"),
         ("real_stability", "real stability", "explicit methods: the stability interval h λ in "
                                               "[−value, 0] on the negative real axis (`0`: implicit, or not one number)"),
+        ("stability_region", "stability region", "its region of absolute stability is in the entry "
+                                                  "(`stable_at`): the stiffness diagnosis predicts its stable step"),
         ("dense_order", "dense order", "order of the dense output (continuous extension) over a step"),
         ("starter_steps", "starter steps", "multistep methods: steps of the starter after every (re)start"),
     ]),

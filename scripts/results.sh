@@ -50,9 +50,9 @@
 # baseline, no -march=native), so that results/ does not depend on this
 # machine's instruction set; each run's meta.json and the benchmark's table
 # record the flags and the CPU. (The native release build is built too: the
-# buildspread stage compares the two.) A fresh full run takes about 20 minutes
-# on 2 cores, before sensitivity and partitioned (the report's header states
-# how long its last full run took).
+# buildspread stage compares the two.) A fresh full run on 2 cores, before
+# sensitivity and partitioned, is long: the report's header states how long
+# its last full run took (an earlier figure: commit d593645).
 # Runs already complete under build/sweeps/ are skipped: delete that folder
 # for a fresh run. Uses private copies of the binaries (build/results-bin/),
 # so that rebuilding meanwhile does not change the program under measurement.

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The README's test command: install what is missing, build, run every test;
-# then the sanitizer build (preset asan) and its tests, a 10-second fuzz run
-# of each parser (scripts/fuzz.sh --smoke), and the threading tests under
+# then the proof that an integrator or a back-end is one file plus one row
+# (scripts/check_extension.py, in a scratch copy of the tree); then the
+# sanitizer build (preset asan) and its tests, a 10-second fuzz run of each
+# parser (scripts/fuzz.sh --smoke), and the threading tests under
 # ThreadSanitizer (preset tsan, which builds them alone). Each phase's wall
 # time goes to stderr.
 set -euo pipefail
@@ -13,6 +15,7 @@ phase() {
 }
 phase scripts/build.sh
 phase ctest --preset release -j "$(nproc)"
+phase /usr/bin/python3 scripts/check_extension.py --jobs "$(nproc)"
 phase cmake --preset asan >/dev/null
 phase cmake --build --preset asan -j "$(nproc)"
 phase ctest --preset asan -j "$(nproc)"

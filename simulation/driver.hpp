@@ -107,7 +107,7 @@ struct ProgressHook {
 // How the driver stops the integrator.
 enum class Stops {
   kEvents,             // at time events and roots only; outputs from the dense output (the default)
-  kEventsAndOutputs,   // also at every output time (the old behaviour: the output grid caps the step)
+  kEventsAndOutputs,   // also at every output time (the output grid caps the step; history: commit 46938f1)
   kOutputsLateEvents,  // at outputs and roots only: time events that passed are applied late, at the
                        // next output, in order, with the state then (shows what stepping over samples does)
 };

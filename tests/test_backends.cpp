@@ -341,7 +341,7 @@ TEST(GeneratedBackEnds, RefuseOtherArmsWithTheReason) {
 
 TEST(Registry, SortedUniqueAndUnknownNameListsTheValidOnes) {
   const auto all = backends();
-  ASSERT_GE(all.size(), 5u);
+  ASSERT_GE(all.size(), 2u);  // a build may have a subset (PUMASIM_BACKENDS); order needs two
   for (std::size_t i = 1; i < all.size(); ++i) {
     EXPECT_LT(std::string_view(all[i - 1].name), std::string_view(all[i].name));
   }

@@ -24,12 +24,12 @@ from pumasim_exp import io as pumasim_io  # noqa: E402
 
 SCENES = os.path.join(pumasim_io.ROOT, "experiments", "scenes")
 SCENE = os.path.join(SCENES, "paper_slow.toml")
-# RK4 steps of 2 us on 4 s (2,000,000 steps, about 2 s of wall time here with
-# the reference tabulated; 1.6 s of it took under a second) with one output at
-# the end: the progress line must come from the step loop, as no output falls
-# in between. The run must last more than a second (the first progress report
-# comes after one); the sanitizer build, some 30 times slower, shortens it with
-# PUMASIM_TEST_LONG_RUN_T_END (tests/CMakeLists.txt).
+# RK4 steps of 2 us on 4 s (2,000,000 steps) with one output at the end: the
+# progress line must come from the step loop, as no output falls in between.
+# The run must last more than a second (the first progress report comes after
+# one; with the reference tabulated a shorter scene ran in less: measured,
+# commit 5f3ec5a); the sanitizer build, much slower (commit 03f83b1), shortens
+# it with PUMASIM_TEST_LONG_RUN_T_END (tests/CMakeLists.txt).
 LONG_T_END = os.environ.get("PUMASIM_TEST_LONG_RUN_T_END", "4")
 LONG_RUN = [os.path.join(SCENES, "paper_slow_viscous.toml"), "--integrator", "rk4", "--dt", "2e-6",
             "--t-end", LONG_T_END, "--set", f"scene.output_interval={LONG_T_END}"]

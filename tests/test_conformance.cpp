@@ -269,9 +269,9 @@ std::vector<double> plant_final_state(const IntegratorInfo& info, const Integrat
 // cancels RK4's h^4 error term (Hairer, Norsett & Wanner, Solving ODEs I,
 // section II.4): a fixed-step check whose accuracy hangs on no error
 // controller, too costly (120,000 right-hand sides) to be every test's
-// reference, as each test runs in its own process. (CVODE BDF at rtol 1e-12,
-// the reference before, is off by about 2e-12 with GCC and by more with
-// Clang: too close to AB4's 3e-12 at dt = 0.5 ms, below.) The error of a
+// reference, as each test runs in its own process. (CVODE BDF at rtol 1e-12
+// is too far off for AB4's smallest errors below, with GCC and more so with
+// Clang: measured, commit 1215338.) The error of a
 // run: max over the states of |x - x_ref| / the state's typical magnitude
 // (the plant's tolerance_scale: 1 rad, 1 rad/s, the stall current, the PIV
 // integral's range), so that every state, the currents included, is seen.

@@ -439,8 +439,18 @@ TEST(Stability, PredictedStepsMatchClosedFormsAndTheIntegrators) {
   // a 1e-12 margin for points on the boundary leaves about 1.4e-6).
   EXPECT_LT(*max_stable_step("euler", {{-1e-9, 1.0}}), 1e-5);
   EXPECT_FALSE(max_stable_step("cvode-bdf", {{-1.0, 0.0}}).has_value());
+  // Every entry with a region (stable_at), the closed forms above and any
+  // other: its region agrees with its entry's real interval, and the
+  // integrator itself decays and grows where the region says.
+  std::vector<std::string> with_region;
+  for (const IntegratorInfo& i : integrators()) {
+    if (!i.stable_at) continue;
+    with_region.emplace_back(i.name);
+    EXPECT_NEAR(*max_stable_step(i.name, {{-1.0, 0.0}}), i.real_stability, 1e-9) << i.name;
+  }
+  EXPECT_GE(with_region.size(), real_axis.size());
   const double a = -1.0, b = 3.0;
-  for (const char* m : {"euler", "rk4", "ab2", "ab3", "ab4"}) {
+  for (const std::string& m : with_region) {
     const double h = *max_stable_step(m, {{a, b}});
     auto final_size = [&](double dt) {
       Rotating sys(a, b);

@@ -77,8 +77,8 @@ std::vector<std::vector<int>> consistent_modes(const Problem& p) {
 }
 
 // The rule the hybrid model used before the coupled solve (Plant::settle_modes
-// until this change): all stuck; release the stuck joint whose holding torque
-// exceeds s the most, in its direction; repeat until none exceeds.
+// until commit 758f58f): all stuck; release the stuck joint whose holding
+// torque exceeds s the most, in its direction; repeat until none exceeds.
 std::vector<int> greedy_release(const Problem& p) {
   std::vector<int> m(p.k, 0);
   StickSolver solver(p.k);

@@ -89,9 +89,9 @@ TEST_P(EveryProblem, EndErrorIsTheMixedError) {
 
 // Central differences, step h_k = 1e-5 max(|x_k|, scale_k): truncation error
 // O(h^2) relative, rounding O(eps / h). Each entry must agree to 1e-5 of its
-// own size plus 1e-3 of its row's largest entry (measured: at most 8e-8 of
-// that, at HIRES' zero entries), so a wrong entry, even a small one beside
-// large ones, fails.
+// own size plus 1e-3 of its row's largest entry (measured far inside that,
+// the worst at HIRES' zero entries: commit df16237), so a wrong entry, even a
+// small one beside large ones, fails.
 TEST_P(EveryProblem, ExactJacobianMatchesCentralDifferences) {
   const int n = p_->size();
   Eigen::MatrixXd J, D(n, n);
@@ -178,11 +178,11 @@ TEST(ProtheroRobinson, ClosedFormSatisfiesTheOde) {
 // Magherini, Univ. of Bari): vdpol.f, hires.f, orego.f, rober.f (their
 // reference-solution routines, RADAU/RADAU5 at rtol = 1.1e-18) and plei.pdf;
 // the values, each with its source, are copied in integrators/testset/problems.cpp.
-// Stated tolerance on the mixed error: 1e-7 (7 correct digits; the runs
-// measured 6e-10 .. 1.5e-8); on the non-stiff PLEI, where BDF (order <= 5) at
-// rtol 1e-10 keeps only about 5 digits through the close encounters, 3e-5
-// (measured 3.9e-6). A transcription error in a coefficient would cost far
-// more digits than these bounds leave.
+// Stated tolerance on the mixed error: 1e-7 (7 correct digits); on the
+// non-stiff PLEI, where BDF (order <= 5) at rtol 1e-10 keeps only about 5
+// digits through the close encounters, 3e-5 (the runs' errors inside both:
+// measured, commit df16237). A transcription error in a coefficient would cost
+// far more digits than these bounds leave.
 TEST_P(EveryProblem, TightBdfRunReproducesThePublishedReference) {
   IntegratorOptions o;
   o.rtol = 1e-10;

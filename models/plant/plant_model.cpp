@@ -421,7 +421,7 @@ void PlantModel::start_state(PlantContext& c, PlantWorkspace<double>& w, double*
 void PlantModel::drive_signals(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x,
                                double* xdot, DriveSignals* out) const {
   eval(c, w, FrictionPart::kAll, t, x, xdot);
-  w.last_valid = false;  // as before this split: the root functions do not take the recorder's f
+  w.last_valid = false;  // the root functions do not take the recorder's f (history: commit ffb6d3d)
   for (int j = 0; j < layout_.n; ++j) {
     out[j] = {w.u[j], w.ea[j], cfg_.drive ? w.tm[j] / motor_.params(j).torque_constant : 0.0};
   }

@@ -12,9 +12,10 @@
 // inside another one (f inside the root functions) does not replace it.
 // Counts: how many times each context was entered at the top.
 //
-// The timers read the steady clock twice per scope (some 20-40 ns each on
-// this kind of machine): a profiled run is slower than a normal one, which
-// experiments/cost_breakdown.py reports beside the normal build's wall time.
+// The timers read the steady clock twice per scope (a read's cost on this
+// kind of machine: commit 1f6fa6a): a profiled run is slower than a normal
+// one, which experiments/cost_breakdown.py reports beside the normal build's
+// wall time.
 #pragma once
 
 #ifdef PUMASIM_PROFILE

@@ -55,9 +55,10 @@
 // Debian 12) sees the text, one linear pass over it refuses, naming the file
 // and the line, what those parsers were found to mishandle (issue 32): a file
 // above the limits below (50,000 nested elements crashed TinyXML's recursive
-// parser, 30,000 took 23 s; one element with 100,000 attributes took 141 s, its
-// duplicate check being quadratic; a chain of 300,000 fixed joints crashed
-// urdfdom), a NUL byte (TinyXML would stop reading there), a control character,
+// parser, and fewer were slow; one element with 100,000 attributes was slower
+// still, its duplicate check being quadratic; a chain of 300,000 fixed joints
+// crashed urdfdom; timings: commit 6c0fa5f), a NUL byte (TinyXML would stop
+// reading there), a control character,
 // a byte sequence that is not UTF-8 (TinyXML steps over a multi-byte
 // character by the length its first byte gives: past the end of the text
 // when the character is truncated there), a byte order mark past the start
@@ -89,8 +90,9 @@ namespace pumasim {
 //
 // 4 MiB: 40 times that, a quarter of the generic input cap (kMaxInputBytes,
 // 16 MiB). The costliest of the 4 MiB files tried within the other limits,
-// 60,000 elements of 13 short attributes each, takes urdfdom 0.3 s and
-// 120 MB (Debian 12's urdfdom 3.0.1 and TinyXML 2.6.2, without sanitizers).
+// 60,000 elements of 13 short attributes each, urdfdom parses quickly and in
+// modest memory (Debian 12's urdfdom 3.0.1 and TinyXML 2.6.2, without
+// sanitizers; measured: commit 6c0fa5f).
 inline constexpr std::size_t kMaxUrdfBytes = std::size_t{4} << 20;
 // 64 levels, the root element being level 1: TinyXML parses each level with
 // a recursive call, and a level costs time that grows with the depth.
