@@ -7,15 +7,18 @@
 
 #include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include <sys/ioctl.h>
 #include <unistd.h>
@@ -32,6 +35,7 @@
 #include "models/robot/robot_file.hpp"
 #include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/ensemble.hpp"
 #include "simulation/run.hpp"
 #include "simulation/run_folder.hpp"
 #include "simulation/scene_run.hpp"
@@ -120,6 +124,10 @@ constexpr NumberRule kSamples{"a whole number in [1, 10000]",
                               [](double x) { return x >= 1 && x <= 10000 && x == std::floor(x); }};
 constexpr NumberRule kManySamples{"a whole number in [1, 100000]",
                                   [](double x) { return x >= 1 && x <= 100000 && x == std::floor(x); }};
+constexpr NumberRule kThreadCount{"a whole number in [1, 1024]",
+                                  [](double x) { return x >= 1 && x <= 1024 && x == std::floor(x); }};
+constexpr NumberRule kSampleIndex{"a whole number >= 0",
+                                  [](double x) { return x >= 0 && x <= 1e15 && x == std::floor(x); }};
 
 // A number option: checked by CLI11 as it is read ("--t-end: expected a
 // number > 0, got 'x'"), then converted exactly; unset when not given.
@@ -516,6 +524,129 @@ void add_run(CLI::App* app, RunArgs& a) {
       ->excludes(late);
 }
 
+// ---------------------------------------------------------------- ensemble
+
+struct EnsembleArgs {
+  std::string file;
+  std::optional<double> threads;
+  std::optional<double> sample;  // one sample alone, by its index
+  std::string out;               // PATH.csv, with PATH.json beside it ("": the table on stdout)
+  bool force = false;
+  bool quiet = false;
+};
+
+// PATH.json beside PATH.csv (PATH.csv.json for another name).
+std::filesystem::path sidecar_of(const std::filesystem::path& csv) {
+  std::filesystem::path j = csv;
+  return csv.extension() == ".csv" ? j.replace_extension(".json") : std::filesystem::path(csv.string() + ".json");
+}
+
+// An existing table is replaced only with --force, and only if its sidecar
+// says pumasim ensemble wrote it: never what the program did not write.
+void check_ensemble_out(const std::filesystem::path& csv, bool force) {
+  const std::filesystem::path json = sidecar_of(csv);
+  if (!std::filesystem::exists(csv) && !std::filesystem::exists(json)) return;
+  std::string writer;
+  if (std::filesystem::exists(json)) {
+    std::ifstream in(json);
+    const auto j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_object() && j.contains("written_by") && j["written_by"].is_string()) writer = j["written_by"];
+  }
+  if (writer != "pumasim ensemble") {
+    throw RunFolderError("--out " + csv.string() + ": " + (std::filesystem::exists(csv) ? csv : json).string() +
+                         " exists and was not written by pumasim ensemble (no " + json.string() +
+                         " saying so); pumasim never overwrites what it did not write: choose another --out");
+  }
+  if (!force) {
+    throw RunFolderError("--out " + csv.string() + ": an ensemble table is there; pass --force to replace it");
+  }
+}
+
+// Writes text to path through a temporary file beside it and a rename: a
+// reader sees the old file or the whole new one.
+void write_whole(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    f << text;
+    f.flush();
+    if (!f) throw RunFolderError("cannot write " + tmp.string());
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
+  const EnsembleSpec spec = read_ensemble_file(a.file);
+  std::vector<EnsembleSample> samples;
+  if (a.sample) {
+    if (*a.sample >= static_cast<double>(spec.samples)) {
+      throw UsageError("--sample " + std::to_string(static_cast<long>(*a.sample)) + ": expected an index below " +
+                       std::to_string(spec.samples) + " (" + a.file + "'s samples)");
+    }
+    samples.push_back(draw_sample(spec, static_cast<long>(*a.sample)));
+  } else {
+    samples = draw_samples(spec);
+  }
+  // The file's own mistakes (a key the scene does not have, a value of the
+  // wrong type) stop here, before any run: the first sample's scene loads.
+  std::vector<std::string> first = spec.sets;
+  for (const std::string& s : samples.front().sets()) first.push_back(s);
+  (void)::pumasim::load_checked_scene(spec.scene, first);
+  if (!a.out.empty()) check_ensemble_out(a.out, a.force);
+  const int threads =
+      a.threads ? static_cast<int>(*a.threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const bool bar = !a.quiet && isatty(STDERR_FILENO);
+  const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  double shown = -1;
+  EnsembleProgress progress;
+  if (bar) {
+    progress = [&](long done, long failed, long total) {
+      const double t = elapsed();
+      if (done < total && t - shown < 0.25) return;
+      shown = t;
+      const int width = 30, filled = static_cast<int>(width * done / std::max(total, 1L));
+      char line[200];
+      std::snprintf(line, sizeof line, "\rpumasim ensemble: [%s%s] %ld / %ld samples, %ld failed, %.1f s",
+                    std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                    std::string(static_cast<std::size_t>(width - filled), '.').c_str(), done, total, failed, t);
+      err << line << std::flush;
+    };
+  }
+  const std::vector<SampleResult> results = run_ensemble(spec, samples, threads, progress);
+  if (bar) err << "\n";
+  const double wall = elapsed();
+  const std::string csv = ensemble_csv(results, spec.final_state);
+  long failed = 0;
+  for (const SampleResult& r : results) failed += r.ok ? 0 : 1;
+  if (a.out.empty()) {
+    out << csv;
+  } else {
+    write_whole(a.out, csv);
+    write_whole(sidecar_of(a.out), ensemble_sidecar(spec, results, threads, wall));
+    if (!a.quiet) err << "results: " << a.out << " (" << sidecar_of(a.out).string() << " describes it)\n";
+  }
+  if (!a.quiet) {
+    char line[200];
+    std::snprintf(line, sizeof line, "pumasim ensemble: %zu samples on %d threads, %ld failed, %.2f s\n",
+                  results.size(), threads, failed, wall);
+    err << line;
+  }
+  return kExitOk;
+}
+
+void add_ensemble(CLI::App* app, EnsembleArgs& a) {
+  app->add_option("file", a.file, "the ensemble file (TOML: scene, samples, seed, [run], [[vary]])")
+      ->required()
+      ->type_name("FILE");
+  add_number(app, "--threads", a.threads, kThreadCount, "threads (default: the machine's cores)", "N");
+  add_number(app, "--sample", a.sample, kSampleIndex, "run sample K alone (its row, bit for bit)", "K");
+  app->add_option("--out", a.out, "the table PATH.csv, with PATH.json describing it (default: the table on stdout)")
+      ->type_name("PATH");
+  app->add_flag("--force", a.force, "replace PATH if pumasim ensemble wrote it");
+  app->add_flag("--quiet,-q", a.quiet, "no progress bar and no summary on stderr");
+}
+
 // ---------------------------------------------------------------- stiffness, conditioning
 
 struct StiffnessArgs {
@@ -707,6 +838,7 @@ struct Parsed {
   RunArgs run;
   StiffnessArgs stiffness;
   ConditioningArgs conditioning;
+  EnsembleArgs ensemble;
   std::string help_topic;
   bool json = false;  // integrators, backends, keys: --json
 };
@@ -787,6 +919,17 @@ const Command kCommands[] = {
        a->add_flag("--json", p.json, "one JSON array: section, key, need, what, meaning, applies");
      },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_keys(p.json, o); }},
+    {"ensemble", "runs many samples of a scene on every core; one table of their results",
+     "Reads an ensemble file: the scene, its overrides (set), the runs' options ([run]: integrator, dt, rtol, "
+     "atol, t_end, max_steps, max_wall), samples, seed, final_state (the runs' final states as columns) and the varied "
+     "keys ([[vary]]: key, distribution "
+     "normal (mean, sd), uniform or log-uniform (low, high) or choice (values)). Sample k draws from its own "
+     "generator, seeded from the seed and k: --sample K re-runs it alone with exactly its row. Writes one row "
+     "per sample (its values, ok, failure kind, steps, RHS, Jacobians, wall time, path errors, the failure's "
+     "reason) as CSV with 17 significant digits, and PATH.json describing every column. A failed run is a row; "
+     "an ensemble file or a first sample the scene reader refuses is bad input (exit status 2).",
+     [](CLI::App* a, Parsed& p) { add_ensemble(a, p.ensemble); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) { return cmd_ensemble(p.ensemble, o, e); }},
     {"help", "prints this text, or a command's options", "",
      [](CLI::App* a, Parsed& p) {
        a->add_option("command", p.help_topic, "the command whose options to print")->type_name("COMMAND");

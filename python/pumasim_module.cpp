@@ -8,6 +8,7 @@
 // a wrong type is a TypeError naming the argument).
 #include <atomic>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <pybind11/eigen.h>
@@ -29,6 +31,7 @@
 #include "models/robot/dynamics_query.hpp"
 #include "models/scene/scene.hpp"
 #include "simulation/driver.hpp"
+#include "simulation/ensemble.hpp"
 #include "simulation/run.hpp"
 #include "simulation/run_folder.hpp"
 
@@ -707,6 +710,71 @@ std::vector<std::string> integrator_list() {
   return names;
 }
 
+// One sample given from Python: {key: value}, each value as TOML text.
+EnsembleSample given_sample(const py::handle& row, long index) {
+  if (!py::isinstance<py::dict>(row)) wrong_type("samples[" + std::to_string(index) + "]", "a dict {key: value}", row);
+  EnsembleSample s;
+  s.index = index;
+  for (const auto& kv : py::reinterpret_borrow<py::dict>(row)) {
+    const std::string what = "samples[" + std::to_string(index) + "]";
+    if (!py::isinstance<py::str>(kv.first)) wrong_type(what, "str keys (section.key)", kv.first);
+    s.keys.push_back(kv.first.cast<std::string>());
+    const py::handle v = kv.second;
+    if (is_bool(v)) {
+      s.values.emplace_back(v.cast<bool>() ? "true" : "false");
+    } else if (py::isinstance<py::str>(v)) {
+      s.values.push_back(toml_string(utf8(v, what)));
+    } else {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.17g", number_arg(v, what + "[" + s.keys.back() + "]"));
+      s.values.emplace_back(buf);
+    }
+  }
+  return s;
+}
+
+// pumasim.ensemble: the ensemble file's samples (or the given ones) on
+// `threads` threads, the GIL released while they run; the table as text and
+// its sidecar as a dict.
+py::dict ensemble(const py::object& file, const py::object& threads, const py::object& samples,
+                  const py::object& sample) {
+  EnsembleSpec spec = read_ensemble_file(path_arg(file, "file"));
+  std::vector<EnsembleSample> todo;
+  if (!samples.is_none()) {
+    if (!py::isinstance<py::list>(samples)) wrong_type("samples", "a list of dicts {key: value}", samples);
+    long k = 0;
+    for (const py::handle& row : samples) todo.push_back(given_sample(row, k++));
+    spec.factors.clear();
+  } else if (!sample.is_none()) {
+    const std::optional<double> k = optional_number(sample, "sample");
+    if (*k < 0 || *k != std::floor(*k) || *k >= static_cast<double>(spec.samples)) {
+      throw std::invalid_argument("sample: expected a whole number in [0, " + std::to_string(spec.samples) + "), got " +
+                                  py::str(sample).cast<std::string>());
+    }
+    todo.push_back(draw_sample(spec, static_cast<long>(*k)));
+  } else {
+    todo = draw_samples(spec);
+  }
+  const std::optional<double> n = optional_number(threads, "threads");
+  if (n && (*n < 1 || *n > 1024 || *n != std::floor(*n))) {
+    throw std::invalid_argument("threads: expected a whole number in [1, 1024], got " +
+                                py::str(threads).cast<std::string>());
+  }
+  const int t = n ? static_cast<int>(*n) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<SampleResult> results;
+  double wall = 0;
+  {
+    py::gil_scoped_release release;
+    const auto start = std::chrono::steady_clock::now();
+    results = run_ensemble(spec, todo, t);
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  py::dict out;
+  out["csv"] = ensemble_csv(results, spec.final_state);
+  out["meta"] = py::module_::import("json").attr("loads")(ensemble_sidecar(spec, results, t, wall));
+  return out;
+}
+
 // The registries and the robot's dynamics.
 void bind_dynamics(py::module_& m) {
   m.def("backends", &backend_list, "The dynamics back-ends' names (pumasim backends), sorted.");
@@ -822,6 +890,12 @@ void bind_run(py::module_& m) {
       "the command line's default), the same checks and messages, the same stats. Writes the run folder\n"
       "only when out is given (a new folder, or with force a pumasim run folder). A run that fails is a\n"
       "result (ok False, failure), as the command line's exit status 1.");
+  m.def("ensemble", &ensemble, py::arg("file"), py::kw_only(), py::arg("threads") = py::none(),
+        py::arg("samples") = py::none(), py::arg("sample") = py::none(),
+        "`pumasim ensemble` on an ensemble file: its samples (or sample k alone, or the given samples, a\n"
+        "list of dicts {section.key: value} run instead of the file's draws) on `threads` threads (None: the\n"
+        "machine's cores), the GIL released while they run. Returns {'csv': the table as text (pandas.read_csv\n"
+        "or numpy.genfromtxt read it; 17 significant digits), 'meta': its sidecar (columns, units, spec)}.");
 }
 
 }  // namespace

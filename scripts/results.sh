@@ -27,6 +27,7 @@
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
+#   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
@@ -60,7 +61,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
-     partitioned filippov panda bench report)
+     partitioned filippov panda bench ensembles report)
 named_only=(fuzz cost ci)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
@@ -141,6 +142,8 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 # writes: results/bench/dynamics.json results/dynamics_backends.md results/dynamics_cost_vs_n.png
 # writes: results/dynamics_cost_vs_n.pdf
 stage_bench() { experiments/bench_dynamics.sh --out results; }
+# writes: results/ensembles/scaling.json results/ensembles/scaling.md
+stage_ensembles() { /usr/bin/python3 experiments/ensemble_scaling.py --bin "$PUMASIM"; }
 # writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }

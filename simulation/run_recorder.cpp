@@ -77,6 +77,7 @@ RunRecorder::~RunRecorder() = default;
 void RunRecorder::observe(double t, const double* x) {
   saved_.push_back(t);
   saved_.insert(saved_.end(), x, x + m_);
+  fig_.final_state.assign(x, x + m_);  // its size once, then no allocation
   if (drive_) {  // as the run applies them: its discrete state (set-point, held output, reference piece) is now
     const auto start = std::chrono::steady_clock::now();
     plant_.drive_signals(t, x, now_.data());

@@ -32,6 +32,7 @@ struct RunFigures {
   bool ledger = false;                // the energy ledger's figures below are set
   double max_ledger_residual = 0;     // [J]
   double ledger_energy_scale = 0;     // [J] the largest term seen, kinetic energy included
+  std::vector<double> final_state;    // the last output's state x
 };
 
 class RunRecorder {

@@ -384,3 +384,44 @@ def test_a_long_random_chain_through_the_module(tmp_path, n):
     Jc = central_jacobian(s.rhs, 0.5, x, s.tolerance_scales)
     scale = np.maximum(np.abs(J).max(axis=0), 1e-3 * np.abs(J).max())
     assert (np.abs(J - Jc) / scale).max() < 1e-5
+
+
+ENSEMBLE = os.path.join(ROOT, "experiments", "ensembles", "paper_slow_viscous_drive.toml")
+
+
+def ensemble_rows(text):
+    import csv
+    import io
+    rows = list(csv.DictReader(io.StringIO(text)))
+    for r in rows:
+        r.pop("wall_time")  # the one column that differs between re-runs
+    return rows
+
+
+def test_ensemble_is_the_command_lines_table_and_replays_a_sample(tmp_path):
+    """pumasim.ensemble gives the table `pumasim ensemble` writes (but for the wall times), on any number
+    of threads; sample=k is row k; given samples run instead of the draws; bad arguments raise."""
+    spec = tmp_path / "e.toml"
+    text = open(ENSEMBLE).read().replace("samples = 64", "samples = 6").replace("t_end = 4.0", "t_end = 0.2")
+    spec.write_text(text.replace('"../scenes/', '"' + SCENES + "/"))
+    r = cli("ensemble", str(spec), "--threads", "2", "-q")
+    assert r.returncode == 0, r.stderr
+    one = pumasim.ensemble(str(spec), threads=1)
+    two = pumasim.ensemble(spec, threads=2)
+    assert ensemble_rows(one["csv"]) == ensemble_rows(r.stdout) == ensemble_rows(two["csv"])
+    assert one["meta"]["written_by"] == "pumasim ensemble" and one["meta"]["samples"] == 6
+    assert [c["name"] for c in one["meta"]["columns"]] == r.stdout.splitlines()[0].split(",")
+    assert ensemble_rows(pumasim.ensemble(spec, sample=4)["csv"]) == ensemble_rows(one["csv"])[4:5]
+    rows = ensemble_rows(one["csv"])
+    given = pumasim.ensemble(spec, samples=[{"motor.resistance": float(rows[2]["motor.resistance"]),
+                                             "motor.inductance": float(rows[2]["motor.inductance"]),
+                                             "amplifier.gain": float(rows[2]["amplifier.gain"])}])
+    g = ensemble_rows(given["csv"])[0]
+    assert g["seed"] == "0" and {k: v for k, v in g.items() if k not in ("sample", "seed")} == \
+        {k: v for k, v in rows[2].items() if k not in ("sample", "seed")}
+    with pytest.raises(ValueError, match="threads"):
+        pumasim.ensemble(spec, threads=0)
+    with pytest.raises(ValueError, match="sample"):
+        pumasim.ensemble(spec, sample=6)
+    with pytest.raises(TypeError, match="samples"):
+        pumasim.ensemble(spec, samples={"motor.resistance": 2.0})

@@ -1,0 +1,402 @@
+#include "simulation/ensemble.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <numbers>
+#include <random>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "core/errors.hpp"
+#include "models/robot/strict_toml.hpp"
+#include "simulation/run_documents.hpp"
+
+namespace pumasim {
+namespace {
+
+using Kind = EnsembleFactor::Kind;
+
+std::string full_precision(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+// SplitMix64's finaliser (Steele, Lea and Flood, "Fast splittable
+// pseudorandom number generators", OOPSLA 2014): a bijective mix of 64 bits,
+// so that neighbouring (seed, k) give unrelated generator seeds.
+std::uint64_t mix64(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// A double in [0, 1) from the generator's top 53 bits.
+double unit(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
+
+double draw(const EnsembleFactor& f, std::mt19937_64& g) {
+  switch (f.kind) {
+    case Kind::kNormal: {
+      // Box-Muller (1958): two uniforms, 1 - u in (0, 1] keeps the log finite.
+      const double u1 = 1.0 - unit(g), u2 = unit(g);
+      return f.a + f.b * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+    }
+    case Kind::kUniform:
+      return f.a + (f.b - f.a) * unit(g);
+    case Kind::kLogUniform:
+      return std::exp(std::log(f.a) + (std::log(f.b) - std::log(f.a)) * unit(g));
+    case Kind::kChoice:
+      return unit(g);  // an index below
+  }
+  return 0;
+}
+
+// A TOML basic string: quoted, its backslashes, quotes and control characters escaped.
+std::string toml_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\', out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::vector<std::string> string_array(StrictTable& t, std::string_view key, bool required) {
+  const toml::node* node = t.node(key);
+  if (!node) {
+    if (required) t.fail(key, "an array of strings", "nothing");
+    return {};
+  }
+  const toml::array* arr = node->as_array();
+  if (!arr) t.fail(key, "an array of strings", "not an array");
+  std::vector<std::string> out;
+  for (const toml::node& e : *arr) {
+    const auto s = e.value<std::string>();
+    if (!s) t.fail(key, "an array of strings", "an element that is not a string");
+    out.push_back(*s);
+  }
+  return out;
+}
+
+EnsembleFactor read_factor(StrictTable& t) {
+  EnsembleFactor f;
+  f.key = t.string("key");
+  if (f.key.find('.') == std::string::npos || f.key.find('=') != std::string::npos) {
+    t.fail("key", "a scene key 'section.key' (pumasim keys lists them)", "'" + f.key + "'");
+  }
+  const std::string kind = t.string("distribution", {"normal", "uniform", "log-uniform", "choice"});
+  if (kind == "normal") {
+    f.kind = Kind::kNormal;
+    f.a = t.number("mean");
+    f.b = t.number("sd", Bounds::positive());
+  } else if (kind == "choice") {
+    f.kind = Kind::kChoice;
+    // Each value as TOML text, as `--set` takes it.
+    const toml::node* node = t.node("values");
+    const toml::array* arr = node ? node->as_array() : nullptr;
+    if (!arr || arr->empty())
+      t.fail("values", "a non-empty array of the key's values", arr ? "an empty array" : "none");
+    for (const toml::node& e : *arr) {
+      if (const auto d = StrictTable::as_double(e)) {
+        f.choices.push_back(full_precision(*d));
+      } else if (const auto s = e.value<std::string>()) {
+        f.choices.push_back(toml_string(*s));
+      } else if (const auto b = e.value<bool>()) {
+        f.choices.push_back(*b ? "true" : "false");
+      } else {
+        t.fail("values", "numbers, strings or booleans", "another kind of value");
+      }
+    }
+  } else {
+    f.kind = kind == "uniform" ? Kind::kUniform : Kind::kLogUniform;
+    f.a = t.number("low", f.kind == Kind::kLogUniform ? Bounds::positive() : Bounds::any());
+    f.b = t.number("high", Bounds{f.a, std::numeric_limits<double>::infinity(), true});
+  }
+  t.finish();
+  return f;
+}
+
+}  // namespace
+
+const char* factor_kind_name(Kind kind) {
+  switch (kind) {
+    case Kind::kNormal:
+      return "normal";
+    case Kind::kUniform:
+      return "uniform";
+    case Kind::kLogUniform:
+      return "log-uniform";
+    case Kind::kChoice:
+      return "choice";
+  }
+  return "?";
+}
+
+std::vector<std::string> EnsembleSample::sets() const {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < keys.size(); ++i) out.push_back(keys[i] + "=" + values[i]);
+  return out;
+}
+
+EnsembleSpec read_ensemble_file(const std::string& path) {
+  const toml::table doc = parse_toml_file(path);
+  StrictTable top(doc, path, "");
+  EnsembleSpec s;
+  s.file = path;
+  const std::filesystem::path scene = top.string("scene");
+  s.scene = scene.is_absolute() ? scene.string() : (std::filesystem::path(path).parent_path() / scene).string();
+  s.sets = string_array(top, "set", false);
+  s.samples = static_cast<long>(top.number("samples", Bounds{1, 1e7}));
+  if (static_cast<double>(s.samples) != top.number("samples")) top.fail("samples", "a whole number", "a fraction");
+  const double seed = top.number_or("seed", 0, Bounds{0, 9007199254740992.0});
+  s.seed = static_cast<std::uint64_t>(seed);
+  s.final_state = top.boolean_or("final_state", false);
+  if (std::optional<StrictTable> run = top.optional_table("run")) {
+    RunOptions& o = s.options;
+    if (run->has("integrator")) o.integrator = run->string("integrator");
+    if (run->has("backend")) o.backend = run->string("backend");
+    if (run->has("dt")) o.dt = run->number("dt", Bounds::positive());
+    if (run->has("rtol")) o.rtol = run->number("rtol", Bounds{0, 1, true, true});
+    if (run->has("atol")) o.atol = run->number("atol", Bounds::positive());
+    if (run->has("t_end")) o.t_end = run->number("t_end", Bounds::positive());
+    if (run->has("max_steps")) o.max_steps = run->number("max_steps", Bounds::non_negative());
+    if (run->has("max_wall")) o.max_wall = run->number("max_wall", Bounds::non_negative());
+    run->finish();
+  }
+  if (top.has("vary")) {
+    for (StrictTable& f : top.array_of_tables("vary")) s.factors.push_back(read_factor(f));
+  }
+  top.finish();
+  return s;
+}
+
+EnsembleSample draw_sample(const EnsembleSpec& spec, long k) {
+  EnsembleSample s;
+  s.index = k;
+  s.seed = mix64(mix64(spec.seed) ^ static_cast<std::uint64_t>(k));
+  std::mt19937_64 g(s.seed);
+  for (const EnsembleFactor& f : spec.factors) {
+    s.keys.push_back(f.key);
+    const double v = draw(f, g);
+    if (f.kind == Kind::kChoice) {
+      const auto n = f.choices.size();
+      s.values.push_back(f.choices[std::min(n - 1, static_cast<std::size_t>(v * static_cast<double>(n)))]);
+    } else {
+      s.values.push_back(full_precision(v));
+    }
+  }
+  return s;
+}
+
+std::vector<EnsembleSample> draw_samples(const EnsembleSpec& spec) {
+  std::vector<EnsembleSample> out;
+  out.reserve(static_cast<std::size_t>(spec.samples));
+  for (long k = 0; k < spec.samples; ++k) out.push_back(draw_sample(spec, k));
+  return out;
+}
+
+namespace {
+
+SampleResult run_sample(const EnsembleSpec& spec, const EnsembleSample& sample) {
+  SampleResult r;
+  r.sample = sample;
+  RunRequest req;
+  req.file = spec.scene;
+  req.sets = spec.sets;
+  for (std::string& s : sample.sets()) req.sets.push_back(std::move(s));
+  req.options = spec.options;
+  try {
+    const RunRecord rec = run(req);
+    const RunResult& res = rec.run.result;
+    r.ok = res.ok;
+    r.failure_kind = res.failure_kind;
+    r.failure = res.failure;
+    r.t_final = res.t_final;
+    r.stats = rec.run.stats;
+    r.figures = rec.run.figures;
+    r.state_names = rec.run.state_names;
+    r.wall_time = res.wall_time;
+  } catch (const std::exception& e) {  // the scene reader or the plan refused the sample's values
+    r.ok = false;
+    r.failure_kind = "input";
+    r.failure = e.what();
+  }
+  return r;
+}
+
+}  // namespace
+
+std::vector<SampleResult> run_ensemble(const EnsembleSpec& spec, const std::vector<EnsembleSample>& samples,
+                                       int threads, const EnsembleProgress& progress, const bool* cancel) {
+  if (threads < 1) throw std::invalid_argument("run_ensemble: expected threads >= 1, got " + std::to_string(threads));
+  const long total = static_cast<long>(samples.size());
+  std::vector<SampleResult> results(samples.size());
+  std::atomic<long> next{0}, done{0}, failed{0};
+  std::mutex report;
+  const auto work = [&] {
+    for (long k = next++; k < total; k = next++) {
+      const auto i = static_cast<std::size_t>(k);
+      if (cancel && *cancel) {
+        results[i].sample = samples[i];
+        results[i].failure_kind = "interrupted";
+        results[i].failure = "not run: the ensemble was interrupted";
+      } else {
+        results[i] = run_sample(spec, samples[i]);
+      }
+      if (!results[i].ok) ++failed;
+      const long d = ++done;
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(report);
+        progress(d, failed.load(), total);
+      }
+    }
+  };
+  const int n = static_cast<int>(std::min<long>(threads, std::max<long>(total, 1)));
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(n - 1));
+  for (int t = 1; t < n; ++t) pool.emplace_back(work);
+  work();  // this thread is one of the n
+  for (std::thread& t : pool) t.join();
+  return results;
+}
+
+namespace {
+
+// An RFC 4180 field: quoted when it holds a comma, a quote or a line break.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (const char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+struct Column {
+  const char* name;
+  const char* unit;
+  const char* meaning;
+};
+
+// The columns after sample, seed and the factors' keys, in order.
+constexpr Column kColumns[] = {
+    {"ok", "", "1 if the run reached its end, else 0"},
+    {"failure_kind", "",
+     "budget, unstable, integrator, interrupted or input (the scene refused the values); empty if ok"},
+    {"t_final", "s", "where the run ended"},
+    {"steps", "", "accepted steps"},
+    {"rhs_evaluations", "", "right-hand sides evaluated"},
+    {"jacobian_evaluations", "", "Jacobians evaluated"},
+    {"rejected_steps", "", "steps rejected by the error test"},
+    {"wall_time", "s", "the integration's own wall-clock time (not bitwise reproducible)"},
+    {"max_path_error", "m", "the flange's largest distance to the reference point (0 without a Cartesian reference)"},
+    {"rms_path_error", "m", "its root mean square over the outputs"},
+    {"max_path_deviation", "m", "the flange's largest distance to the geometric path, whatever the timing"},
+    {"rms_path_deviation", "m", "its root mean square over the outputs"},
+    {"failure", "", "the reason, when not ok"},
+};
+
+}  // namespace
+
+// The state names of the first result that has them (every run of one
+// scene has the same layout).
+static std::vector<std::string> final_state_names(const std::vector<SampleResult>& results) {
+  for (const SampleResult& r : results) {
+    if (!r.state_names.empty()) return r.state_names;
+  }
+  return {};
+}
+
+std::string ensemble_csv(const std::vector<SampleResult>& results, bool final_state) {
+  std::string out = "sample,seed";
+  const std::vector<std::string> no_keys;
+  const std::vector<std::string>& keys = results.empty() ? no_keys : results.front().sample.keys;
+  for (const std::string& k : keys) out += "," + csv_field(k);
+  for (const Column& c : kColumns) out += std::string(",") + c.name;
+  const std::vector<std::string> names = final_state ? final_state_names(results) : std::vector<std::string>{};
+  for (const std::string& n : names) out += ",final." + csv_field(n);
+  out += "\n";
+  for (const SampleResult& r : results) {
+    out += std::to_string(r.sample.index) + "," + std::to_string(r.sample.seed);
+    for (const std::string& v : r.sample.values) out += "," + csv_field(v);
+    const IntegratorStats& st = r.stats;
+    const RunFigures& f = r.figures;
+    out += std::string(",") + (r.ok ? "1" : "0") + "," + csv_field(r.failure_kind) + "," + full_precision(r.t_final) +
+           "," + std::to_string(st.steps) + "," + std::to_string(st.rhs_evaluations) + "," +
+           std::to_string(st.jacobian_evaluations) + "," + std::to_string(st.rejected_steps) + "," +
+           full_precision(r.wall_time) + "," + full_precision(f.max_path_error) + "," +
+           full_precision(f.rms_path_error) + "," + full_precision(f.max_path_deviation) + "," +
+           full_precision(f.rms_path_deviation) + "," + csv_field(r.failure);
+    const bool has = r.ok && f.final_state.size() == names.size();
+    for (std::size_t i = 0; i < names.size(); ++i) out += "," + (has ? full_precision(f.final_state[i]) : "");
+    out += "\n";
+  }
+  return out;
+}
+
+std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleResult>& results, int threads,
+                             double wall_time) {
+  using Json = nlohmann::ordered_json;
+  Json j;
+  j["written_by"] = "pumasim ensemble";
+  j["build"] = version_text();
+  j["ensemble_file"] = spec.file;
+  j["scene"] = spec.scene;
+  j["set"] = spec.sets;
+  Json run = Json::object();
+  const RunOptions& o = spec.options;
+  if (o.integrator) run["integrator"] = *o.integrator;
+  if (o.backend) run["backend"] = *o.backend;
+  if (o.dt) run["dt"] = *o.dt;
+  if (o.rtol) run["rtol"] = *o.rtol;
+  if (o.atol) run["atol"] = *o.atol;
+  if (o.t_end) run["t_end"] = *o.t_end;
+  if (o.max_steps) run["max_steps"] = *o.max_steps;
+  if (o.max_wall) run["max_wall"] = *o.max_wall;
+  j["run"] = run;
+  j["seed"] = spec.seed;
+  j["samples"] = results.size();
+  Json factors = Json::array();
+  for (const EnsembleFactor& f : spec.factors) {
+    Json e{{"key", f.key}, {"distribution", factor_kind_name(f.kind)}};
+    if (f.kind == Kind::kNormal) e["mean"] = f.a, e["sd"] = f.b;
+    if (f.kind == Kind::kUniform || f.kind == Kind::kLogUniform) e["low"] = f.a, e["high"] = f.b;
+    if (f.kind == Kind::kChoice) e["values"] = f.choices;
+    factors.push_back(e);
+  }
+  j["factors"] = factors;
+  Json columns = Json::array();
+  columns.push_back({{"name", "sample"}, {"unit", ""}, {"meaning", "the sample's index"}});
+  columns.push_back({{"name", "seed"}, {"unit", ""}, {"meaning", "its generator's seed (0: a given sample)"}});
+  for (const EnsembleFactor& f : spec.factors) {
+    columns.push_back(
+        {{"name", f.key}, {"unit", ""}, {"meaning", std::string("the scene key, drawn: ") + factor_kind_name(f.kind)}});
+  }
+  for (const Column& c : kColumns) columns.push_back({{"name", c.name}, {"unit", c.unit}, {"meaning", c.meaning}});
+  if (spec.final_state) {
+    for (const std::string& n : final_state_names(results)) {
+      columns.push_back({{"name", "final." + n}, {"unit", ""}, {"meaning", "the state " + n + " at the last output"}});
+    }
+  }
+  j["columns"] = columns;
+  j["final_state"] = spec.final_state;
+  long failed = 0;
+  for (const SampleResult& r : results) failed += r.ok ? 0 : 1;
+  j["failed"] = failed;
+  j["threads"] = threads;
+  j["wall_time"] = wall_time;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace pumasim

@@ -1,0 +1,104 @@
+// Many runs of one scene (issue 35): an ensemble is a scene, the options of
+// its runs, and samples, each a set of scene overrides ("section.key=value",
+// as `--set` takes them). The samples come from an ensemble file's factors
+// (a distribution per varied key), each drawn from its own generator seeded
+// from the ensemble's seed and the sample's index, so that any sample
+// re-runs alone with exactly its result; or they are given (a table, the
+// Python module). run_ensemble runs them on a pool of threads through the
+// front door (run(), simulation/run.hpp), each with its own plant: samples
+// share nothing mutable, so a sample's result does not depend on the number
+// of threads or on which thread ran it (tests/test_threads.cpp, under
+// ThreadSanitizer). The result is one table: a row per sample, its inputs
+// and outputs, a failed run as a row with its reason.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "integrators/integrator.hpp"
+#include "simulation/run.hpp"
+
+namespace pumasim {
+
+// One varied scene key and its distribution.
+struct EnsembleFactor {
+  enum class Kind { kNormal, kUniform, kLogUniform, kChoice };
+  std::string key;  // "section.key", as `--set` takes it
+  Kind kind = Kind::kUniform;
+  double a = 0, b = 0;               // normal: mean, sd; uniform and log-uniform: low, high
+  std::vector<std::string> choices;  // choice: the values as TOML text, each equally likely
+};
+
+// "normal", "uniform", "log-uniform", "choice".
+const char* factor_kind_name(EnsembleFactor::Kind kind);
+
+struct EnsembleSpec {
+  std::string file;               // the ensemble file ("" when built in code)
+  std::string scene;              // the scene file (relative to the ensemble file's folder when read from one)
+  std::vector<std::string> sets;  // overrides common to every sample, applied before the sample's
+  RunOptions options;             // the runs' integrator, tolerances, end time, budgets
+  long samples = 0;               // how many to draw from the factors
+  std::uint64_t seed = 0;
+  bool final_state = false;  // the table also gives each run's final state (columns final.<state>)
+  std::vector<EnsembleFactor> factors;
+};
+
+struct EnsembleSample {
+  long index = 0;
+  std::uint64_t seed = 0;                 // its generator's seed (0 for a given sample)
+  std::vector<std::string> keys;          // the overridden keys, "section.key"
+  std::vector<std::string> values;        // their values as TOML text (numbers with 17 significant digits)
+  std::vector<std::string> sets() const;  // "key=value" each
+};
+
+// Reads an ensemble file; ConfigError naming the file, line and key for an
+// unknown key, a wrong type or a value out of range (a distribution's
+// parameters included). The scene's path is resolved against the file's
+// folder.
+EnsembleSpec read_ensemble_file(const std::string& path);
+
+// Sample k of the spec's factors: its seed is a hash of (spec.seed, k) and
+// its generator (std::mt19937_64, whose output the standard fixes) draws each
+// factor in order, by transforms written here (not the library's
+// distributions, whose algorithms the standard leaves open): any sample is
+// reproducible alone, on any standard library.
+EnsembleSample draw_sample(const EnsembleSpec& spec, long k);
+std::vector<EnsembleSample> draw_samples(const EnsembleSpec& spec);
+
+struct SampleResult {
+  EnsembleSample sample;
+  bool ok = false;
+  std::string failure_kind;  // the run's ("budget", "unstable", "integrator", "interrupted") or "input"
+  std::string failure;       // its reason ("" when ok)
+  double t_final = 0;
+  IntegratorStats stats;
+  RunFigures figures;                    // figures.final_state: the last output's state
+  std::vector<std::string> state_names;  // the plant's, for the final state's columns
+  double wall_time = 0;                  // [s] the integration's own (RunResult::wall_time)
+};
+
+// How far the ensemble is: called from one thread at a time.
+using EnsembleProgress = std::function<void(long done, long failed, long total)>;
+
+// Runs every sample (threads >= 1; more threads than samples are not
+// started) and returns their results in the samples' order. A sample whose
+// overrides the scene reader refuses is a row with failure_kind "input"; a
+// run that fails is a row with its reason. `cancel`, when set and true,
+// stops starting new samples (those left are rows of kind "interrupted").
+std::vector<SampleResult> run_ensemble(const EnsembleSpec& spec, const std::vector<EnsembleSample>& samples,
+                                       int threads, const EnsembleProgress& progress = {},
+                                       const bool* cancel = nullptr);
+
+// The table: a header, then a row per sample; numbers with 17 significant
+// digits (they read back exactly), text fields quoted as RFC 4180 says. With
+// final_state, a column final.<state> per state (empty in a failed row).
+std::string ensemble_csv(const std::vector<SampleResult>& results, bool final_state = false);
+
+// The JSON sidecar: what wrote the table, the spec (scene, options, seed,
+// factors), every column's meaning and unit, the counts and the wall time.
+std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleResult>& results, int threads,
+                             double wall_time);
+
+}  // namespace pumasim

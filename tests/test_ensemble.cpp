@@ -1,0 +1,287 @@
+// Ensembles (simulation/ensemble.hpp): the samples' draws (replayable, from
+// the distributions they claim: moments against their closed forms), a
+// sample re-run alone equal bit for bit to its row, failures as rows, the
+// table's numbers reading back exactly, and the ensemble file's errors. The
+// same ensemble on 1, 2 and 8 threads: tests/test_threads.cpp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "simulation/ensemble.hpp"
+#include "tests/cli_capture.hpp"
+#include "tests/ensemble_helpers.hpp"
+
+namespace pumasim {
+namespace {
+
+using Kind = EnsembleFactor::Kind;
+
+const std::string kScenesDir = PUMASIM_SCENES_DIR;
+
+EnsembleSpec one_factor(EnsembleFactor f, long samples) {
+  EnsembleSpec s;
+  s.samples = samples;
+  s.seed = 7;
+  s.factors.push_back(std::move(f));
+  return s;
+}
+
+std::vector<double> drawn(const EnsembleSpec& s) {
+  std::vector<double> x;
+  for (const EnsembleSample& e : draw_samples(s)) x.push_back(std::strtod(e.values[0].c_str(), nullptr));
+  return x;
+}
+
+double mean_of(const std::vector<double>& x) {
+  double m = 0;
+  for (double v : x) m += v / static_cast<double>(x.size());
+  return m;
+}
+
+double variance_of(const std::vector<double>& x) {
+  const double m = mean_of(x);
+  double v = 0;
+  for (double e : x) v += (e - m) * (e - m) / static_cast<double>(x.size() - 1);
+  return v;
+}
+
+// Sample k drawn alone is sample k of the whole draw; samples differ; a
+// different seed gives different samples; the values read back exactly.
+TEST(EnsembleDraws, EachSampleIsReplayableAlone) {
+  const EnsembleSpec s = testing::small_ensemble(kScenesDir, 50);
+  const std::vector<EnsembleSample> all = draw_samples(s);
+  ASSERT_EQ(all.size(), 50u);
+  for (long k : {0L, 1L, 17L, 49L}) {
+    const EnsembleSample alone = draw_sample(s, k);
+    EXPECT_EQ(alone.values, all[static_cast<std::size_t>(k)].values) << k;
+    EXPECT_EQ(alone.seed, all[static_cast<std::size_t>(k)].seed) << k;
+  }
+  EXPECT_NE(all[0].values, all[1].values);
+  EnsembleSpec other = s;
+  other.seed = s.seed + 1;
+  EXPECT_NE(draw_sample(other, 0).values, all[0].values);
+  for (const std::string& v : all[3].values) {
+    const double x = std::strtod(v.c_str(), nullptr);
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", x);
+    EXPECT_EQ(v, buf);  // 17 significant digits: the text is the double
+  }
+}
+
+// Moments against their closed forms, over 40,000 draws: within 5 standard
+// errors (a false failure about once in 3.5 million). Uniform(a, b): mean
+// (a+b)/2, variance (b-a)^2/12, every draw in [a, b). Log-uniform: ln x
+// uniform on [ln a, ln b). Normal(mu, sd): mean mu, variance sd^2 (standard
+// error of the sample variance sd^2 sqrt(2/(n-1))). Choice: each of the
+// values with probability 1/k.
+TEST(EnsembleDraws, DistributionsHaveTheirClosedFormMoments) {
+  const long n = 40000;
+  const double se = 5.0 / std::sqrt(static_cast<double>(n));
+  {
+    const auto x = drawn(one_factor({.key = "a.b", .kind = Kind::kUniform, .a = -1.0, .b = 3.0}, n));
+    for (double v : x) ASSERT_TRUE(v >= -1.0 && v < 3.0) << v;
+    const double sd = 4.0 / std::sqrt(12.0);
+    EXPECT_NEAR(mean_of(x), 1.0, se * sd);
+    EXPECT_NEAR(variance_of(x), sd * sd, 5 * sd * sd * std::sqrt(0.8 / n));  // var of U's sample variance: 4/5 s^4/n
+  }
+  {
+    auto x = drawn(one_factor({.key = "a.b", .kind = Kind::kLogUniform, .a = 1e-3, .b = 1e1}, n));
+    for (double& v : x) {
+      ASSERT_TRUE(v >= 1e-3 && v < 1e1) << v;
+      v = std::log(v);
+    }
+    const double lo = std::log(1e-3), hi = std::log(1e1), sd = (hi - lo) / std::sqrt(12.0);
+    EXPECT_NEAR(mean_of(x), (lo + hi) / 2, se * sd);
+  }
+  {
+    const auto x = drawn(one_factor({.key = "a.b", .kind = Kind::kNormal, .a = 2.0, .b = 0.5}, n));
+    EXPECT_NEAR(mean_of(x), 2.0, se * 0.5);
+    EXPECT_NEAR(variance_of(x), 0.25, 5 * 0.25 * std::sqrt(2.0 / (n - 1)));
+    long beyond = 0;  // P(|z| > 2) = 0.0455 (erfc(sqrt 2))
+    for (double v : x) beyond += std::abs(v - 2.0) > 1.0;
+    const double p = std::erfc(std::numbers::sqrt2);
+    EXPECT_NEAR(static_cast<double>(beyond) / n, p, 5 * std::sqrt(p * (1 - p) / n));
+  }
+  {
+    EnsembleFactor f{.key = "a.b", .kind = Kind::kChoice};
+    f.choices = {"1", "\"two\"", "3.5"};
+    long counts[3] = {0, 0, 0};
+    for (const EnsembleSample& e : draw_samples(one_factor(f, n))) {
+      for (int i = 0; i < 3; ++i) counts[i] += e.values[0] == f.choices[static_cast<std::size_t>(i)];
+    }
+    EXPECT_EQ(counts[0] + counts[1] + counts[2], n);
+    for (long c : counts) EXPECT_NEAR(static_cast<double>(c) / n, 1.0 / 3, 5 * std::sqrt(2.0 / 9 / n));
+  }
+}
+
+// Sample k run alone (as `pumasim ensemble --sample K` does) is its row of
+// the whole ensemble, bit for bit; the varied values reached the plant (the
+// samples' step counts or path errors differ).
+TEST(Ensemble, ASampleRunAloneIsItsRowBitForBit) {
+  const EnsembleSpec s = testing::small_ensemble(kScenesDir, 4);
+  const std::vector<SampleResult> all = run_ensemble(s, draw_samples(s), 2);
+  ASSERT_EQ(all.size(), 4u);
+  for (const SampleResult& r : all) ASSERT_TRUE(r.ok) << r.failure;
+  const std::vector<SampleResult> alone = run_ensemble(s, {draw_sample(s, 2)}, 1);
+  ASSERT_EQ(alone.size(), 1u);
+  testing::expect_same_result(alone[0], all[2], "alone");
+  EXPECT_FALSE(testing::same_bits(all[0].figures.max_path_error, all[1].figures.max_path_error));
+}
+
+// A value the scene reader refuses (a negative resistance) is a row with
+// failure_kind "input" and the reader's message; the other samples run.
+TEST(Ensemble, ARefusedSampleIsARowWithItsReason) {
+  EnsembleSpec s = testing::small_ensemble(kScenesDir, 0);
+  s.factors = {{.key = "motor.resistance", .kind = Kind::kChoice, .choices = {"-1.0"}}};
+  std::vector<EnsembleSample> samples = {draw_sample(s, 0)};
+  EnsembleSample good = samples[0];
+  good.index = 1, good.values = {"2.0"};
+  samples.push_back(good);
+  const std::vector<SampleResult> r = run_ensemble(s, samples, 2);
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_FALSE(r[0].ok);
+  EXPECT_EQ(r[0].failure_kind, "input");
+  EXPECT_NE(r[0].failure.find("motor.resistance"), std::string::npos) << r[0].failure;
+  EXPECT_TRUE(r[1].ok) << r[1].failure;
+  // The table has both rows; the failure's reason is one quoted field.
+  const std::string csv = ensemble_csv(r);
+  std::istringstream lines(csv);
+  std::string header, row0, row1, extra;
+  std::getline(lines, header), std::getline(lines, row0), std::getline(lines, row1);
+  EXPECT_FALSE(std::getline(lines, extra) && !extra.empty());
+  EXPECT_EQ(header.rfind("sample,seed,motor.resistance,ok,failure_kind,", 0), 0u) << header;
+  EXPECT_NE(row0.find(",0,input,"), std::string::npos) << row0;
+  EXPECT_NE(row1.find(",1,,"), std::string::npos) << row1;
+}
+
+std::filesystem::path write_file(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_ensemble";
+  std::filesystem::create_directories(dir);
+  const auto p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+void expect_config_error(const std::string& text, const std::vector<std::string>& parts) {
+  const auto p = write_file("bad.toml", text);
+  try {
+    read_ensemble_file(p.string());
+    ADD_FAILURE() << "expected a ConfigError for:\n" << text;
+  } catch (const ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(p.string()), std::string::npos) << msg;
+    for (const std::string& part : parts) EXPECT_NE(msg.find(part), std::string::npos) << part << " in: " << msg;
+  }
+}
+
+// The ensemble file: every key read, the scene resolved against its folder;
+// an unknown key, a wrong type or a value out of range names the file, the
+// line and the key.
+TEST(EnsembleFile, ReadsEveryKeyAndRefusesBadOnesNamingFileLineAndKey) {
+  const std::string head = "scene = \"" + kScenesDir + "/paper_slow_viscous.toml\"\nsamples = 3\n";
+  const auto p = write_file("good.toml", head +
+                                             "seed = 5\nset = [\"friction.viscous=0.001\"]\n[run]\n"
+                                             "integrator = \"cvode-bdf\"\nrtol = 1e-5\nt_end = 0.5\n"
+                                             "max_wall = 10\n[[vary]]\nkey = \"motor.resistance\"\n"
+                                             "distribution = \"choice\"\nvalues = [1.5, 2.5]\n");
+  const EnsembleSpec s = read_ensemble_file(p.string());
+  EXPECT_EQ(s.samples, 3);
+  EXPECT_EQ(s.seed, 5u);
+  EXPECT_EQ(s.sets, std::vector<std::string>{"friction.viscous=0.001"});
+  EXPECT_EQ(*s.options.integrator, "cvode-bdf");
+  EXPECT_EQ(*s.options.rtol, 1e-5);
+  ASSERT_EQ(s.factors.size(), 1u);
+  EXPECT_EQ(s.factors[0].choices, (std::vector<std::string>{"1.5", "2.5"}));
+  const auto relative = write_file("relative.toml", "scene = \"x.toml\"\nsamples = 1\n");
+  EXPECT_EQ(read_ensemble_file(relative.string()).scene, (relative.parent_path() / "x.toml").string());
+
+  expect_config_error(head + "sample = 3\n", {":3:", "unknown key 'sample'"});
+  expect_config_error(head + "[run]\nrtol = \"tight\"\n", {":4:", "run.rtol", "expected"});
+  expect_config_error(head + "[[vary]]\nkey = \"motor.resistance\"\ndistribution = \"normal\"\nmean = 2\nsd = -1\n",
+                      {"vary", "sd", "a number > 0"});
+  expect_config_error(head + "[[vary]]\nkey = \"motor.resistance\"\ndistribution = \"gaussian\"\n",
+                      {"distribution", "normal", "log-uniform"});
+  expect_config_error(head + "[[vary]]\nkey = \"r\"\ndistribution = \"uniform\"\nlow = 1\nhigh = 2\n",
+                      {"key", "section.key"});
+  expect_config_error(head + "[[vary]]\nkey = \"a.b\"\ndistribution = \"uniform\"\nlow = 2\nhigh = 1\n", {"high"});
+  expect_config_error("scene = \"x.toml\"\nsamples = 2.5\n", {"samples", "whole"});
+}
+
+// `pumasim ensemble`: the table and its sidecar, --sample K's row equal to
+// row K but for the wall time, an existing table replaced only with --force,
+// a file pumasim did not write never replaced, and a bad file exit status 2
+// with nothing written.
+TEST(EnsembleCli, WritesTheTableReplaysARowAndNeverOverwritesWhatItDidNotWrite) {
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_ensemble_cli";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "e.toml";
+  std::ofstream(file) << "scene = \"" << kScenesDir << "/paper_slow_viscous.toml\"\nsamples = 3\nseed = 4\n"
+                      << "[run]\nintegrator = \"cvode-bdf\"\nt_end = 0.05\n[[vary]]\nkey = \"amplifier.gain\"\n"
+                      << "distribution = \"uniform\"\nlow = 3.5\nhigh = 4.5\n";
+  const std::string csv = (dir / "t.csv").string();
+  const auto r = testing::cli({"ensemble", file.string(), "--out", csv, "--threads", "2", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(csv);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 4u);
+  ASSERT_TRUE(std::filesystem::exists(dir / "t.json"));
+  // Row 1 alone, on stdout: the same fields but wall_time (the 13th column).
+  const auto one = testing::cli({"ensemble", file.string(), "--sample", "1", "-q"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  const auto fields = [](const std::string& line) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (!line.empty() && line.back() == ',') f.emplace_back();
+    return f;
+  };
+  std::istringstream o(one.out);
+  std::string header, row;
+  std::getline(o, header), std::getline(o, row);
+  EXPECT_EQ(header, lines[0]);
+  auto a = fields(row), b = fields(lines[2]);
+  ASSERT_EQ(a.size(), b.size());
+  const std::vector<std::string> names = fields(header);
+  const auto wall = std::find(names.begin(), names.end(), "wall_time") - names.begin();
+  ASSERT_GT(wall, 0);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (static_cast<long>(i) != wall) EXPECT_EQ(a[i], b[i]) << "column " << i;
+  }
+  // Replaced only with --force.
+  EXPECT_EQ(testing::cli({"ensemble", file.string(), "--out", csv, "-q"}).status, 2);
+  EXPECT_EQ(testing::cli({"ensemble", file.string(), "--out", csv, "-q", "--force"}).status, 0);
+  // A file of the user's is never replaced, --force or not.
+  const std::string mine = (dir / "mine.csv").string();
+  std::ofstream(mine) << "my data\n";
+  const auto refused = testing::cli({"ensemble", file.string(), "--out", mine, "-q", "--force"});
+  EXPECT_EQ(refused.status, 2);
+  EXPECT_NE(refused.err.find("not written by pumasim ensemble"), std::string::npos) << refused.err;
+  std::ifstream kept(mine);
+  std::string first;
+  std::getline(kept, first);
+  EXPECT_EQ(first, "my data");
+  // A bad ensemble file: exit status 2, the file and key named, nothing written.
+  const auto bad = dir / "bad.toml";
+  std::ofstream(bad) << "scene = \"x.toml\"\nsamples = 3\nthreads = 2\n";
+  const std::string none = (dir / "none.csv").string();
+  const auto b2 = testing::cli({"ensemble", bad.string(), "--out", none});
+  EXPECT_EQ(b2.status, 2);
+  EXPECT_NE(b2.err.find("bad.toml:3"), std::string::npos) << b2.err;
+  EXPECT_NE(b2.err.find("threads"), std::string::npos) << b2.err;
+  EXPECT_FALSE(std::filesystem::exists(none));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pumasim
