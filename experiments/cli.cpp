@@ -530,6 +530,7 @@ struct EnsembleArgs {
   std::string file;
   std::optional<double> threads;
   std::optional<double> sample;  // one sample alone, by its index
+  std::string table;             // given samples (a CSV table) instead of the file's draws
   std::string out;               // PATH.csv, with PATH.json beside it ("": the table on stdout)
   bool force = false;
   bool quiet = false;
@@ -576,9 +577,19 @@ void write_whole(const std::filesystem::path& path, const std::string& text) {
 }
 
 int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
-  const EnsembleSpec spec = read_ensemble_file(a.file);
+  EnsembleSpec spec = read_ensemble_file(a.file);
   std::vector<EnsembleSample> samples;
-  if (a.sample) {
+  if (!a.table.empty()) {
+    samples = read_sample_table(a.table);
+    spec.factors.clear(), spec.table = a.table;  // the table's values, not the file's draws
+    if (a.sample) {
+      if (*a.sample >= static_cast<double>(samples.size())) {
+        throw UsageError("--sample " + std::to_string(static_cast<long>(*a.sample)) + ": expected an index below " +
+                         std::to_string(samples.size()) + " (" + a.table + "'s rows)");
+      }
+      samples = {samples[static_cast<std::size_t>(*a.sample)]};
+    }
+  } else if (a.sample) {
     if (*a.sample >= static_cast<double>(spec.samples)) {
       throw UsageError("--sample " + std::to_string(static_cast<long>(*a.sample)) + ": expected an index below " +
                        std::to_string(spec.samples) + " (" + a.file + "'s samples)");
@@ -641,6 +652,10 @@ void add_ensemble(CLI::App* app, EnsembleArgs& a) {
       ->type_name("FILE");
   add_number(app, "--threads", a.threads, kThreadCount, "threads (default: the machine's cores)", "N");
   add_number(app, "--sample", a.sample, kSampleIndex, "run sample K alone (its row, bit for bit)", "K");
+  app->add_option("--table", a.table,
+                  "run the samples of a CSV table instead of the file's draws (header: scene keys; a row per "
+                  "sample, values as TOML text)")
+      ->type_name("CSV");
   app->add_option("--out", a.out, "the table PATH.csv, with PATH.json describing it (default: the table on stdout)")
       ->type_name("PATH");
   app->add_flag("--force", a.force, "replace PATH if pumasim ensemble wrote it");

@@ -27,7 +27,8 @@
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
-#   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py)
+#   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
+#               Sobol indices of the drive ensemble (experiments/ensemble_gsa.py)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
@@ -143,7 +144,12 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 # writes: results/dynamics_cost_vs_n.pdf
 stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
-stage_ensembles() { /usr/bin/python3 experiments/ensemble_scaling.py --bin "$PUMASIM"; }
+# writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
+stage_ensembles() {
+  /usr/bin/python3 experiments/ensemble_scaling.py --bin "$PUMASIM"
+  /usr/bin/python3 experiments/ensemble_gsa.py experiments/ensembles/paper_slow_viscous_drive.toml --n 1024 \
+    --bin "$PUMASIM"
+}
 # writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }

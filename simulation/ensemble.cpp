@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <numbers>
 #include <random>
@@ -201,6 +202,69 @@ EnsembleSample draw_sample(const EnsembleSpec& spec, long k) {
   return s;
 }
 
+namespace {
+
+// The fields of one CSV line (RFC 4180 quoting; no line breaks in a field).
+std::vector<std::string> csv_fields(const std::string& line, const std::string& where) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"', ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        out.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.emplace_back();
+    } else if (c != '\r') {
+      out.back() += c;
+    }
+  }
+  if (quoted) throw ConfigError(where + ": a quoted field is not closed; expected a CSV line (RFC 4180)");
+  return out;
+}
+
+}  // namespace
+
+std::vector<EnsembleSample> read_sample_table(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot read the sample table");
+  std::string line;
+  if (!std::getline(in, line)) throw ConfigError(path + ":1: empty; expected a header of scene keys");
+  const std::vector<std::string> keys = csv_fields(line, path + ":1");
+  for (const std::string& k : keys) {
+    if (k.find('.') == std::string::npos || k.find('=') != std::string::npos) {
+      throw ConfigError(path + ":1: header '" + k + "': expected a scene key 'section.key' (pumasim keys lists them)");
+    }
+  }
+  std::vector<EnsembleSample> out;
+  for (long row = 2; std::getline(in, line); ++row) {
+    if (line.empty() || line == "\r") continue;
+    const std::string where = path + ":" + std::to_string(row);
+    std::vector<std::string> values = csv_fields(line, where);
+    if (values.size() != keys.size()) {
+      throw ConfigError(where + ": " + std::to_string(values.size()) + " fields; expected " +
+                        std::to_string(keys.size()) + ", one per key of the header");
+    }
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if (values[i].empty()) throw ConfigError(where + ": " + keys[i] + ": empty; expected a value (TOML text)");
+    }
+    EnsembleSample s;
+    s.index = static_cast<long>(out.size());
+    s.keys = keys;
+    s.values = std::move(values);
+    out.push_back(std::move(s));
+  }
+  if (out.empty()) throw ConfigError(path + ": no rows; expected a sample per row after the header");
+  return out;
+}
+
 std::vector<EnsembleSample> draw_samples(const EnsembleSpec& spec) {
   std::vector<EnsembleSample> out;
   out.reserve(static_cast<std::size_t>(spec.samples));
@@ -354,6 +418,7 @@ std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleR
   j["ensemble_file"] = spec.file;
   j["scene"] = spec.scene;
   j["set"] = spec.sets;
+  if (!spec.table.empty()) j["table"] = spec.table;
   Json run = Json::object();
   const RunOptions& o = spec.options;
   if (o.integrator) run["integrator"] = *o.integrator;
@@ -379,9 +444,13 @@ std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleR
   Json columns = Json::array();
   columns.push_back({{"name", "sample"}, {"unit", ""}, {"meaning", "the sample's index"}});
   columns.push_back({{"name", "seed"}, {"unit", ""}, {"meaning", "its generator's seed (0: a given sample)"}});
-  for (const EnsembleFactor& f : spec.factors) {
-    columns.push_back(
-        {{"name", f.key}, {"unit", ""}, {"meaning", std::string("the scene key, drawn: ") + factor_kind_name(f.kind)}});
+  for (const std::string& k : results.empty() ? std::vector<std::string>{} : results.front().sample.keys) {
+    std::string meaning = "the scene key's value (TOML text)";
+    for (const EnsembleFactor& f : spec.factors) {
+      if (f.key == k) meaning += std::string(", drawn: ") + factor_kind_name(f.kind);
+    }
+    if (!spec.table.empty()) meaning += ", from the table " + spec.table;
+    columns.push_back({{"name", k}, {"unit", ""}, {"meaning", meaning}});
   }
   for (const Column& c : kColumns) columns.push_back({{"name", c.name}, {"unit", c.unit}, {"meaning", c.meaning}});
   if (spec.final_state) {

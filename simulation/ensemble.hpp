@@ -43,6 +43,7 @@ struct EnsembleSpec {
   std::uint64_t seed = 0;
   bool final_state = false;  // the table also gives each run's final state (columns final.<state>)
   std::vector<EnsembleFactor> factors;
+  std::string table;  // the samples' table, when they were given as one (read_sample_table)
 };
 
 struct EnsembleSample {
@@ -66,6 +67,13 @@ EnsembleSpec read_ensemble_file(const std::string& path);
 // reproducible alone, on any standard library.
 EnsembleSample draw_sample(const EnsembleSpec& spec, long k);
 std::vector<EnsembleSample> draw_samples(const EnsembleSpec& spec);
+
+// Given samples: a CSV table (RFC 4180) whose header names the scene keys
+// ("section.key") and each of whose rows is a sample, its fields the values
+// as TOML text (numbers, true/false, or quoted strings). Sample k is row k
+// (seed 0). ConfigError naming the file and line for a row of another width,
+// an empty field, a header key without a section, or no rows.
+std::vector<EnsembleSample> read_sample_table(const std::string& path);
 
 struct SampleResult {
   EnsembleSample sample;

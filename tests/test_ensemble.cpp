@@ -283,5 +283,41 @@ TEST(EnsembleCli, WritesTheTableReplaysARowAndNeverOverwritesWhatItDidNotWrite) 
   std::filesystem::remove_all(dir);
 }
 
+// A table of given samples: one per row, the header's keys, values as TOML
+// text (a quoted string's quotes CSV-escaped); a row of another width or an
+// empty field names the file and the line. Run, each row's values reach the
+// scene (the two gains give two tracking errors; the same gain twice, the
+// same result bit for bit).
+TEST(EnsembleTable, RowsAreSamplesAndBadRowsNameTheirLine) {
+  const auto t =
+      write_file("t.csv", "amplifier.gain,scene.name\n4.0,\"\"\"a\"\"\"\n3.5,\"\"\"b\"\"\"\n4.0,\"\"\"a\"\"\"\n");
+  const std::vector<EnsembleSample> s = read_sample_table(t.string());
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_EQ(s[1].index, 1);
+  EXPECT_EQ(s[1].keys, (std::vector<std::string>{"amplifier.gain", "scene.name"}));
+  EXPECT_EQ(s[1].values, (std::vector<std::string>{"3.5", "\"b\""}));
+  EnsembleSpec spec = testing::small_ensemble(kScenesDir, 0);
+  spec.factors.clear();
+  const std::vector<SampleResult> r = run_ensemble(spec, s, 2);
+  for (const SampleResult& x : r) ASSERT_TRUE(x.ok) << x.failure;
+  EXPECT_FALSE(testing::same_bits(r[0].figures.max_path_error, r[1].figures.max_path_error));
+  SampleResult again = r[0];
+  again.sample.index = 2;
+  testing::expect_same_result(r[2], again, "the same row again");
+  const auto expect_error = [](const std::string& text, const std::string& part) {
+    const auto p = write_file("bad.csv", text);
+    try {
+      read_sample_table(p.string());
+      ADD_FAILURE() << text;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(p.string() + part), std::string::npos) << e.what();
+    }
+  };
+  expect_error("amplifier.gain,motor.resistance\n4.0,2.0\n4.0\n", ":3: 1 fields; expected 2");
+  expect_error("amplifier.gain\n\n4.0\n,\n", ":4:");
+  expect_error("gain\n4.0\n", ":1: header 'gain'");
+  expect_error("amplifier.gain\n", ": no rows");
+}
+
 }  // namespace
 }  // namespace pumasim
