@@ -44,19 +44,50 @@ asymptotic_fit() finds that range and fits there, or marks the slope:
      for the record, never as an order).
 
 p is the method's theoretical order, the highest for a variable-order one
-("1-5": 5). THEORY holds it per integrator.
+("1-5": 5). THEORY holds it per integrator, from the registry.
 """
+import collections.abc
+import json
 import math
+import subprocess
 
-# Theoretical orders (the registry's summaries state most of them; the
-# CVODE methods are variable-order).
-THEORY = {"euler": "1", "rk4": "4", "ab2": "2", "ab3": "3", "ab4": "4",
-          "cvode-bdf": "1-5", "cvode-adams": "1-12", "arkode-erk": "4", "arkode-dirk": "4",
-          "arkode-imex": "4", "odeint-dopri5": "5", "odeint-rodas4p": "4", "odeint-rosenbrock4": "4",
-          "etd-ab2": "2", "etd-ab3": "3", "etd-ab4": "4", "etd-rk4": "4",
-          # Moreau-Jean: linearly implicit theta-method, first order at theta = 1 and 3/4
-          # (error constant theta - 1/2; integrators/moreau_jean.cpp)
-          "moreau-jean": "1", "moreau-jean-075": "1"}
+
+def theory_of(entry):
+    """The theoretical order of a registry entry (an object of `pumasim integrators --json`): "p",
+    or "1-p" for a variable-order method (CVODE's BDF 1-5 and Adams 1-12 start at order 1)."""
+    p = int(entry["order"])
+    return f"1-{p}" if entry["variable_order"] else str(p)
+
+
+class _Theory(collections.abc.Mapping):
+    """name -> theoretical order (theory_of) of every registry entry, read from `pumasim integrators
+    --json` ($PUMASIM, else the release build's) on first use: the registry is the one list, so a new
+    integrator needs no entry here."""
+
+    def __init__(self):
+        self._table = None
+
+    def _load(self):
+        if self._table is None:
+            from pumasim_exp.io import PUMASIM
+            p = subprocess.run([PUMASIM, "integrators", "--json"], capture_output=True, text=True)
+            if p.returncode != 0:
+                raise SystemExit(f"order_fit: {PUMASIM} integrators --json: exit status {p.returncode}: "
+                                 f"{p.stderr.strip()}")
+            self._table = {e["name"]: theory_of(e) for e in json.loads(p.stdout)}
+        return self._table
+
+    def __getitem__(self, name):
+        return self._load()[name]
+
+    def __iter__(self):
+        return iter(self._load())
+
+    def __len__(self):
+        return len(self._load())
+
+
+THEORY = _Theory()
 
 STEEP = 1.0      # a pair steeper than order + STEEP: the coarser run is past the stability limit
 SETTLED = 0.2    # fixed step: a coarse pair whose next pair's slope is this much closer to p: pre-asymptotic

@@ -92,7 +92,7 @@ std::string fastest_component(OdeSystem& sys, double t, const double* x) {
 }
 
 // Each row's factory, defined in the integrator's own file (the only other
-// file a new integrator touches: scripts/check_extension.sh adds one in a
+// file a new integrator touches: scripts/check_extension.py adds one in a
 // scratch copy of the tree with no other edit).
 namespace detail {
 std::unique_ptr<Integrator> make_euler(const IntegratorOptions&);

@@ -31,7 +31,10 @@ struct IntegratorInfo {
   // Explicit fixed-step methods: is z = h lambda in the (closed) region of
   // absolute stability (y' = lambda y stays bounded)? nullptr: no region here
   // (adaptive, implicit and exponential methods). stability.hpp's
-  // max_stable_step reads it; a test checks it against real_stability.
+  // max_stable_step reads it (scanning |z| up to 4: a region reaching
+  // further reads as no limit); a test checks it against real_stability.
+  // Left out of a row it is nullptr, and the method drops out of the
+  // stiffness diagnosis and the stability test.
   bool (*stable_at)(std::complex<double> z);
   int dense_order;           // order of the dense output (continuous extension) over a step
   int starter_steps;         // multistep methods: steps of the RK4 (etd-ab: ETDRK4) starter after every (re)start (k - 1)

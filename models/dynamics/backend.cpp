@@ -11,8 +11,8 @@
 namespace pumasim {
 
 // Sorted by name: the generated list is, at compile time (built_backends.hpp).
-// A new back-end is one file in models/dynamics/backends/ and its name in
-// models/dynamics/CMakeLists.txt.
+// A new back-end is its entry file in models/dynamics/backends/ (found by
+// the build's glob), with its algorithm beside it.
 std::span<const BackendInfo> backends() {
   static const auto table = [] {
     auto t = detail::make_backend_table();
