@@ -29,6 +29,7 @@
 #include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
 #include "models/robot/dynamics_query.hpp"
+#include "models/robot/strict_toml.hpp"
 #include "models/scene/scene.hpp"
 #include "simulation/driver.hpp"
 #include "simulation/ensemble.hpp"
@@ -158,24 +159,6 @@ Eigen::VectorXd vector_arg(const py::handle& v, const std::string& what) {
                                 std::string(py::str(a.attr("shape"))));
   }
   return a.cast<Eigen::VectorXd>();
-}
-
-// A TOML string: "..." with the escapes TOML knows.
-std::string toml_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\', out += c;
-    } else if (u < 0x20 || u == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", u);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
 }
 
 // A Python value as a TOML value, for a scene override ("section.key=value",

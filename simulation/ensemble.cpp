@@ -58,23 +58,6 @@ double draw(const EnsembleFactor& f, std::mt19937_64& g) {
   return 0;
 }
 
-// A TOML basic string: quoted, its backslashes, quotes and control characters escaped.
-std::string toml_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\', out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 std::vector<std::string> string_array(StrictTable& t, std::string_view key, bool required) {
   const toml::node* node = t.node(key);
   if (!node) {

@@ -53,6 +53,23 @@ std::string Bounds::describe() const {
   return "a finite number";
 }
 
+std::string toml_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\', out += c;
+    } else if (u < 0x20 || u == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(u));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
 toml::table parse_toml_file(const std::string& path) {
   const std::optional<std::string> text = read_input_file(path);
   if (!text) throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable TOML file");

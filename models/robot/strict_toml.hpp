@@ -24,6 +24,10 @@ namespace pumasim {
 
 // Bad user input in a configuration file: ConfigError (core/errors.hpp).
 
+// A TOML basic string of s: quoted, its backslashes, quotes and control
+// characters escaped (what an override's or a sample's text value needs).
+std::string toml_string(const std::string& s);
+
 // Parse a whole file; a syntax error becomes a ConfigError naming file and line.
 toml::table parse_toml_file(const std::string& path);
 
