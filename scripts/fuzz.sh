@@ -46,7 +46,7 @@ while [ $# -gt 0 ]; do
 done
 [ ${#harnesses[@]} -gt 0 ] || harnesses=(robot scene set urdf joint_csv open_loop_csv)
 
-cmake --preset asan >/dev/null
+scripts/configure.sh asan >/dev/null
 cmake --build --preset asan -j "$(nproc)" --target "${harnesses[@]/#/fuzz_}"
 
 out=build/asan/fuzz

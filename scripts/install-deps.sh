@@ -5,6 +5,8 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake git            # toolchain (g++ 12, CMake 3.25)
+  ninja-build                          # the presets' generator
+  ccache                               # compiler cache (build/ccache): the extension check recompiles only its edit
   clang libclang-rt-14-dev llvm-14     # clang 14 with its sanitizer and libFuzzer runtimes (preset asan), llvm-symbolizer for reports
   libeigen3-dev                        # Eigen 3.4
   libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
@@ -18,6 +20,7 @@ PACKAGES=(
   python3 python3-matplotlib python3-sympy   # plots, tables, symbolic generation
   python3-pytest                       # tests of the Python scripts' module (tests/test_pumasim_io.py)
   strace                               # tests/test_input_files.py: every file a run opens is hashed
+  parallel                             # GNU parallel: tests/check_ensemble_shards.sh runs an ensemble's shards under it
   clang-format                         # clang-format 14: the lines a change touches follow .clang-format (scripts/check_format.sh)
   pybind11-dev python3-pybind11 python3-dev  # the Python module `import pumasim` (python/)
   python3-numpy python3-scipy          # its arrays, and its tests against scipy's solve_ivp

@@ -155,7 +155,7 @@ stage_ensembles() {
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }
 # writes: results/cost_breakdown.json results/cost_breakdown.md
 stage_cost() {
-  cmake --preset profile > /dev/null   # the timers (PUMASIM_PROFILE) beside scripts/build.sh's release build
+  scripts/configure.sh profile > /dev/null   # the timers (PUMASIM_PROFILE) beside scripts/build.sh's release build
   cmake --build --preset profile --target pumasim -j "$(nproc)" > /dev/null
   /usr/bin/python3 experiments/cost_breakdown.py --label "${COST_LABEL:-main}" \
     --revision "release and profiled builds of $(git rev-parse --short HEAD)"
@@ -188,7 +188,7 @@ if [ $own -eq 1 ]; then
   exit 0
 fi
 scripts/build.sh > /dev/null   # the dependencies, and the native build (buildspread, cost)
-cmake --preset portable > /dev/null
+scripts/configure.sh portable > /dev/null
 cmake --build --preset portable -j "$(nproc)" > /dev/null
 mkdir -p build/results-bin
 for b in pumasim testset rosenbrock_local_error bench_dynamics; do

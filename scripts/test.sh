@@ -16,10 +16,10 @@ phase() {
 phase scripts/build.sh
 phase ctest --preset release -j "$(nproc)"
 phase /usr/bin/python3 scripts/check_extension.py --jobs "$(nproc)"
-phase cmake --preset asan >/dev/null
+phase scripts/configure.sh asan >/dev/null
 phase cmake --build --preset asan -j "$(nproc)"
 phase ctest --preset asan -j "$(nproc)"
 phase scripts/fuzz.sh --smoke
-phase cmake --preset tsan >/dev/null
+phase scripts/configure.sh tsan >/dev/null
 phase cmake --build --preset tsan -j "$(nproc)"
 phase ctest --preset tsan -j "$(nproc)"
