@@ -529,18 +529,16 @@ void add_run(CLI::App* app, RunArgs& a) {
 struct EnsembleArgs {
   std::string file;
   std::optional<double> threads;
-  std::optional<double> sample;  // one sample alone, by its index
-  std::string table;             // given samples (a CSV table) instead of the file's draws
-  std::string out;               // PATH.csv, with PATH.json beside it ("": the table on stdout)
+  std::optional<double> sample;    // one sample alone, by its index
+  std::string table;               // given samples (a CSV table) instead of the file's draws
+  std::string shard;               // K/N: that share of the samples alone (sweep.py's contract)
+  std::vector<std::string> merge;  // the shards' tables, merged into one
+  std::string out;                 // PATH.csv, with PATH.json beside it ("": the table on stdout)
   bool force = false;
   bool quiet = false;
 };
 
-// PATH.json beside PATH.csv (PATH.csv.json for another name).
-std::filesystem::path sidecar_of(const std::filesystem::path& csv) {
-  std::filesystem::path j = csv;
-  return csv.extension() == ".csv" ? j.replace_extension(".json") : std::filesystem::path(csv.string() + ".json");
-}
+std::filesystem::path sidecar_of(const std::filesystem::path& csv) { return ensemble_sidecar_path(csv); }
 
 // An existing table is replaced only with --force, and only if its sidecar
 // says pumasim ensemble wrote it: never what the program did not write.
@@ -576,11 +574,55 @@ void write_whole(const std::filesystem::path& path, const std::string& text) {
   std::filesystem::rename(tmp, path);
 }
 
-int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
-  EnsembleSpec spec = read_ensemble_file(a.file);
+// pumasim ensemble FILE --merge SHARD.csv...: the shards' tables as the one
+// table a single process writes (merge_ensemble_shards checks that they are
+// every shard of FILE as it is now, each once).
+int merge_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
+  if (a.sample || !a.table.empty() || !a.shard.empty() || a.threads) {
+    throw UsageError("--merge: the shards' tables alone, with --out; not with --sample, --table, --shard or --threads");
+  }
+  for (const std::string& t : a.merge) {
+    if (!a.out.empty() && std::filesystem::weakly_canonical(t) == std::filesystem::weakly_canonical(a.out)) {
+      throw UsageError("--out " + a.out + ": is one of the shards to merge; expected another path");
+    }
+  }
+  const MergedEnsemble m = merge_ensemble_shards(a.merge, a.file);
+  if (a.out.empty()) {
+    out << m.csv;
+    return kExitOk;
+  }
+  check_ensemble_out(a.out, a.force);
+  write_whole(a.out, m.csv);
+  write_whole(sidecar_of(a.out), m.sidecar);
+  if (!a.quiet)
+    err << "results: " << a.out << " (" << sidecar_of(a.out).string() << " describes it), merged from "
+        << a.merge.size() << " shards\n";
+  return kExitOk;
+}
+
+// The samples this process runs (the table's or the file's draws, one
+// with --sample), the ensemble's count of them, and the shard.
+struct ChosenSamples {
   std::vector<EnsembleSample> samples;
+  long total = 0;
+  std::optional<EnsembleShard> shard;
+};
+
+ChosenSamples choose_samples(const EnsembleArgs& a, EnsembleSpec& spec) {
+  ChosenSamples c;
+  if (!a.shard.empty()) {
+    if (a.sample) throw UsageError("--shard " + a.shard + ": not with --sample (one sample is no share)");
+    try {
+      c.shard = parse_shard(a.shard);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(std::string("--") + e.what());
+    }
+  }
+  std::vector<EnsembleSample>& samples = c.samples;
+  c.total = spec.samples;
   if (!a.table.empty()) {
     samples = read_sample_table(a.table);
+    c.total = static_cast<long>(samples.size());
     spec.factors.clear(), spec.table = a.table;  // the table's values, not the file's draws
     if (a.sample) {
       if (*a.sample >= static_cast<double>(samples.size())) {
@@ -598,11 +640,29 @@ int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
   } else {
     samples = draw_samples(spec);
   }
+  return c;
+}
+
+int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
+  if (!a.merge.empty()) return merge_ensemble(a, out, err);
+  EnsembleSpec spec = read_ensemble_file(a.file);
+  ChosenSamples chosen = choose_samples(a, spec);
+  std::vector<EnsembleSample>& samples = chosen.samples;
+  const long total = chosen.total;
+  const std::optional<EnsembleShard>& shard = chosen.shard;
   // The file's own mistakes (a key the scene does not have, a value of the
   // wrong type) stop here, before any run: the first sample's scene loads.
   std::vector<std::string> first = spec.sets;
   for (const std::string& s : samples.front().sets()) first.push_back(s);
-  (void)::pumasim::load_checked_scene(spec.scene, first);
+  const Scene first_scene = ::pumasim::load_checked_scene(spec.scene, first);
+  const EnsembleProvenance provenance = ensemble_provenance(spec, first_scene, total, shard);
+  if (shard) {
+    samples = select_shard(samples, *shard);
+    if (samples.empty()) {
+      throw UsageError("--shard " + a.shard + ": no sample is in it; expected N at most the ensemble's " +
+                       std::to_string(total) + " samples");
+    }
+  }
   if (!a.out.empty()) check_ensemble_out(a.out, a.force);
   const int threads =
       a.threads ? static_cast<int>(*a.threads) : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -634,7 +694,7 @@ int cmd_ensemble(const EnsembleArgs& a, std::ostream& out, std::ostream& err) {
     out << csv;
   } else {
     write_whole(a.out, csv);
-    write_whole(sidecar_of(a.out), ensemble_sidecar(spec, results, threads, wall));
+    write_whole(sidecar_of(a.out), ensemble_sidecar(spec, results, threads, wall, provenance));
     if (!a.quiet) err << "results: " << a.out << " (" << sidecar_of(a.out).string() << " describes it)\n";
   }
   if (!a.quiet) {
@@ -658,6 +718,15 @@ void add_ensemble(CLI::App* app, EnsembleArgs& a) {
       ->type_name("CSV");
   app->add_option("--out", a.out, "the table PATH.csv, with PATH.json describing it (default: the table on stdout)")
       ->type_name("PATH");
+  app->add_option("--shard", a.shard,
+                  "run only the K-th of N shares of the samples (index K-1 modulo N); the shards' tables merge "
+                  "with --merge")
+      ->type_name("K/N");
+  app->add_option("--merge", a.merge,
+                  "merge the tables of every shard of FILE (each with its sidecar) into one, rows in sample order: "
+                  "the table one process writes, every field but wall_time equal")
+      ->type_name("SHARD.csv...")
+      ->expected(1, -1);
   app->add_flag("--force", a.force, "replace PATH if pumasim ensemble wrote it");
   app->add_flag("--quiet,-q", a.quiet, "no progress bar and no summary on stderr");
 }
@@ -942,7 +1011,10 @@ const Command kCommands[] = {
      "generator, seeded from the seed and k: --sample K re-runs it alone with exactly its row. Writes one row "
      "per sample (its values, ok, failure kind, steps, RHS, Jacobians, wall time, path errors, the failure's "
      "reason) as CSV with 17 significant digits, and PATH.json describing every column. A failed run is a row; "
-     "an ensemble file or a first sample the scene reader refuses is bad input (exit status 2).",
+     "an ensemble file or a first sample the scene reader refuses is bad input (exit status 2). --shard K/N runs "
+     "the samples whose index is K-1 modulo N (one job of GNU parallel or a Slurm array each); --merge "
+     "SHARD.csv... joins every shard's table into the one table a single process writes, refusing shards of "
+     "another ensemble, file or build.",
      [](CLI::App* a, Parsed& p) { add_ensemble(a, p.ensemble); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) { return cmd_ensemble(p.ensemble, o, e); }},
     {"help", "prints this text, or a command's options", "",

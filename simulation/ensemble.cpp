@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,7 @@
 #include <mutex>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -376,7 +378,7 @@ std::string ensemble_csv(const std::vector<SampleResult>& results, bool final_st
   out += "\n";
   for (const SampleResult& r : results) {
     out += std::to_string(r.sample.index) + "," + std::to_string(r.sample.seed);
-    for (const std::string& v : r.sample.values) out += "," + csv_field(v);
+    for (const std::string& v : r.sample.values) out.append(",").append(csv_field(v));
     const IntegratorStats& st = r.stats;
     const RunFigures& f = r.figures;
     out += std::string(",") + (r.ok ? "1" : "0") + "," + csv_field(r.failure_kind) + "," + full_precision(r.t_final) +
@@ -386,14 +388,15 @@ std::string ensemble_csv(const std::vector<SampleResult>& results, bool final_st
            full_precision(f.rms_path_error) + "," + full_precision(f.max_path_deviation) + "," +
            full_precision(f.rms_path_deviation) + "," + csv_field(r.failure);
     const bool has = r.ok && f.final_state.size() == names.size();
-    for (std::size_t i = 0; i < names.size(); ++i) out += "," + (has ? full_precision(f.final_state[i]) : "");
+    for (std::size_t i = 0; i < names.size(); ++i)
+      out.append(",").append(has ? full_precision(f.final_state[i]) : std::string());
     out += "\n";
   }
   return out;
 }
 
 std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleResult>& results, int threads,
-                             double wall_time) {
+                             double wall_time, const EnsembleProvenance& provenance) {
   using Json = nlohmann::ordered_json;
   Json j;
   j["written_by"] = "pumasim ensemble";
@@ -415,6 +418,13 @@ std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleR
   j["run"] = run;
   j["seed"] = spec.seed;
   j["samples"] = results.size();
+  j["samples_total"] = provenance.samples_total > 0 ? provenance.samples_total : static_cast<long>(results.size());
+  if (provenance.shard) j["shard"] = provenance.shard->text();
+  Json inputs = Json::array();
+  for (const InputFile& f : provenance.inputs) {
+    inputs.push_back({{"path", f.path}, {"bytes", f.bytes}, {"fnv1a64", hex64(f.fnv1a64)}});
+  }
+  j["inputs"] = inputs;
   Json factors = Json::array();
   for (const EnsembleFactor& f : spec.factors) {
     Json e{{"key", f.key}, {"distribution", factor_kind_name(f.kind)}};
@@ -449,6 +459,239 @@ std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleR
   j["threads"] = threads;
   j["wall_time"] = wall_time;
   return j.dump(2) + "\n";
+}
+
+// ---------------------------------------------------------------- shards
+
+std::string EnsembleShard::text() const { return std::to_string(k) + "/" + std::to_string(n); }
+
+EnsembleShard parse_shard(const std::string& text) {
+  EnsembleShard s;
+  const std::size_t slash = text.find('/');
+  const auto whole = [&](std::size_t from, std::size_t to, long& v) {
+    const char* end = text.data() + to;
+    const auto [p, ec] = std::from_chars(text.data() + from, end, v);
+    return from < to && ec == std::errc() && p == end;
+  };
+  if (slash == std::string::npos || !whole(0, slash, s.k) || !whole(slash + 1, text.size(), s.n) || s.k < 1 ||
+      s.k > s.n) {
+    throw std::invalid_argument("shard '" + text + "': expected K/N, whole numbers with 1 <= K <= N");
+  }
+  return s;
+}
+
+std::vector<EnsembleSample> select_shard(const std::vector<EnsembleSample>& samples, const EnsembleShard& shard) {
+  std::vector<EnsembleSample> out;
+  for (const EnsembleSample& s : samples) {
+    if (s.index % shard.n == shard.k - 1) out.push_back(s);
+  }
+  return out;
+}
+
+std::filesystem::path ensemble_sidecar_path(const std::filesystem::path& csv) {
+  std::filesystem::path j = csv;
+  return csv.extension() == ".csv" ? j.replace_extension(".json") : std::filesystem::path(csv.string() + ".json");
+}
+
+EnsembleProvenance ensemble_provenance(const EnsembleSpec& spec, const Scene& first, long total,
+                                       std::optional<EnsembleShard> shard) {
+  EnsembleProvenance p;
+  p.samples_total = total;
+  p.shard = shard;
+  for (const std::string& f : {spec.file, spec.table}) {
+    if (f.empty()) continue;
+    std::ifstream in(f, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    const std::string b = bytes.str();
+    p.inputs.push_back({std::filesystem::absolute(f).lexically_normal().string(), b.size(), fnv1a64(b)});
+  }
+  for (const InputFile& f : first.inputs) p.inputs.push_back(f);
+  return p;
+}
+
+namespace {
+
+std::string read_whole(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot read " + what);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The records of a CSV text, each with its line break (RFC 4180: a quoted
+// field may hold line breaks; a doubled quote toggles twice).
+std::vector<std::string> csv_records(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  bool quoted = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '"') {
+      quoted = !quoted;
+    } else if (text[i] == '\n' && !quoted) {
+      out.push_back(text.substr(start, i + 1 - start));
+      start = i + 1;
+    }
+  }
+  if (start < text.size()) out.push_back(text.substr(start));
+  return out;
+}
+
+using OrderedJson = nlohmann::ordered_json;
+
+// One shard's table and sidecar, as read.
+struct ShardTable {
+  std::string path, side;
+  OrderedJson meta;    // its sidecar
+  OrderedJson common;  // the sidecar without what differs between shards
+  EnsembleShard shard;
+  std::vector<std::string> records;  // the header, then a row per sample
+};
+
+ShardTable read_shard(const std::string& path) {
+  // What differs between the shards of one ensemble; everything else in the
+  // sidecars (the build, the spec, the columns, the input files) must agree.
+  static const char* const kPerShard[] = {"shard", "samples", "failed", "threads", "wall_time"};
+  ShardTable t;
+  t.path = path;
+  t.side = ensemble_sidecar_path(path).string();
+  t.records = csv_records(read_whole(path, "the shard's table"));
+  t.meta = OrderedJson::parse(read_whole(t.side, "the table's sidecar"), nullptr, false);
+  if (!t.meta.is_object() || !t.meta.contains("written_by") || t.meta["written_by"] != "pumasim ensemble") {
+    throw ConfigError(t.side + ": not a sidecar that pumasim ensemble wrote; expected the JSON beside a shard's table");
+  }
+  if (!t.meta.contains("shard") || !t.meta["shard"].is_string()) {
+    throw ConfigError(t.side + ": shard: missing; expected the table of one shard (pumasim ensemble --shard K/N)");
+  }
+  try {
+    t.shard = parse_shard(t.meta["shard"].get<std::string>());
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(t.side + ": " + e.what());
+  }
+  if (t.records.empty()) throw ConfigError(path + ": empty; expected a header and a row per sample");
+  t.common = t.meta;
+  for (const char* key : kPerShard) t.common.erase(key);
+  return t;
+}
+
+// The first key in which two sidecars differ.
+std::string first_difference(const OrderedJson& a, const OrderedJson& b) {
+  for (const auto& [k, v] : a.items()) {
+    if (!b.contains(k) || b[k] != v) return k;
+  }
+  for (const auto& [k, v] : b.items()) {
+    if (!a.contains(k)) return k;
+  }
+  return "?";
+}
+
+// t belongs with the first shard: the same ensemble, build, columns and count of shards.
+void check_same_ensemble(const ShardTable& t, const ShardTable& first) {
+  if (t.shard.n != first.shard.n) {
+    throw ConfigError(t.side + ": shard " + t.shard.text() + ": expected one of " + std::to_string(first.shard.n) +
+                      " shards, as " + first.side + " says");
+  }
+  if (t.common != first.common) {
+    throw ConfigError(t.side + ": " + first_difference(first.common, t.common) + " differs from " + first.side +
+                      "'s: expected shards of one ensemble, run by one build");
+  }
+  if (t.records.front() != first.records.front()) {
+    throw ConfigError(t.path + ": its header differs from " + first.path + "'s: expected the same columns");
+  }
+}
+
+// The ensemble file as it is now is the one the shards read (by content).
+void check_ensemble_file(const std::string& file, const ShardTable& first) {
+  const std::string now = read_whole(file, "the ensemble file");
+  const std::string abs = std::filesystem::absolute(file).lexically_normal().string();
+  bool same = false;
+  for (const OrderedJson& f : first.common.value("inputs", OrderedJson::array())) {
+    if (f.value("path", "") == abs) same = f.value("fnv1a64", "") == hex64(fnv1a64(now));
+  }
+  if (!same) {
+    throw ConfigError(file + ": not the file the shards were run from, or changed since (" + first.side +
+                      "'s inputs); expected the ensemble file as the shards read it");
+  }
+}
+
+// The rows of every shard, in sample order, checked to hold each sample once.
+std::vector<std::pair<long, const std::string*>> merged_rows(const std::vector<ShardTable>& shards) {
+  std::vector<std::pair<long, const std::string*>> rows;
+  for (const ShardTable& t : shards) {
+    for (std::size_t r = 1; r < t.records.size(); ++r) {
+      long index = -1;
+      const std::string& rec = t.records[r];
+      const auto [p, ec] = std::from_chars(rec.data(), rec.data() + rec.size(), index);
+      if (ec != std::errc() || p == rec.data() + rec.size() || *p != ',' || index < 0 ||
+          index % t.shard.n != t.shard.k - 1) {
+        throw ConfigError(t.path + ":" + std::to_string(r + 1) + ": sample: expected the index of one of shard " +
+                          t.shard.text() + "'s samples");
+      }
+      rows.emplace_back(index, &rec);
+    }
+  }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].first != static_cast<long>(i)) {
+      throw ConfigError("merge: sample " + std::to_string(i) +
+                        (rows[i].first > static_cast<long>(i) ? " is missing" : " appears twice") +
+                        "; expected every sample of the ensemble once");
+    }
+  }
+  const long total = shards.front().common.value("samples_total", 0L);
+  if (static_cast<long>(rows.size()) != total) {
+    throw ConfigError("merge: " + std::to_string(rows.size()) + " samples; expected " + std::to_string(total) +
+                      " (samples_total in " + shards.front().side + ")");
+  }
+  return rows;
+}
+
+}  // namespace
+
+MergedEnsemble merge_ensemble_shards(const std::vector<std::string>& tables, const std::string& ensemble_file) {
+  if (tables.empty()) throw ConfigError("merge: no shard tables; expected the tables of the shards 1/N to N/N");
+  std::vector<ShardTable> shards;
+  std::vector<std::string> by_k;
+  for (const std::string& path : tables) {
+    shards.push_back(read_shard(path));
+    const ShardTable& t = shards.back();
+    if (shards.size() == 1) by_k.resize(static_cast<std::size_t>(t.shard.n));
+    check_same_ensemble(t, shards.front());
+    std::string& seen = by_k[static_cast<std::size_t>(t.shard.k - 1)];
+    if (!seen.empty()) throw ConfigError(path + ": shard " + t.shard.text() + " is given twice (also " + seen + ")");
+    seen = path;
+  }
+  std::string missing;
+  for (std::size_t k = 0; k < by_k.size(); ++k) {
+    if (by_k[k].empty()) {
+      missing += (missing.empty() ? "" : ", ") + EnsembleShard{static_cast<long>(k) + 1, shards.front().shard.n}.text();
+    }
+  }
+  if (!missing.empty()) {
+    throw ConfigError("merge: shards missing: " + missing + "; expected every shard of " + std::to_string(by_k.size()));
+  }
+  if (!ensemble_file.empty()) check_ensemble_file(ensemble_file, shards.front());
+  MergedEnsemble m;
+  m.csv = shards.front().records.front();
+  for (const auto& [i, rec] : merged_rows(shards)) m.csv += *rec;
+  OrderedJson side = shards.front().common, from = OrderedJson::array();
+  long failed = 0;
+  double wall = 0;
+  for (const ShardTable& t : shards) {
+    failed += t.meta.value("failed", 0L);
+    wall += t.meta.value("wall_time", 0.0);
+    from.push_back({{"table", t.path},
+                    {"shard", t.shard.text()},
+                    {"threads", t.meta.value("threads", 0)},
+                    {"wall_time", t.meta.value("wall_time", 0.0)}});
+  }
+  side["samples"] = side.value("samples_total", 0L);
+  side["failed"] = failed;
+  side["wall_time"] = wall;
+  side["merged_from"] = from;
+  m.sidecar = side.dump(2) + "\n";
+  return m;
 }
 
 }  // namespace pumasim

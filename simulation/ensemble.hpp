@@ -13,11 +13,14 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "integrators/integrator.hpp"
+#include "models/robot/input_files.hpp"
 #include "simulation/run.hpp"
 
 namespace pumasim {
@@ -104,9 +107,58 @@ std::vector<SampleResult> run_ensemble(const EnsembleSpec& spec, const std::vect
 // final_state, a column final.<state> per state (empty in a failed row).
 std::string ensemble_csv(const std::vector<SampleResult>& results, bool final_state = false);
 
+// A share of an ensemble's samples, sweep.py's --shard contract: "K/N"
+// (1 <= K <= N) takes the samples whose index is K-1 modulo N. Shards of one
+// ensemble, each run anywhere (GNU parallel, a Slurm job array), merge into
+// the table one process writes (merge_ensemble_shards): every field equal,
+// byte for byte, but wall_time (the integration's own clock time).
+struct EnsembleShard {
+  long k = 1, n = 1;
+  std::string text() const;  // "K/N"
+};
+
+// "K/N" as a shard; std::invalid_argument for anything else, or K outside 1..N.
+EnsembleShard parse_shard(const std::string& text);
+
+// The samples of the shard, in their order.
+std::vector<EnsembleSample> select_shard(const std::vector<EnsembleSample>& samples, const EnsembleShard& shard);
+
+// What a sidecar records beside the spec: how many samples the ensemble has
+// (a shard's table holds fewer), the shard, and the files the ensemble read
+// (the ensemble file, the table, the first sample's scene with its robot and
+// side files), by content: shards merge only when these agree.
+struct EnsembleProvenance {
+  long samples_total = 0;  // 0: the results' count
+  std::optional<EnsembleShard> shard;
+  std::vector<InputFile> inputs;
+};
+
+// PATH.json beside PATH.csv (PATH.csv.json for another name): a table's sidecar.
+std::filesystem::path ensemble_sidecar_path(const std::filesystem::path& csv);
+
+// The shard tables of one ensemble (each PATH.csv with its sidecar) as one
+// table, rows in sample order, and its sidecar (the shards' common record,
+// with each shard's threads and wall time). ConfigError naming the file when
+// a table or its sidecar is missing or not pumasim ensemble's, is not a
+// shard, belongs to another ensemble (any recorded field or input file
+// differs, the file `ensemble_file` as it is now included, when given), when
+// a shard is missing or given twice, or when the rows do not hold every
+// sample exactly once.
+struct MergedEnsemble {
+  std::string csv, sidecar;
+};
+MergedEnsemble merge_ensemble_shards(const std::vector<std::string>& tables, const std::string& ensemble_file = "");
+
 // The JSON sidecar: what wrote the table, the spec (scene, options, seed,
-// factors), every column's meaning and unit, the counts and the wall time.
+// factors), the provenance (the ensemble's sample count, the shard, the
+// files read), every column's meaning and unit, the counts and the wall time.
 std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleResult>& results, int threads,
-                             double wall_time);
+                             double wall_time, const EnsembleProvenance& provenance = {});
+
+// The provenance of an ensemble of `total` samples (run as `shard`, if set):
+// the ensemble file and the table (spec.file, spec.table) by their bytes,
+// then the files the first sample's scene read (first.inputs).
+EnsembleProvenance ensemble_provenance(const EnsembleSpec& spec, const Scene& first, long total,
+                                       std::optional<EnsembleShard> shard = std::nullopt);
 
 }  // namespace pumasim

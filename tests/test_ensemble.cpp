@@ -5,6 +5,8 @@
 // same ensemble on 1, 2 and 8 threads: tests/test_threads.cpp.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -317,6 +319,106 @@ TEST(EnsembleTable, RowsAreSamplesAndBadRowsNameTheirLine) {
   expect_error("amplifier.gain\n\n4.0\n,\n", ":4:");
   expect_error("gain\n4.0\n", ":1: header 'gain'");
   expect_error("amplifier.gain\n", ": no rows");
+}
+
+// Shards (sweep.py's --shard K/N contract): K-1 modulo N, the shares
+// disjoint and together every sample; their tables merged equal the one
+// table a single process writes, every field but wall_time (the
+// integration's own clock time) byte for byte; a missing, repeated or
+// foreign shard is refused, naming the file. A small ensemble for them: 7
+// samples of the viscous scene.
+void write_shard_ensemble(const std::filesystem::path& file, long seed) {
+  std::ofstream(file) << "scene = \"" << kScenesDir << "/paper_slow_viscous.toml\"\nsamples = 7\nseed = " << seed
+                      << "\n[run]\nintegrator = \"cvode-bdf\"\nt_end = 0.03\n[[vary]]\nkey = \"amplifier.gain\"\n"
+                      << "distribution = \"uniform\"\nlow = 3.5\nhigh = 4.5\n";
+}
+
+TEST(EnsembleShards, AreKMinusOneModuloNDisjointAndTogetherEverySample) {
+  EXPECT_EQ(parse_shard("2/3").k, 2);
+  EXPECT_EQ(parse_shard("2/3").n, 3);
+  for (const char* bad : {"0/3", "4/3", "3", "1/0", "a/b", "1/3x", "-1/3", ""}) {
+    EXPECT_THROW(parse_shard(bad), std::invalid_argument) << bad;
+  }
+  const auto file = std::filesystem::temp_directory_path() / "pumasim_test_shard_partition.toml";
+  write_shard_ensemble(file, 4);
+  const std::vector<EnsembleSample> all = draw_samples(read_ensemble_file(file.string()));
+  std::vector<long> seen;
+  for (long k = 1; k <= 3; ++k) {
+    for (const EnsembleSample& s : select_shard(all, {k, 3})) {
+      EXPECT_EQ(s.index % 3, k - 1);
+      seen.push_back(s.index);
+    }
+  }
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, (std::vector<long>{0, 1, 2, 3, 4, 5, 6}));
+  std::filesystem::remove(file);
+}
+
+TEST(EnsembleShards, MergeIntoTheSingleProcessTableAndRefuseForeignOrMissingShards) {
+  const auto dir = std::filesystem::temp_directory_path() / "pumasim_test_ensemble_shards";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "e.toml";
+  const auto write_file = [&](long seed) { write_shard_ensemble(file, seed); };
+  write_file(4);
+  const std::string whole = (dir / "whole.csv").string();
+  ASSERT_EQ(testing::cli({"ensemble", file.string(), "--out", whole, "--threads", "1", "-q"}).status, 0);
+  std::vector<std::string> shards;
+  for (int k : {3, 1, 2}) {  // in any order
+    shards.push_back((dir / ("s" + std::to_string(k) + ".csv")).string());
+    const auto r = testing::cli({"ensemble", file.string(), "--shard", std::to_string(k) + "/3", "--out", shards.back(),
+                                 "--threads", "2", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+  }
+  const std::string merged = (dir / "merged.csv").string();
+  std::vector<std::string> args = {"ensemble", file.string(), "--merge"};
+  args.insert(args.end(), shards.begin(), shards.end());
+  args.insert(args.end(), {"--out", merged, "-q"});
+  const auto m = testing::cli(args);
+  ASSERT_EQ(m.status, 0) << m.err;
+  // Every field but wall_time equal, byte for byte (no field here is quoted).
+  const auto masked = [](const std::string& path) {
+    std::ifstream in(path);
+    std::vector<std::vector<std::string>> rows;
+    for (std::string l; std::getline(in, l);) {
+      std::vector<std::string> f;
+      std::stringstream ss(l);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      if (!l.empty() && l.back() == ',') f.emplace_back();
+      rows.push_back(f);
+    }
+    if (rows.empty()) return rows;
+    const auto wall = std::find(rows[0].begin(), rows[0].end(), "wall_time") - rows[0].begin();
+    for (std::size_t r = 1; r < rows.size(); ++r) rows[r].at(static_cast<std::size_t>(wall)) = "";
+    return rows;
+  };
+  const auto a = masked(whole), b = masked(merged);
+  ASSERT_EQ(a.size(), 8u);
+  EXPECT_EQ(a, b);
+  const nlohmann::json side = nlohmann::json::parse(std::ifstream(dir / "merged.json"));
+  EXPECT_EQ(side["samples"], 7);
+  EXPECT_EQ(side["merged_from"].size(), 3u);
+
+  // Refused: a shard missing, one given twice, the output one of the shards.
+  const auto refuse = [&](std::vector<std::string> tables, const std::string& what) {
+    std::vector<std::string> a2 = {"ensemble", file.string(), "--merge"};
+    a2.insert(a2.end(), tables.begin(), tables.end());
+    const auto r = testing::cli(a2);
+    EXPECT_EQ(r.status, 2) << what;
+    EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+  };
+  refuse({shards[0], shards[1]}, "shards missing: 2/3");
+  refuse({shards[0], shards[1], shards[2], shards[1]}, "given twice");
+  // A shard of another ensemble: the file run again with another seed.
+  write_file(5);
+  const std::string other = (dir / "other.csv").string();
+  ASSERT_EQ(testing::cli({"ensemble", file.string(), "--shard", "2/3", "--out", other, "-q"}).status, 0);
+  refuse({shards[0], other, shards[2]}, "differs from");
+  // The ensemble file changed since the shards ran: refused, naming it.
+  refuse({shards[0], shards[1], shards[2]}, "not the file the shards were run from");
+  EXPECT_EQ(testing::cli({"ensemble", file.string(), "--shard", "8/7", "-q"}).status, 2);
+  EXPECT_EQ(testing::cli({"ensemble", file.string(), "--shard", "8/8", "-q"}).status, 2);  // no sample: 7 of them
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
