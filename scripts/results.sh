@@ -41,6 +41,9 @@
 #               results/cost_breakdown.json, the other labels kept.
 #   ci          only when named: CI's wall time on a fresh clone (scripts/measure_ci.sh;
 #               as long as CI, on a committed tree with nothing else running).
+#   slurm       only when named: an ensemble as a job array on a one-node Slurm on localhost
+#               (scripts/slurm_one_node.sh: as root, it installs slurm-wlm and munge when missing and
+#               writes /etc/slurm/slurm.conf when absent; the release build's binary).
 #
 # What each stage writes is the `# writes:` line above its function (a path
 # ending in '/' is the folder and everything in it; {folder} and {name} stand
@@ -63,7 +66,7 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
      partitioned filippov panda bench ensembles report)
-named_only=(fuzz cost ci)
+named_only=(fuzz cost ci slurm)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
 while [ $# -gt 0 ]; do
@@ -162,6 +165,8 @@ stage_cost() {
 }
 # writes: results/reliability/ci_phases.txt
 stage_ci() { scripts/measure_ci.sh; }
+# writes: results/ensembles/slurm_one_node.log
+stage_slurm() { scripts/slurm_one_node.sh; }
 # writes: results/README.md results/report_run.json
 stage_report() {
   if [ $full -eq 1 ]; then
