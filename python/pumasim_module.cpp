@@ -347,7 +347,9 @@ py::dict dynamics(const py::object& robot, const py::object& backend, const py::
 class PyScene {
  public:
   PyScene(const std::string& path, const std::vector<std::string>& overrides, const std::vector<std::string>& unset)
-      : scene_(load_checked_scene(path, overrides, unset)),
+      : PyScene(load_checked_scene(path, overrides, unset)) {}
+  explicit PyScene(Scene scene)
+      : scene_(std::move(scene)),
         discrete_(discrete_state(scene_)),
         plant_(std::make_unique<Plant>(scene_.plant)),
         system_(std::make_unique<PlantSystem>(*plant_)) {
@@ -773,6 +775,42 @@ void bind_dynamics(py::module_& m) {
         "numbers or a pose name of the robot file; qd: default 0.");
 }
 
+// A Scene pickles as its resolved content (resolved_toml: every key, the
+// overrides applied), not as its file's path: unpickled after the scene file
+// changed, it is still the scene pickled. The other files it read (the robot
+// file, an input CSV) are read again; one that changed since is refused
+// (ValueError naming it), as the unpickled scene would not be the pickled one.
+py::tuple scene_state(const PyScene& s) {
+  py::list inputs;
+  for (const InputFile& f : s.scene().inputs) inputs.append(py::make_tuple(f.path, hex64(f.fnv1a64), f.bytes));
+  return py::make_tuple("pumasim.Scene", 1, resolved_toml(s.scene()), s.scene().file, inputs);
+}
+
+std::unique_ptr<PyScene> scene_from_state(const py::tuple& st) {
+  if (st.size() != 5 || !py::isinstance<py::str>(st[0]) || st[0].cast<std::string>() != "pumasim.Scene" ||
+      st[1].cast<int>() != 1) {
+    throw py::value_error("pumasim.Scene: expected the state a pumasim.Scene pickles (version 1)");
+  }
+  Scene sc = load_checked_scene_text(st[2].cast<std::string>(), st[3].cast<std::string>());
+  std::vector<InputFile> then;
+  for (const py::handle& h : st[4].cast<py::list>()) {
+    const auto [path, hash, bytes] = h.cast<std::tuple<std::string, std::string, std::size_t>>();
+    then.push_back({path, bytes, std::stoull(hash, nullptr, 16)});
+  }
+  for (const InputFile& now : sc.inputs) {
+    const auto was = std::find_if(then.begin(), then.end(), [&](const InputFile& f) { return f.path == now.path; });
+    if (was != then.end() && was->fnv1a64 == now.fnv1a64 && was->bytes == now.bytes) continue;
+    throw py::value_error("pumasim.Scene: the pickled scene read " + now.path + ", which has changed since (" +
+                          (was == then.end()
+                               ? std::string("not read then")
+                               : "fnv1a64 " + hex64(was->fnv1a64) + ", " + std::to_string(was->bytes) + " bytes then") +
+                          "; fnv1a64 " + hex64(now.fnv1a64) + ", " + std::to_string(now.bytes) +
+                          " bytes now): unpickled, it would not be the scene pickled");
+  }
+  sc.inputs = std::move(then);  // the scene file too, as it was read: the content the resolved text came from
+  return std::make_unique<PyScene>(std::move(sc));
+}
+
 // Scene: a scene file's plant as f(t, x) and its Jacobian.
 void bind_scene(py::module_& m) {
   py::class_<PyScene>(m, "Scene",
@@ -792,7 +830,8 @@ void bind_scene(py::module_& m) {
           "keys removed from the file first, as --unset.")
       .def_property_readonly("name", [](const PyScene& s) { return s.scene().name; })
       .def_property_readonly("file", [](const PyScene& s) { return s.scene().file; })
-      .def_property_readonly("size", [](const PyScene& s) { return s.plant().size(); }, "The state's length.")
+      .def_property_readonly(
+          "size", [](const PyScene& s) { return s.plant().size(); }, "The state's length.")
       .def_property_readonly("state_names", [](const PyScene& s) { return s.plant().layout().names; })
       .def_property_readonly(
           "tolerance_scales",
@@ -802,8 +841,10 @@ void bind_scene(py::module_& m) {
             return v;
           },
           "Each state's typical magnitude: the integrators' absolute tolerance is atol times it.")
-      .def_property_readonly("duration", [](const PyScene& s) { return s.scene().duration; }, "[s]")
-      .def_property_readonly("output_interval", [](const PyScene& s) { return s.scene().output_interval; }, "[s]")
+      .def_property_readonly(
+          "duration", [](const PyScene& s) { return s.scene().duration; }, "[s]")
+      .def_property_readonly(
+          "output_interval", [](const PyScene& s) { return s.scene().output_interval; }, "[s]")
       .def_property_readonly("integrator", [](const PyScene& s) { return s.scene().integrator.name; })
       .def_property_readonly("backend", [](const PyScene& s) { return s.scene().plant.backend; })
       .def_property_readonly(
@@ -817,8 +858,10 @@ void bind_scene(py::module_& m) {
       .def("rhs", &PyScene::rhs, py::arg("t"), py::arg("x"), "f(t, x), the plant's right-hand side.")
       .def("jacobian", &PyScene::jacobian, py::arg("t"), py::arg("x"), py::arg("exact") = true,
            "df/dx at (t, x): exact (dual numbers through the plant), or the integrators' forward differences.")
-      .def("resolved_toml", [](const PyScene& s) { return resolved_toml(s.scene()); },
-           "The scene with every default filled in (what scene.resolved.toml holds).")
+      .def(
+          "resolved_toml", [](const PyScene& s) { return resolved_toml(s.scene()); },
+          "The scene with every default filled in (what scene.resolved.toml holds).")
+      .def(py::pickle(&scene_state, &scene_from_state))
       .def("__repr__", [](const PyScene& s) {
         return "<pumasim.Scene " + s.scene().name + " (" + s.scene().file + "): " + std::to_string(s.plant().size()) +
                " states>";
@@ -839,6 +882,23 @@ void bind_run(py::module_& m) {
       .def_readonly("ok", &PyRun::ok, "False when the run failed (stats['failure'] says why).")
       .def_readonly("failure", &PyRun::failure)
       .def_readonly("out", &PyRun::out, "The run folder written, or None.")
+      .def(py::pickle(
+          [](const PyRun& r) {  // its values (the arrays pickle as numpy's)
+            return py::make_tuple("pumasim.Run", 1, r.t, r.x, r.state_names, r.stats, r.path_error_mm,
+                                  r.path_deviation_mm, r.out, r.ok, r.failure);
+          },
+          [](const py::tuple& st) {
+            if (st.size() != 11 || !py::isinstance<py::str>(st[0]) || st[0].cast<std::string>() != "pumasim.Run" ||
+                st[1].cast<int>() != 1) {
+              throw py::value_error("pumasim.Run: expected the state a pumasim.Run pickles (version 1)");
+            }
+            PyRun r;
+            r.t = st[2], r.x = st[3], r.state_names = st[4], r.stats = st[5];
+            r.path_error_mm = st[6], r.path_deviation_mm = st[7], r.out = st[8];
+            r.ok = st[9].cast<bool>();
+            r.failure = st[10].cast<std::string>();
+            return r;
+          }))
       .def("__repr__", [](const PyRun& r) {
         return "<pumasim.Run " + std::string(py::str(r.stats["scene"])) + " with " +
                std::string(py::str(r.stats["integrator"])) + (r.ok ? ": ok" : ": failed") + ">";

@@ -117,11 +117,7 @@ IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adapt
   return io;
 }
 
-}  // namespace
-
-Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides,
-                         const std::vector<std::string>& unsets) {
-  Scene sc = load_scene(file, overrides, unsets);
+Scene with_known_integrator(Scene sc) {
   try {
     find_integrator(sc.integrator.name);
   } catch (const std::invalid_argument&) {
@@ -129,6 +125,17 @@ Scene load_checked_scene(const std::string& file, const std::vector<std::string>
                       sc.integrator.name + "\"");
   }
   return sc;
+}
+
+}  // namespace
+
+Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides,
+                         const std::vector<std::string>& unsets) {
+  return with_known_integrator(load_scene(file, overrides, unsets));
+}
+
+Scene load_checked_scene_text(const std::string& text, const std::string& file) {
+  return with_known_integrator(load_scene_text(text, file));
 }
 
 RunPlan plan_run(Scene sc, const RunOptions& a) {

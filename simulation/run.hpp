@@ -97,6 +97,8 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks = {});
 // and run() load).
 Scene load_checked_scene(const std::string& file, const std::vector<std::string>& overrides,
                          const std::vector<std::string>& unsets = {});
+// The same from a scene's text (load_scene_text), as if read from `file`.
+Scene load_checked_scene_text(const std::string& text, const std::string& file);
 
 // The options applied to the scene (taken as a copy: the plan's scene is
 // the record of what is run) with their checks. An option the method cannot

@@ -258,7 +258,9 @@ TEST(EnsembleCli, WritesTheTableReplaysARowAndNeverOverwritesWhatItDidNotWrite) 
   const auto wall = std::find(names.begin(), names.end(), "wall_time") - names.begin();
   ASSERT_GT(wall, 0);
   for (std::size_t i = 0; i < a.size(); ++i) {
-    if (static_cast<long>(i) != wall) EXPECT_EQ(a[i], b[i]) << "column " << i;
+    if (static_cast<long>(i) != wall) {
+      EXPECT_EQ(a[i], b[i]) << "column " << i;
+    }
   }
   // Replaced only with --force.
   EXPECT_EQ(testing::cli({"ensemble", file.string(), "--out", csv, "-q"}).status, 2);

@@ -425,3 +425,57 @@ def test_ensemble_is_the_command_lines_table_and_replays_a_sample(tmp_path):
         pumasim.ensemble(spec, sample=6)
     with pytest.raises(TypeError, match="samples"):
         pumasim.ensemble(spec, samples={"motor.resistance": 2.0})
+
+
+# ---------------------------------------------------------------- pickling
+
+def _same_runs(a, b):
+    """Two runs' values equal bit for bit, but for the wall times."""
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(a.x, b.x)
+    np.testing.assert_array_equal(a.path_error_mm, b.path_error_mm)
+    timing = {"integration_wall_time_s", "wall_time_s"}
+    assert {k: v for k, v in a.stats.items() if k not in timing} == \
+        {k: v for k, v in b.stats.items() if k not in timing}
+
+
+def test_a_pickled_scene_is_its_resolved_content_not_its_path(tmp_path):
+    # Issue 35: a Scene pickles as what it resolved to (its overrides applied), so unpickled after its
+    # file changed it still runs as the scene pickled; the changed file itself runs differently (else
+    # the test could not fail).
+    import pickle
+    path = tmp_path / "s.toml"
+    path.write_text(open(DRIVEN).read())
+    scene = pumasim.Scene.load(path, overrides={"amplifier.gain": 3.8})
+    blob = pickle.dumps(scene)
+    before = pumasim.run(scene, integrator="cvode-bdf", rtol=1e-6, t_end=0.5)
+    path.write_text(open(DRIVEN).read().replace("resistance = 2.0", "resistance = 3.1", 1))
+    again = pickle.loads(blob)
+    assert again.resolved_toml() == scene.resolved_toml()
+    assert (again.name, again.file, again.state_names) == (scene.name, scene.file, scene.state_names)
+    _same_runs(before, pumasim.run(again, integrator="cvode-bdf", rtol=1e-6, t_end=0.5))
+    changed = pumasim.run(pumasim.Scene.load(path, overrides={"amplifier.gain": 3.8}), integrator="cvode-bdf",
+                          rtol=1e-6, t_end=0.5)
+    assert not np.array_equal(changed.x, before.x)
+
+
+def test_an_unpickled_scene_refuses_a_robot_file_changed_since(tmp_path):
+    # The robot file is read again on unpickling; changed, the scene would not be the one pickled.
+    import pickle
+    robot = tmp_path / "arm.toml"
+    robot.write_text(open(os.path.join(ROOT, "models", "robots", "puma560.toml")).read())
+    scene = pumasim.Scene.load(DRIVEN, overrides={"scene.robot": str(robot)})
+    blob = pickle.dumps(scene)
+    assert pickle.loads(blob).resolved_toml() == scene.resolved_toml()
+    robot.write_text(robot.read_text() + "\n# edited\n")
+    with pytest.raises(ValueError, match=re.escape(str(robot)) + ".*changed since"):
+        pickle.loads(blob)
+
+
+def test_a_run_pickles_with_its_values(tmp_path):
+    import pickle
+    run = pumasim.run(pumasim.Scene.load(DRIVEN), integrator="cvode-bdf", rtol=1e-6, t_end=0.2)
+    back = pickle.loads(pickle.dumps(run))
+    _same_runs(run, back)
+    np.testing.assert_array_equal(run.path_deviation_mm, back.path_deviation_mm)
+    assert (back.state_names, back.ok, back.failure, back.out) == (run.state_names, run.ok, run.failure, run.out)

@@ -181,6 +181,11 @@ void expect_round_trip(const std::string& scene, const std::vector<std::string>&
   fs::remove(path);
   EXPECT_EQ(body(text), body(resolved_toml(b))) << what;
   expect_same_scene(a, b, what);
+  // The same text read with no file (load_scene_text, what an unpickled
+  // pumasim.Scene loads), as if at the scene's own path.
+  const Scene c = load_scene_text(text, scene);
+  EXPECT_EQ(body(text), body(resolved_toml(c))) << what << " (from its text)";
+  expect_same_scene(a, c, what + " (from its text)");
 }
 
 TEST(SceneRoundTrip, EveryShippedScene) {

@@ -73,16 +73,20 @@ std::string toml_string(const std::string& s) {
 toml::table parse_toml_file(const std::string& path) {
   const std::optional<std::string> text = read_input_file(path);
   if (!text) throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable TOML file");
+  return parse_toml_text(*text, path);
+}
+
+toml::table parse_toml_text(const std::string& text, const std::string& origin) {
   // What toml++ 3.3 would mishandle is refused first (models/robot/toml_guard.hpp);
   // the guard and the parser read the same bytes.
-  if (const auto hazard = find_toml_hazard(*text)) {
-    throw ConfigError(path + ":" + std::to_string(hazard->line) + ": TOML syntax error: expected " +
+  if (const auto hazard = find_toml_hazard(text)) {
+    throw ConfigError(origin + ":" + std::to_string(hazard->line) + ": TOML syntax error: expected " +
                       hazard->expected + ", got " + hazard->got);
   }
   try {
-    return toml::parse(*text, path);
+    return toml::parse(text, origin);
   } catch (const toml::parse_error& e) {
-    throw ConfigError(path + ":" + line_of(e.source()) + ": TOML syntax error: " + std::string(e.description()));
+    throw ConfigError(origin + ":" + line_of(e.source()) + ": TOML syntax error: " + std::string(e.description()));
   }
 }
 

@@ -30,6 +30,9 @@ std::string toml_string(const std::string& s);
 
 // Parse a whole file; a syntax error becomes a ConfigError naming file and line.
 toml::table parse_toml_file(const std::string& path);
+// Parse TOML text; origin names it in messages (file:line) and in the
+// table's source regions.
+toml::table parse_toml_text(const std::string& text, const std::string& origin);
 
 // Command-line overrides "section.key=value" (value in TOML syntax) merged
 // into a parsed document before it is checked; a bad value is reported as

@@ -987,12 +987,11 @@ void check_start_inertia(StrictTable& root, const Scene& sc) {
 
 }  // namespace
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
-                 const std::vector<std::string>& unsets) {
-  const InputRecord record;  // every file read from here on
-  toml::table doc = parse_toml_file(path);
-  remove_keys(doc, unsets, path);
-  apply_overrides(doc, overrides);
+namespace {
+
+// The scene in `doc` (from `path`), read and checked: load_scene's and
+// load_scene_text's work once the document is parsed.
+Scene read_scene_document(toml::table& doc, const std::string& path, const InputRecord& record) {
   StrictTable root(doc, path, "");
   // The scene's sections, checked first (every key inside them is checked as
   // it is read, and root.finish() below rejects what no reader asked for).
@@ -1029,6 +1028,23 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   }
   sc.inputs = record.files();
   return sc;
+}
+
+}  // namespace
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 const std::vector<std::string>& unsets) {
+  const InputRecord record;  // every file read from here on
+  toml::table doc = parse_toml_file(path);
+  remove_keys(doc, unsets, path);
+  apply_overrides(doc, overrides);
+  return read_scene_document(doc, path, record);
+}
+
+Scene load_scene_text(const std::string& text, const std::string& path) {
+  const InputRecord record;  // every file read from here on (the robot's, an input CSV's: not the scene's)
+  toml::table doc = parse_toml_text(text, path);
+  return read_scene_document(doc, path, record);
 }
 
 PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r) {

@@ -115,6 +115,12 @@ PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSe
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
                  const std::vector<std::string>& unsets = {});
 
+// The scene in `text` (a scene file's TOML, such as resolved_toml's), as if
+// read from `path`: named by it in messages, relative paths taken from its
+// folder. No file is read for the scene itself, so sc.inputs lists only the
+// other files read (the robot's, an input's).
+Scene load_scene_text(const std::string& text, const std::string& path);
+
 // The scene with every default filled in, as TOML, then a footer naming
 // every input file with its hash ("# input file: PATH (fnv1a64 H, N bytes)").
 std::string resolved_toml(const Scene& scene);
