@@ -7,7 +7,8 @@ column with bootstrap confidence (SALib's names: S1, S1_conf, ST, ST_conf).
     /usr/bin/python3 experiments/ensemble_gsa.py ENSEMBLE.toml [--n 256] [--outputs max_path_error,...]
         [--bin build/release/bin/pumasim] [--seed 1] [--out results/ensembles/NAME_sobol]
 
-Writes OUT.json and OUT.md. N (a power of 2) is the Saltelli base size: N (d + 2) runs.
+Writes OUT.json and OUT.md. N (a power of 2) is the Saltelli base size: N (d + 2) runs. When some runs
+fail (a failed run has no outputs), the indices are those of the failure indicator `failed` instead.
 """
 import argparse
 import csv
@@ -33,6 +34,23 @@ def factors_of(path):
     if not factors:
         sys.exit(f"ensemble_gsa: {path} has no [[vary]] factors")
     return factors
+
+
+def first_failure(rows):
+    row = next(r for r in rows if r["ok"] != "1")
+    return f"sample {row['sample']}: {row['failure']}"
+
+
+def output_columns(rows, outputs):
+    """(failed runs, [(name, values)]): each output column's values, or, when some runs failed (a failed run
+    has no outputs), the one column `failed`, 1 for a failed run and 0 else."""
+    for col in outputs:
+        if col not in rows[0]:
+            sys.exit(f"ensemble_gsa: no output column '{col}'; expected one of: {', '.join(rows[0])}")
+    failed = np.array([row["ok"] != "1" for row in rows], dtype=float)
+    if failed.any():
+        return int(failed.sum()), [("failed", failed)]
+    return 0, [(col, np.array([float(row[col]) for row in rows])) for col in outputs]
 
 
 def main():
@@ -71,10 +89,6 @@ def main():
             rows = list(csv.DictReader(fh))
         with open(result[:-4] + ".json") as fh:
             meta = json.load(fh)
-    failed = [row for row in rows if row["ok"] != "1"]
-    if failed:
-        sys.exit(f"ensemble_gsa: {len(failed)} of {len(rows)} runs failed (first: sample {failed[0]['sample']}: "
-                 f"{failed[0]['failure']}); Sobol indices need every run")
     n = args.n
     doc = {"ensemble": os.path.relpath(args.ensemble, ROOT), "n": n, "runs": len(rows), "seed": args.seed,
            "factors": factors, "build": meta["build"], "wall_time": meta["wall_time"],
@@ -84,10 +98,13 @@ def main():
           f"`{doc['ensemble']}`'s factors, Saltelli design with N = {n} ({len(rows)} runs, seed {args.seed}), "
           f"Jansen's estimators, 95 % bootstrap half-widths ({args.bootstrap} resamples). Build: {meta['build']}; "
           f"the runs took {meta['wall_time']:.1f} s on {meta['threads']} threads.", ""]
-    for col in [c.strip() for c in args.outputs.split(",") if c.strip()]:
-        if col not in rows[0]:
-            sys.exit(f"ensemble_gsa: no output column '{col}'; expected one of: {', '.join(rows[0])}")
-        y = np.array([float(row[col]) for row in rows])
+    failures, sections = output_columns(rows, [c.strip() for c in args.outputs.split(",") if c.strip()])
+    doc["failed_runs"] = failures
+    if failures:
+        md += [f"{failures} of {len(rows)} runs failed (first: {first_failure(rows)}). A failed run has no "
+               "outputs, so the outputs' indices are not computed; the indices of `failed` (1 for a failed run, "
+               "0 else) say which factors decide whether a run fails.", ""]
+    for col, y in sections:
         try:
             ind = gsa.sobol_indices(y[:n], y[n:2 * n], y[2 * n:].reshape(d, n), bootstrap=args.bootstrap, seed=args.seed)
         except gsa.GsaError as e:

@@ -28,7 +28,8 @@
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
-#               Sobol indices of the drive ensemble (experiments/ensemble_gsa.py)
+#               Sobol indices of the drive ensemble and of the paper's experiment over five unpublished
+#               inputs (experiments/ensemble_gsa.py)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
@@ -148,10 +149,19 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
+# writes: results/ensembles/paper_slow_unpublished_sobol.json results/ensembles/paper_slow_unpublished_sobol.md
+# writes: results/ensembles/paper_slow_unpublished_stable_sobol.json results/ensembles/paper_slow_unpublished_stable_sobol.md
 stage_ensembles() {
   /usr/bin/python3 experiments/ensemble_scaling.py --bin "$PUMASIM"
   /usr/bin/python3 experiments/ensemble_gsa.py experiments/ensembles/paper_slow_viscous_drive.toml --n 1024 \
     --bin "$PUMASIM"
+  # The paper's experiment over five unpublished inputs (AB2 at 0.5 ms, 24 s): which decide whether it
+  # diverges, and, where it does not, which drive its tracking error.
+  local e
+  for e in paper_slow_unpublished paper_slow_unpublished_stable; do
+    /usr/bin/python3 experiments/ensemble_gsa.py "experiments/ensembles/$e.toml" --n 1024 \
+      --outputs max_path_error,max_path_deviation --bin "$PUMASIM"
+  done
 }
 # writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086

@@ -65,3 +65,18 @@ def test_to_factors_maps_the_unit_cube_onto_the_distributions():
     assert v[1] == pytest.approx([3.0, 1e-2, 1.0 + 0.5 * 1.959963984540054])
     with pytest.raises(gsa.GsaError, match="choice"):
         gsa.to_factors(np.zeros((1, 1)), [{"key": "a.c", "distribution": "choice", "values": [1, 2]}])
+
+
+def test_a_failed_run_turns_the_outputs_into_the_failure_indicator():
+    # experiments/ensemble_gsa.py: a failed run has no outputs; with one, the only column indexed is
+    # `failed` (1 for a failed run), and with none, each output as read.
+    import ensemble_gsa
+    ok = {"sample": "0", "ok": "1", "max_path_error": "0.5", "failure": ""}
+    bad = {"sample": "1", "ok": "0", "max_path_error": "", "failure": "unstable at t = 1 s"}
+    n, cols = ensemble_gsa.output_columns([ok, bad, ok], ["max_path_error"])
+    assert n == 1 and [c for c, _ in cols] == ["failed"]
+    np.testing.assert_array_equal(cols[0][1], [0.0, 1.0, 0.0])
+    n, cols = ensemble_gsa.output_columns([ok, ok], ["max_path_error"])
+    assert n == 0 and cols[0][0] == "max_path_error"
+    np.testing.assert_array_equal(cols[0][1], [0.5, 0.5])
+    assert ensemble_gsa.first_failure([ok, bad]) == "sample 1: unstable at t = 1 s"
