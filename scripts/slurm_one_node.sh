@@ -125,17 +125,7 @@ done
 say "array finished after $((SECONDS - start)) s: $written of $n tasks wrote their shard's table"
 "$bin" ensemble "$ensemble" --merge "${shards[@]}" --out "$work/merged.csv" -q
 "$bin" ensemble "$ensemble" --threads 1 --out "$work/whole.csv" -q
-/usr/bin/python3 - "$work/whole.csv" "$work/merged.csv" <<'PY' | tee -a "$log.tmp"
-import csv, sys
-def rows(path):
-    with open(path, newline="") as f:
-        r = list(csv.reader(f))
-    w = r[0].index("wall_time")
-    return [row[:w] + row[w + 1:] for row in r]
-a, b = rows(sys.argv[1]), rows(sys.argv[2])
-if a != b:
-    sys.exit("the merged table differs from the single process's")
-print(f"merged: {len(b) - 1} samples from the job array equal the single-process table, every field but wall_time")
-PY
+same=$(/usr/bin/python3 scripts/same_ensemble_tables.py "$work/whole.csv" "$work/merged.csv")
+say "merged: ${same%% samples*} samples from the job array equal the single-process table, every field but wall_time"
 mv "$log.tmp" "$log"
 echo "slurm_one_node: log in ${log#$root/}"
