@@ -782,7 +782,7 @@ void bind_dynamics(py::module_& m) {
 // (ValueError naming it), as the unpickled scene would not be the pickled one.
 py::tuple scene_state(const PyScene& s) {
   py::list inputs;
-  for (const InputFile& f : s.scene().inputs) inputs.append(py::make_tuple(f.path, hex64(f.fnv1a64), f.bytes));
+  for (const InputFile& f : s.scene().inputs) inputs.append(py::make_tuple(f.path, f.fnv1a64, f.bytes));
   return py::make_tuple("pumasim.Scene", 1, resolved_toml(s.scene()), s.scene().file, inputs);
 }
 
@@ -794,8 +794,8 @@ std::unique_ptr<PyScene> scene_from_state(const py::tuple& st) {
   Scene sc = load_checked_scene_text(st[2].cast<std::string>(), st[3].cast<std::string>());
   std::vector<InputFile> then;
   for (const py::handle& h : st[4].cast<py::list>()) {
-    const auto [path, hash, bytes] = h.cast<std::tuple<std::string, std::string, std::size_t>>();
-    then.push_back({path, bytes, std::stoull(hash, nullptr, 16)});
+    const auto [path, hash, bytes] = h.cast<std::tuple<std::string, std::uint64_t, std::size_t>>();
+    then.push_back({path, bytes, hash});
   }
   for (const InputFile& now : sc.inputs) {
     const auto was = std::find_if(then.begin(), then.end(), [&](const InputFile& f) { return f.path == now.path; });
