@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <numbers>
 #include <random>
@@ -259,15 +260,33 @@ std::vector<EnsembleSample> draw_samples(const EnsembleSpec& spec) {
 
 namespace {
 
-SampleResult run_sample(const EnsembleSpec& spec, const EnsembleSample& sample) {
+// The samples' scene, read once (nullptr: the reader refused it or the
+// common overrides, `why`).
+struct EnsembleScene {
+  std::unique_ptr<SceneTemplate> scene;
+  std::string why;
+};
+
+EnsembleScene ensemble_scene(const EnsembleSpec& spec) {
+  EnsembleScene s;
+  try {
+    s.scene = std::make_unique<SceneTemplate>(spec.scene, spec.sets);
+  } catch (const std::exception& e) {
+    s.why = e.what();
+  }
+  return s;
+}
+
+SampleResult run_sample(const EnsembleSpec& spec, const EnsembleScene& scene, const EnsembleSample& sample) {
   SampleResult r;
   r.sample = sample;
   RunRequest req;
-  req.file = spec.scene;
-  req.sets = spec.sets;
-  for (std::string& s : sample.sets()) req.sets.push_back(std::move(s));
   req.options = spec.options;
+  req.stats = false;  // the row holds the figures
   try {
+    if (!scene.scene) throw ConfigError(scene.why);
+    const Scene sc = load_checked_scene(*scene.scene, sample.sets());  // load_scene(file, sets + the sample's)
+    req.scene = &sc;
     const RunRecord rec = run(req);
     const RunResult& res = rec.run.result;
     r.ok = res.ok;
@@ -295,6 +314,7 @@ std::vector<SampleResult> run_ensemble(const EnsembleSpec& spec, const std::vect
   std::vector<SampleResult> results(samples.size());
   std::atomic<long> next{0}, done{0}, failed{0};
   std::mutex report;
+  const EnsembleScene scene = ensemble_scene(spec);
   const auto work = [&] {
     for (long k = next++; k < total; k = next++) {
       const auto i = static_cast<std::size_t>(k);
@@ -303,7 +323,7 @@ std::vector<SampleResult> run_ensemble(const EnsembleSpec& spec, const std::vect
         results[i].failure_kind = "interrupted";
         results[i].failure = "not run: the ensemble was interrupted";
       } else {
-        results[i] = run_sample(spec, samples[i]);
+        results[i] = run_sample(spec, scene, samples[i]);
       }
       if (!results[i].ok) ++failed;
       const long d = ++done;

@@ -138,6 +138,10 @@ Scene load_checked_scene_text(const std::string& text, const std::string& file) 
   return with_known_integrator(load_scene_text(text, file));
 }
 
+Scene load_checked_scene(const SceneTemplate& scene, const std::vector<std::string>& overrides) {
+  return with_known_integrator(scene.load(overrides));
+}
+
 RunPlan plan_run(Scene sc, const RunOptions& a) {
   check_options(a);
   if (a.backend) override_backend(sc, *a.backend);
@@ -216,8 +220,10 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
   std::optional<Scene> loaded;
   if (!request.scene) loaded.emplace(load_checked_scene(request.file, request.sets, request.unsets));
   const Scene& given = request.scene ? *request.scene : *loaded;
-  // The start time and the files as loaded, before anything else is read.
-  const RunContext started = run_context(request.argv, given);
+  // The start time and the files as loaded, before anything else is read
+  // (meta.json's: with a folder to write).
+  std::optional<RunContext> started;
+  if (request.out || request.default_out) started = run_context(request.argv, given);
   RunRecord rec{loaded ? plan_run(std::move(*loaded), request.options) : plan_run(given, request.options), {}, {}};
   const Scene& sc = rec.plan.scene;
   const RunControls& rc = rec.plan.controls;
@@ -240,10 +246,10 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
                             .keep_rows = request.keep_rows,
                             .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
   rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
-  rec.stats = stats_json(sc, rc, rec.run);
+  if (request.stats || folder) rec.stats = stats_json(sc, rc, rec.run);
   // An interrupted run (ProgressHook::cancel: Ctrl-C in the Python module)
   // leaves no folder: the twin goes, and a folder it would replace stays.
-  if (folder && rec.run.result.failure_kind != "interrupted") write_folder(*folder, rec, started);
+  if (folder && rec.run.result.failure_kind != "interrupted") write_folder(*folder, rec, *started);
   return rec;
 }
 

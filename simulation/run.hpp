@@ -55,6 +55,7 @@ struct RunRequest {
   bool default_out = false;                  // without out: runs/<the scene's name> (the command line's default)
   bool force = false;                        // out may replace a pumasim run folder holding only what pumasim wrote
   bool keep_rows = false;                    // the output rows kept in SceneRun::rows, with their path errors
+  bool stats = true;                         // stats.json's text made (RunRecord::stats) without a folder too
   std::vector<std::string> argv;             // the command line, for meta.json (empty: none)
 };
 
@@ -80,7 +81,7 @@ struct RunSinks {
 struct RunRecord {
   RunPlan plan;
   SceneRun run;       // run.result.failure phrased in sinks.words
-  std::string stats;  // stats.json's text
+  std::string stats;  // stats.json's text ("" when neither asked for nor written)
 };
 
 // The run as requested: the scene loaded (or taken), the plan made
@@ -99,6 +100,8 @@ Scene load_checked_scene(const std::string& file, const std::vector<std::string>
                          const std::vector<std::string>& unsets = {});
 // The same from a scene's text (load_scene_text), as if read from `file`.
 Scene load_checked_scene_text(const std::string& text, const std::string& file);
+// The same through a template (many loads of one file: an ensemble's samples).
+Scene load_checked_scene(const SceneTemplate& scene, const std::vector<std::string>& overrides);
 
 // The options applied to the scene (taken as a copy: the plan's scene is
 // the record of what is run) with their checks. An option the method cannot

@@ -51,7 +51,7 @@ struct RunRecorder::Sums {
 
 RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::size_t expected_rows)
     : plant_(plant),
-      rows_plant_(plant.config()),
+      rows_plant_(plant.shared_model()),
       cfg_(plant.config()),
       m_(plant.size()),
       n_(plant.layout().n),
@@ -161,15 +161,20 @@ void RunRecorder::write_row(double t, const double* x, const double* signals) {
   Eigen::Vector3d p;
   rows_plant_.tool_pose(x, R_tool, p);
   if (cfg_.reference) {
-    cfg_.reference->eval(std::min(t, cfg_.reference->timing().duration()), sums_->ref);
-    for (int j = 0; j < n_; ++j) csv.num(sums_->ref.q[j]);
+    const double t_ref = std::min(t, cfg_.reference->timing().duration());
+    if (csv.on) {  // q_ref's columns: the full evaluation
+      cfg_.reference->eval(t_ref, sums_->ref);
+      for (int j = 0; j < n_; ++j) csv.num(sums_->ref.q[j]);
+    } else {  // the figures need only the point
+      sums_->ref.p = cfg_.reference->point(t_ref, sums_->ref);
+    }
   }
   csv.num(p.x()), csv.num(p.y()), csv.num(p.z());
   Eigen::Quaterniond quat(R_tool);
   if (quat.w() < 0) quat.coeffs() *= -1;  // one sign for one orientation
   csv.num(quat.w()), csv.num(quat.x()), csv.num(quat.y()), csv.num(quat.z());
   if (cfg_.reference) path_columns(p);
-  if (cfg_.drive) drive_columns(t, x, signals);
+  if (cfg_.drive) drive_columns(signals);
   if (plant_.layout().e >= 0) ledger_columns(x, fig_.rows == 1);
 }
 
@@ -190,7 +195,7 @@ void RunRecorder::path_columns(const Eigen::Vector3d& p) {
   ++fig_.samples;
 }
 
-void RunRecorder::drive_columns(double t, const double* x, const double* signals) {
+void RunRecorder::drive_columns(const double* signals) {
   Csv& csv = *csv_;
   for (int j = 0; j < n_; ++j) {
     const DriveSignals d{signals[3 * j], signals[3 * j + 1], signals[3 * j + 2]};

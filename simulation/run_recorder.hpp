@@ -73,7 +73,7 @@ class RunRecorder {
   void format_pending();
   void write_row(double t, const double* x, const double* signals);
   void path_columns(const Eigen::Vector3d& p);
-  void drive_columns(double t, const double* x, const double* signals);
+  void drive_columns(const double* signals);
   void ledger_columns(const double* x, bool first);
   void summarise();
   // The run's plant: the drive signals at each output, as applied (they
@@ -82,7 +82,8 @@ class RunRecorder {
   Plant& plant_;
   // A twin of it that computes the rows' other columns as the run goes (the
   // flange's pose, the energies: functions of the state alone), so that the
-  // run's plant sees no evaluation but the drive signals' between its steps.
+  // run's plant sees no evaluation but the drive signals' between its steps;
+  // it shares the run's model (its own context and workspaces only).
   Plant rows_plant_;
   const PlantConfig& cfg_;
   int m_, n_;

@@ -40,9 +40,7 @@ ControllerBlock controller_block(const PlantConfig& c) {
 }
 
 bool has_tabulated_reference(const PlantConfig& c) {
-  return c.tabulate_reference && c.reference && c.reference->has_path() &&
-         c.reference->interpolation() == Interpolation::kCartesian &&
-         ReferenceTable::blocks(*c.reference) <= ReferenceTable::kMaxBlocks;
+  return c.tabulate_reference && c.reference && ReferenceTable::tabulates(*c.reference);
 }
 
 }  // namespace
@@ -138,7 +136,10 @@ PlantModel::PlantModel(PlantConfig config, const PlantModel* shared)
   }
   if (has_tabulated_reference(cfg_)) {
     const bool same = shared && shared->ref_table_ && shared->cfg_.reference == cfg_.reference;
-    ref_table_ = same ? shared->ref_table_ : std::make_shared<const ReferenceTable>(*cfg_.reference);
+    const bool given = cfg_.reference_table && &cfg_.reference_table->reference() == cfg_.reference.get();
+    ref_table_ = same    ? shared->ref_table_
+                 : given ? cfg_.reference_table
+                         : std::make_shared<const ReferenceTable>(*cfg_.reference);
   }
   // h's tangents reach f only through the applied torque of a joint whose
   // law reads it without stick/slip events (a law with events reads it only
@@ -420,8 +421,14 @@ void PlantModel::start_state(PlantContext& c, PlantWorkspace<double>& w, double*
 
 void PlantModel::drive_signals(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x,
                                double* xdot, DriveSignals* out) const {
-  eval(c, w, FrictionPart::kAll, t, x, xdot);
-  w.last_valid = false;  // the root functions do not take the recorder's f (history: commit ffb6d3d)
+  // eval()'s first steps: the signals come before the friction and the
+  // dynamics, which they do not need (the current is a state, or the
+  // motor's algebraic current from e_a and w_m).
+  w.last_valid = false;
+  body_.load(layout_, x, w);
+  controller_output(c, w, t, x);
+  ledger_.reset(w);
+  drive(x, xdot, w);  // the root functions do not take the recorder's f (history: commit ffb6d3d)
   for (int j = 0; j < layout_.n; ++j) {
     out[j] = {w.u[j], w.ea[j], cfg_.drive ? w.tm[j] / motor_.params(j).torque_constant : 0.0};
   }

@@ -91,6 +91,10 @@ struct PlantConfig {
   // Chebyshev interpolants (reference_table.hpp) instead of the inverse
   // kinematics at every time; false: the exact reference everywhere.
   bool tabulate_reference = true;
+  // The reference's table when one is shared between configurations (a
+  // SceneTemplate's loads: their runs fill one table); used only when it is
+  // the table of `reference`, else the model makes its own.
+  std::shared_ptr<const ReferenceTable> reference_table;
   Eigen::VectorXd q0;  // initial angles without a reference [rad]; a controller then holds them
   // Energy ledger: three quadrature states e_in, e_copper, e_friction [J]
   // (electrical input e_a i, or a torque input's mechanical tau qd; copper
@@ -211,7 +215,8 @@ class PlantModel {
   void input_currents(const PlantContext& c, PlantWorkspace<double>& w, double* x) const;
 
   // Controller output, amplifier output voltage and motor current of every
-  // simulated joint at (t, x) under c (evaluates f into w and xdot).
+  // simulated joint at (t, x) under c: the controller and the drive of f's
+  // evaluation, into w (xdot: scratch; no friction, no dynamics).
   void drive_signals(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, double* xdot,
                      DriveSignals* out) const;
   // True when the drive signals depend on a discrete state besides (t, x).

@@ -68,6 +68,11 @@ class ReferenceTable {
     return (3 * ref.simulated_joints() + 6 + kBlock - 1) / kBlock;
   }
 
+  // Whether a reference is tabulated: a Cartesian path followed through its
+  // inverse kinematics, of at most kMaxBlocks blocks.
+  static bool tabulates(const Reference& ref) {
+    return ref.has_path() && ref.interpolation() == Interpolation::kCartesian && blocks(ref) <= kMaxBlocks;
+  }
   // The reference must outlive the table. Allocates all storage. truncate:
   // cut each series as above (false: every series keeps kDegree; for tests).
   explicit ReferenceTable(const Reference& ref, bool truncate = true);
@@ -81,6 +86,7 @@ class ReferenceTable {
   int filled() const;
   int exact_fallbacks() const;
   int max_degree_kept() const;
+  const Reference& reference() const { return ref_; }
 
  private:
   using Coefs = Eigen::Matrix<double, Eigen::Dynamic, kDegree + 1>;  // blocks_ x kBlock rows

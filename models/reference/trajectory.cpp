@@ -34,6 +34,16 @@ Path::Path(Eigen::Vector2d start, double heading, double height, std::vector<Pat
     total_ += len;
   }
   if (pieces_.empty()) throw std::invalid_argument("path without segments");
+  for (Piece& pc : pieces_) {
+    Eigen::Vector3d a, b, d1, d2;
+    eval(pc.s0, a, d1, d2);
+    eval(pc.s0 + pc.len, b, d1, d2);
+    pc.a = a.head<2>(), pc.b = b.head<2>();
+    pc.dir = Eigen::Vector2d(std::cos(pc.heading0), std::sin(pc.heading0));
+    if (pc.curvature != 0.0) {
+      pc.centre = pc.p0 + Eigen::Vector2d(-std::sin(pc.heading0), std::cos(pc.heading0)) / pc.curvature;
+    }
+  }
 }
 
 void Path::eval(double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const {
@@ -83,24 +93,22 @@ double Path::distance(const Eigen::Vector3d& p) const {
   const Eigen::Vector2d xy = p.head<2>();
   double best = std::numeric_limits<double>::infinity();
   for (const Piece& pc : pieces_) {
-    Eigen::Vector3d a, b, d1, d2;
-    eval(pc.s0, a, d1, d2);
-    eval(pc.s0 + pc.len, b, d1, d2);
-    double d = std::min((xy - a.head<2>()).norm(), (xy - b.head<2>()).norm());  // the ends
+    double d = std::min((xy - pc.a).norm(), (xy - pc.b).norm());  // the ends
     if (pc.curvature == 0.0) {
-      const Eigen::Vector2d dir(std::cos(pc.heading0), std::sin(pc.heading0));
-      const double u = (xy - pc.p0).dot(dir);
-      if (u > 0 && u < pc.len) d = std::min(d, (xy - pc.p0 - u * dir).norm());
+      const double u = (xy - pc.p0).dot(pc.dir);
+      if (u > 0 && u < pc.len) d = std::min(d, (xy - pc.p0 - u * pc.dir).norm());
     } else {
       // Arc points: c + (sin h, -cos h) / kappa with h = heading0 + kappa u.
-      const Eigen::Vector2d c = pc.p0 + Eigen::Vector2d(-std::sin(pc.heading0), std::cos(pc.heading0)) / pc.curvature;
-      const Eigen::Vector2d r = xy - c;
-      if (r.norm() > 0) {
+      const Eigen::Vector2d r = xy - pc.centre;
+      const double to_circle = std::abs(r.norm() - 1.0 / std::abs(pc.curvature));
+      // The circle's nearest point counts only when it is on the arc; it
+      // can lower d only when nearer than the ends (then the angle is taken).
+      if (r.norm() > 0 && to_circle < d) {
         const double sg = pc.curvature > 0 ? 1.0 : -1.0;
         const double h = std::atan2(sg * r.x(), -sg * r.y());
         double u = std::remainder(h - pc.heading0, 2 * M_PI) / pc.curvature;
         if (u < 0) u += 2 * M_PI / std::abs(pc.curvature);
-        if (u < pc.len) d = std::min(d, std::abs(r.norm() - 1.0 / std::abs(pc.curvature)));
+        if (u < pc.len) d = to_circle;
       }
     }
     best = std::min(best, std::hypot(d, p.z() - height_));
@@ -467,6 +475,18 @@ void Reference::eval(double t, ReferenceSample& out, int segment, bool extend) c
   } else {
     eval_joint_space(t, out, segment, extend);
   }
+}
+
+Eigen::Vector3d Reference::point(double t, ReferenceSample& out) const {
+  if (curve_ || interp_ != Interpolation::kCartesian) {
+    eval(t, out);
+    return out.p;
+  }
+  double s, sd, sdd;
+  Eigen::Vector3d p, dp, ddp;
+  timing_.eval(t, s, sd, sdd);  // eval_cartesian's steps with no segment given, up to out.p
+  path_->eval(s, p, dp, ddp);
+  return p;
 }
 
 void Reference::eval_cartesian(double t, ReferenceSample& out, int segment) const {

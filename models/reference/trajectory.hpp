@@ -31,6 +31,7 @@ struct PathSegment {
   double length = 0;  // straight segment [m] (when radius == 0)
   double radius = 0;  // arc radius [m]
   double angle = 0;   // arc turning angle [rad], positive = left turn
+  bool operator==(const PathSegment&) const = default;
 };
 
 class Path {
@@ -55,6 +56,9 @@ class Path {
     Eigen::Vector2d p0;
     double heading0;
     double curvature;  // 0 for a line, +-1/r for an arc
+    // What distance() reads, computed once by the formulas it used per call:
+    // the ends (eval at s0 and s0 + len), a line's direction, an arc's centre.
+    Eigen::Vector2d a, b, dir, centre;
   };
   std::vector<Piece> pieces_;
   double height_, total_ = 0;
@@ -154,6 +158,10 @@ class Reference {
   // continuation past the piece's ends, for differences in t that must not see
   // a kink; the caller keeps t near the piece).
   void eval(double t, ReferenceSample& out, int segment = -1, bool extend = false) const;
+  // The flange's reference position at t, eval(t, out).p bit for bit: a
+  // Cartesian path's point without the inverse kinematics (what a figure
+  // of the path error needs), else the full evaluation into `out`.
+  Eigen::Vector3d point(double t, ReferenceSample& out) const;
   // The segment a step starting at t lies in: the number of breakpoints <= t
   // (to rounding).
   int segment_after(double t) const;

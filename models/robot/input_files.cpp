@@ -51,8 +51,12 @@ std::optional<std::string> read_input_file(const std::string& path) {
   const bool failed = std::ferror(f) != 0;
   std::fclose(f);
   if (failed) return std::nullopt;
-  if (innermost) innermost->add(InputFile{absolute_path(path), text.size(), fnv1a64(text)});
+  record_input_file(InputFile{absolute_path(path), text.size(), fnv1a64(text)});
   return text;
+}
+
+void record_input_file(const InputFile& f) {
+  if (innermost) innermost->add(f);
 }
 
 std::string unreadable_reason(const std::string& path) {

@@ -25,6 +25,7 @@ struct InputFile {
   std::string path;         // absolute, lexically normal
   std::size_t bytes = 0;    // its size as read
   std::uint64_t fnv1a64 = 0;  // FNV-1a 64 of the bytes read
+  bool operator==(const InputFile&) const = default;
 };
 
 // FNV-1a, 64 bits (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
@@ -42,6 +43,11 @@ inline constexpr std::size_t kMaxInputBytes = std::size_t{16} << 20;
 // unreadable); recorded in the open records when read. A file longer than
 // kMaxInputBytes is a ConfigError naming it, read no further.
 std::optional<std::string> read_input_file(const std::string& path);
+
+// f recorded in the open records as if read now: what a reader that keeps
+// a file's product (SceneTemplate) gives its later loads, so that their
+// records list the file it read once.
+void record_input_file(const InputFile& f);
 
 // Why read_input_file(path) gave nothing, for a message: "no such file",
 // "a folder, not a file", "permission denied", ...

@@ -112,6 +112,7 @@ struct PumaConfig {
   bool right_arm = true;    // shoulder: right (X > 0 in the arm plane) or left
   bool elbow_up = true;     // elbow above or below the shoulder-wrist line
   bool wrist_flip = false;  // the second wrist solution (q4 + pi, -q5, q6 + pi)
+  bool operator==(const PumaConfig&) const = default;
 };
 
 // Closed-form inverse kinematics of a PUMA-structured arm (standard DH twists

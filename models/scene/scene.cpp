@@ -5,14 +5,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <sstream>
 
 #include "core/invariant.hpp"
 #include "models/dynamics/backend.hpp"
-#include "models/robot/robot_file.hpp"
-#include "models/robot/urdf_file.hpp"
+#include "models/reference/reference_table.hpp"
 #include "models/reference/time_optimal.hpp"
+#include "models/robot/robot_file.hpp"
 #include "models/robot/toml_writer.hpp"
+#include "models/robot/urdf_file.hpp"
 #include "models/scene/entries.hpp"
 #include "models/scene/joint_csv.hpp"
 
@@ -22,7 +24,89 @@
 // at the entries above it.
 
 namespace pumasim {
+
+// What a SceneTemplate's loads share: each robot model as loaded, with the
+// files its load read, and the references built, each with its key.
+struct SceneTemplate::Shared {
+  struct Robot {
+    std::string spec;  // scene.robot, a path made absolute
+    RobotModel model;
+    std::vector<InputFile> files;
+  };
+  struct ReferenceKey {  // everything make_reference reads
+    std::string robot_spec;
+    std::vector<InputFile> robot_files;  // by content: a robot loaded again when many are shared
+    bool rotor_inertia = true;
+    int n = 0;
+    Eigen::VectorXd q_held;
+    ReferenceSettings settings;
+    bool operator==(const ReferenceKey& o) const {
+      return robot_spec == o.robot_spec && robot_files == o.robot_files && rotor_inertia == o.rotor_inertia &&
+             n == o.n && q_held.size() == o.q_held.size() && q_held == o.q_held && settings == o.settings;
+    }
+  };
+  std::mutex mutex;
+  std::vector<Robot> robots;
+  struct Tabulated {  // a reference and its table (which refers to it), built once
+    std::shared_ptr<const Reference> reference;
+    std::shared_ptr<const ReferenceTable> table;  // nullptr: not tabulated (ReferenceTable::tabulates)
+  };
+  std::vector<std::pair<ReferenceKey, Tabulated>> references;
+
+  // The robot of `spec`, loaded by the first load that asks (under the lock:
+  // the others wait for it rather than read it again); its files recorded
+  // in the asking load's record either way.
+  Robot robot(const std::string& spec) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const Robot& r : robots) {
+      if (r.spec != spec) continue;
+      for (const InputFile& f : r.files) record_input_file(f);
+      return r;
+    }
+    Robot r{spec, {}, {}};
+    {
+      const InputRecord record;  // nested: the files reach the load's record too
+      r.model = load_robot(spec);
+      r.files = record.files();
+    }
+    if (robots.size() < kShared) robots.push_back(r);
+    return r;
+  }
+
+  template <class Make>
+  Tabulated reference(const ReferenceKey& key, const Make& make) {
+    std::unique_lock<std::mutex> lock(mutex);
+    for (const auto& [k, ref] : references) {
+      if (k == key) return ref;
+    }
+    if (references.size() >= kShared) {
+      lock.unlock();
+      return {make(), nullptr};
+    }
+    Tabulated t{make(), nullptr};  // a failure throws, and nothing is kept
+    if (ReferenceTable::tabulates(*t.reference)) {
+      struct Held {  // the table keeps its reference alive
+        std::shared_ptr<const Reference> reference;
+        ReferenceTable table;
+        explicit Held(std::shared_ptr<const Reference> r) : reference(std::move(r)), table(*reference) {}
+      };
+      const auto held = std::make_shared<const Held>(t.reference);
+      t.table = std::shared_ptr<const ReferenceTable>(held, &held->table);
+    }
+    references.emplace_back(key, t);
+    return t;
+  }
+};
+
 namespace {
+
+// The SceneTemplate load running on this thread (none: a plain load): what
+// it shares, and the files of the robot it took.
+struct TemplateLoad {
+  SceneTemplate::Shared* shared = nullptr;
+  std::vector<InputFile> robot_files;
+};
+thread_local TemplateLoad* template_load = nullptr;
 
 using scene_io::Codec;
 using scene_io::Entry;
@@ -62,7 +146,13 @@ void load_robot_of(StrictTable& t, Scene& sc) {
     sc.robot_spec = fs::absolute(p.is_absolute() ? p : fs::path(sc.file).parent_path() / p).lexically_normal().string();
   }
   try {
-    sc.plant.robot = load_robot(sc.robot_spec);
+    if (template_load) {
+      SceneTemplate::Shared::Robot r = template_load->shared->robot(sc.robot_spec);
+      sc.plant.robot = std::move(r.model);
+      template_load->robot_files = std::move(r.files);
+    } else {
+      sc.plant.robot = load_robot(sc.robot_spec);
+    }
   } catch (const ConfigError& e) {
     throw ConfigError(t.where("robot") + e.what());
   }
@@ -918,7 +1008,15 @@ void read_reference(StrictTable& root, Scene& sc) {
     }
     read_planning(plan, sc.file, r, sc.plant.n);
   }
-  sc.plant.reference = build_reference(*rt, sc.plant, r);
+  if (template_load && r.timing != "time-optimal") {  // the planner reads the drive too: not shared
+    const SceneTemplate::Shared::ReferenceKey key{
+        sc.robot_spec, template_load->robot_files, sc.rotor_inertia, sc.plant.n, sc.plant.q_held, r};
+    auto shared = template_load->shared->reference(key, [&] { return build_reference(*rt, sc.plant, r); });
+    sc.plant.reference = std::move(shared.reference);
+    sc.plant.reference_table = std::move(shared.table);
+  } else {
+    sc.plant.reference = build_reference(*rt, sc.plant, r);
+  }
 }
 
 void write_reference(toml::table& doc, const Scene& sc) {
@@ -1045,6 +1143,34 @@ Scene load_scene_text(const std::string& text, const std::string& path) {
   const InputRecord record;  // every file read from here on (the robot's, an input CSV's: not the scene's)
   toml::table doc = parse_toml_text(text, path);
   return read_scene_document(doc, path, record);
+}
+
+SceneTemplate::SceneTemplate(const std::string& path, const std::vector<std::string>& sets)
+    : path_(path), sets_(sets), shared_(std::make_unique<Shared>()) {
+  const InputRecord record;
+  const std::optional<std::string> text = read_input_file(path);
+  if (!text)
+    throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable TOML file");
+  text_ = *text;
+  file_ = record.files().front();
+  toml::table doc = parse_toml_text(text_, path);  // its errors, and the sets', now rather than at every load
+  apply_overrides(doc, sets_);
+}
+
+SceneTemplate::~SceneTemplate() = default;
+
+Scene SceneTemplate::load(const std::vector<std::string>& overrides) const {
+  const InputRecord record;  // every file read from here on, and the scene file read once
+  record_input_file(file_);
+  toml::table doc = parse_toml_text(text_, path_);
+  apply_overrides(doc, sets_);
+  apply_overrides(doc, overrides);
+  struct Scope {  // template_load set for this load (and restored, were loads to nest)
+    TemplateLoad load, *outer;
+    explicit Scope(SceneTemplate::Shared* s) : load{s, {}}, outer(template_load) { template_load = &load; }
+    ~Scope() { template_load = outer; }
+  } scope(shared_.get());
+  return read_scene_document(doc, path_, record);
 }
 
 PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r) {

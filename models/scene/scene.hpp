@@ -74,6 +74,9 @@ struct ReferenceSettings {
   std::string scene_dir;       // the scene file's folder (joints is relative to it)
   std::string closed_form_why; // why the robot has no closed-form IK ("" if it has)
   bool joint_source() const { return !joints_file.empty() || !via_points.empty(); }
+  // Every member, so that a member added is compared with no other edit
+  // (SceneTemplate shares a reference between equal settings).
+  bool operator==(const ReferenceSettings&) const = default;
 };
 
 struct Scene {
@@ -120,6 +123,44 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 // folder. No file is read for the scene itself, so sc.inputs lists only the
 // other files read (the robot's, an input's).
 Scene load_scene_text(const std::string& text, const std::string& path);
+
+// Many loads of one scene file, each with its own overrides (an ensemble's
+// samples, issue 35): the file parsed once, and what every load would build
+// again from the same inputs built once and shared. Shared: the robot model
+// of each scene.robot, and the reference, keyed by everything its
+// construction reads (scene.robot, scene.rotor_inertia, the simulated
+// joints, the held pose, every [reference] setting); not the time-optimal
+// timing's, whose planner also reads the drive, the friction and the
+// controller. load(overrides) gives the Scene that
+// load_scene(path, sets + overrides) gives: the same values, the same
+// inputs, the same errors (tests/test_scene_template.cpp). A file is read
+// once, by the first load that needs it, so that every load of a template
+// sees the same bytes. Thread-safe: what is shared is immutable, and at most
+// kShared references are kept (a sample that varies the reference builds its
+// own when they are taken). What a load still does itself: parse the
+// text it holds (the messages' line numbers live in the parsed document),
+// apply the overrides, read and check every section.
+class SceneTemplate {
+ public:
+  static constexpr std::size_t kShared = 8;
+  // ConfigError as load_scene gives it (the file, a set).
+  explicit SceneTemplate(const std::string& path, const std::vector<std::string>& sets = {});
+  ~SceneTemplate();
+  SceneTemplate(const SceneTemplate&) = delete;
+  SceneTemplate& operator=(const SceneTemplate&) = delete;
+  Scene load(const std::vector<std::string>& overrides = {}) const;
+  const std::string& path() const { return path_; }
+  struct Shared;  // the robots and references built (scene.cpp)
+
+ private:
+  std::string path_;
+  // The file's text as read, parsed again by each load: toml++ copies a
+  // table without its source positions, which the messages name.
+  std::string text_;
+  std::vector<std::string> sets_;
+  InputFile file_;  // the scene file as read
+  std::unique_ptr<Shared> shared_;
+};
 
 // The scene with every default filled in, as TOML, then a footer naming
 // every input file with its hash ("# input file: PATH (fnv1a64 H, N bytes)").
