@@ -44,12 +44,15 @@ std::uint64_t mix64(std::uint64_t z) {
 // A double in [0, 1) from the generator's top 53 bits.
 double unit(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
 
-double draw(const EnsembleFactor& f, std::mt19937_64& g) {
+// The factor's value; for a normal one, also its standard normal in z.
+double draw(const EnsembleFactor& f, std::mt19937_64& g, double& z) {
   switch (f.kind) {
     case Kind::kNormal: {
       // Box-Muller (1958): two uniforms, 1 - u in (0, 1] keeps the log finite.
       const double u1 = 1.0 - unit(g), u2 = unit(g);
-      return f.a + f.b * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+      const double r = std::sqrt(-2.0 * std::log(u1)), c = std::cos(2 * std::numbers::pi * u2);
+      z = r * c;
+      return f.a + f.b * r * c;
     }
     case Kind::kUniform:
       return f.a + (f.b - f.a) * unit(g);
@@ -112,8 +115,31 @@ EnsembleFactor read_factor(StrictTable& t) {
     f.a = t.number("low", f.kind == Kind::kLogUniform ? Bounds::positive() : Bounds::any());
     f.b = t.number("high", Bounds{f.a, std::numeric_limits<double>::infinity(), true});
   }
-  t.finish();
   return f;
+}
+
+// correlate_with and correlation: factor i's partner among the earlier ones.
+void read_pair(StrictTable& t, std::vector<EnsembleFactor>& factors, std::size_t i) {
+  EnsembleFactor& f = factors[i];
+  if (!t.has("correlate_with")) {
+    if (t.has("correlation")) t.fail("correlation", "correlate_with beside it (the factor it pairs with)", "none");
+    return;
+  }
+  const std::string with = t.string("correlate_with");
+  if (f.kind != Kind::kNormal)
+    t.fail("correlate_with", "a normal factor (pairs are of normals)", factor_kind_name(f.kind));
+  for (std::size_t k = 0; k < i; ++k) {
+    if (factors[k].key == with) f.partner = static_cast<int>(k);
+  }
+  if (f.partner < 0) t.fail("correlate_with", "the key of an earlier [[vary]] factor", "\"" + with + "\"");
+  const EnsembleFactor& p = factors[static_cast<std::size_t>(f.partner)];
+  if (p.kind != Kind::kNormal)
+    t.fail("correlate_with", "a normal factor (pairs are of normals)", factor_kind_name(p.kind));
+  bool paired = p.partner >= 0;
+  for (std::size_t k = 0; k < i; ++k) paired = paired || factors[k].partner == f.partner;
+  if (paired)
+    t.fail("correlate_with", "a factor in no other pair (correlated pairs only)", "\"" + with + "\", already paired");
+  f.rho = t.number("correlation", Bounds{-1, 1});
 }
 
 }  // namespace
@@ -164,7 +190,11 @@ EnsembleSpec read_ensemble_file(const std::string& path) {
     run->finish();
   }
   if (top.has("vary")) {
-    for (StrictTable& f : top.array_of_tables("vary")) s.factors.push_back(read_factor(f));
+    for (StrictTable& f : top.array_of_tables("vary")) {
+      s.factors.push_back(read_factor(f));
+      read_pair(f, s.factors, s.factors.size() - 1);
+      f.finish();
+    }
   }
   top.finish();
   return s;
@@ -175,9 +205,15 @@ EnsembleSample draw_sample(const EnsembleSpec& spec, long k) {
   s.index = k;
   s.seed = mix64(mix64(spec.seed) ^ static_cast<std::uint64_t>(k));
   std::mt19937_64 g(s.seed);
-  for (const EnsembleFactor& f : spec.factors) {
+  std::vector<double> z(spec.factors.size(), 0.0);  // each normal factor's standard normal
+  for (std::size_t i = 0; i < spec.factors.size(); ++i) {
+    const EnsembleFactor& f = spec.factors[i];
     s.keys.push_back(f.key);
-    const double v = draw(f, g);
+    double v = draw(f, g, z[i]);
+    if (f.partner >= 0) {  // the pair's: rho z_p + sqrt(1 - rho^2) z
+      z[i] = f.rho * z[static_cast<std::size_t>(f.partner)] + std::sqrt(1 - f.rho * f.rho) * z[i];
+      v = f.a + f.b * z[i];
+    }
     if (f.kind == Kind::kChoice) {
       const auto n = f.choices.size();
       s.values.push_back(f.choices[std::min(n - 1, static_cast<std::size_t>(v * static_cast<double>(n)))]);
@@ -449,6 +485,8 @@ std::string ensemble_sidecar(const EnsembleSpec& spec, const std::vector<SampleR
   for (const EnsembleFactor& f : spec.factors) {
     Json e{{"key", f.key}, {"distribution", factor_kind_name(f.kind)}};
     if (f.kind == Kind::kNormal) e["mean"] = f.a, e["sd"] = f.b;
+    if (f.partner >= 0)
+      e["correlate_with"] = spec.factors[static_cast<std::size_t>(f.partner)].key, e["correlation"] = f.rho;
     if (f.kind == Kind::kUniform || f.kind == Kind::kLogUniform) e["low"] = f.a, e["high"] = f.b;
     if (f.kind == Kind::kChoice) e["values"] = f.choices;
     factors.push_back(e);

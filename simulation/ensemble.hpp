@@ -32,6 +32,12 @@ struct EnsembleFactor {
   Kind kind = Kind::kUniform;
   double a = 0, b = 0;               // normal: mean, sd; uniform and log-uniform: low, high
   std::vector<std::string> choices;  // choice: the values as TOML text, each equally likely
+  // A correlated pair of normals: this normal factor's standard normal is
+  // rho z_p + sqrt(1 - rho^2) z, z_p that of `partner` (an earlier normal
+  // factor, in no other pair; its draw unchanged), z its own draw. Pairs
+  // only, so that every correlation matrix is valid (positive semi-definite).
+  int partner = -1;  // the earlier factor's index (-1: independent)
+  double rho = 0;    // the correlation, in [-1, 1]
 };
 
 // "normal", "uniform", "log-uniform", "choice".

@@ -125,6 +125,30 @@ TEST(EnsembleDraws, DistributionsHaveTheirClosedFormMoments) {
   }
 }
 
+// A correlated pair of normals: the partner's draws are those it has alone;
+// the pair's sample correlation is rho within 5 standard errors (the large-n
+// standard error of Pearson's r for a bivariate normal, (1 - rho^2) / sqrt(n);
+// Fisher 1915), and each member keeps its own mean and sd.
+TEST(EnsembleDraws, ACorrelatedPairHasItsCorrelation) {
+  const long n = 40000;
+  for (const double rho : {0.6, -0.9, 0.0, 1.0}) {
+    EnsembleSpec s = one_factor({.key = "a.b", .kind = Kind::kNormal, .a = 2.0, .b = 0.5}, n);
+    const std::vector<double> alone = drawn(s);
+    s.factors.push_back({.key = "c.d", .kind = Kind::kNormal, .a = -1.0, .b = 3.0, .partner = 0, .rho = rho});
+    std::vector<double> x, y;
+    for (const EnsembleSample& e : draw_samples(s))
+      x.push_back(std::stod(e.values[0])), y.push_back(std::stod(e.values[1]));
+    EXPECT_EQ(x, alone) << rho;
+    const double mx = mean_of(x), my = mean_of(y);
+    double sxy = 0;
+    for (long k = 0; k < n; ++k) sxy += (x[static_cast<std::size_t>(k)] - mx) * (y[static_cast<std::size_t>(k)] - my);
+    const double r = sxy / (n - 1) / std::sqrt(variance_of(x) * variance_of(y));
+    EXPECT_NEAR(r, rho, 5 * std::max(1 - rho * rho, 1e-3) / std::sqrt(static_cast<double>(n))) << rho;
+    EXPECT_NEAR(my, -1.0, 5 * 3.0 / std::sqrt(static_cast<double>(n))) << rho;
+    EXPECT_NEAR(variance_of(y), 9.0, 5 * 9.0 * std::sqrt(2.0 / (n - 1))) << rho;
+  }
+}
+
 // Sample k run alone (as `pumasim ensemble --sample K` does) is its row of
 // the whole ensemble, bit for bit; the varied values reached the plant (the
 // samples' step counts or path errors differ).
@@ -216,6 +240,34 @@ TEST(EnsembleFile, ReadsEveryKeyAndRefusesBadOnesNamingFileLineAndKey) {
                       {"key", "section.key"});
   expect_config_error(head + "[[vary]]\nkey = \"a.b\"\ndistribution = \"uniform\"\nlow = 2\nhigh = 1\n", {"high"});
   expect_config_error("scene = \"x.toml\"\nsamples = 2.5\n", {"samples", "whole"});
+
+  // Correlated pairs: read, and refused unless of two normals, the partner
+  // earlier and in no other pair, the correlation in [-1, 1].
+  const std::string r = "[[vary]]\nkey = \"motor.resistance\"\ndistribution = \"normal\"\nmean = 2\nsd = 0.2\n";
+  const std::string u = "[[vary]]\nkey = \"amplifier.gain\"\ndistribution = \"uniform\"\nlow = 3\nhigh = 5\n";
+  const auto pair = [](const std::string& with, const std::string& rho) {
+    return "[[vary]]\nkey = \"motor.inductance\"\ndistribution = \"normal\"\nmean = 0.002\nsd = 0.0003\n"
+           "correlate_with = \"" +
+           with + "\"\ncorrelation = " + rho + "\n";
+  };
+  const EnsembleSpec paired =
+      read_ensemble_file(write_file("pair.toml", head + u + r + pair("motor.resistance", "0.6")).string());
+  ASSERT_EQ(paired.factors.size(), 3u);
+  EXPECT_EQ(paired.factors[2].partner, 1);
+  EXPECT_EQ(paired.factors[2].rho, 0.6);
+  EXPECT_EQ(paired.factors[0].partner, -1);
+  expect_config_error(head + r + pair("motor.resistance", "1.5"), {"correlation", "1"});
+  expect_config_error(head + r + pair("motor.resistanc", "0.5"), {"correlate_with", "earlier"});
+  expect_config_error(head + u + pair("amplifier.gain", "0.5"), {"correlate_with", "normal", "uniform"});
+  expect_config_error(head + pair("motor.resistance", "0.5") + r, {"correlate_with", "earlier"});
+  expect_config_error(head + r + pair("motor.resistance", "0.5") +
+                          "[[vary]]\nkey = \"motor.torque_constant\"\ndistribution = \"normal\"\nmean = 0.2\n"
+                          "sd = 0.01\ncorrelate_with = \"motor.resistance\"\ncorrelation = 0.1\n",
+                      {"correlate_with", "already paired"});
+  expect_config_error(head + r +
+                          "[[vary]]\nkey = \"a.b\"\ndistribution = \"normal\"\nmean = 0\nsd = 1\n"
+                          "correlation = 0.5\n",
+                      {"correlation", "correlate_with"});
 }
 
 // `pumasim ensemble`: the table and its sidecar, --sample K's row equal to
