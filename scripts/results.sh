@@ -30,6 +30,8 @@
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
 #               Sobol indices of the drive ensemble and of the paper's experiment over five unpublished
 #               inputs (experiments/ensemble_gsa.py)
+#   literature  the paper's scenes across the published PUMA 560 parameter sets (RTB's, AKB86's, crossed)
+#               and friction levels (experiments/literature_spread.py)
 #   report      results/README.md from all of the above (experiments/report.py)
 #   fuzz        only when named: the long fuzz run, scripts/fuzz.sh --runs 1000000 --record
 #               (one million inputs per harness, in the sanitizer build, build/asan;
@@ -66,7 +68,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
-     partitioned filippov panda bench ensembles report)
+     partitioned filippov panda bench ensembles literature report)
 named_only=(fuzz cost ci slurm)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
@@ -163,6 +165,8 @@ stage_ensembles() {
     --outputs max_path_error,max_path_deviation --bin "$PUMASIM" --range motor.inductance=0.0025:0.008 \
     --out results/ensembles/paper_slow_unpublished_stable_sobol
 }
+# writes: results/ensembles/literature_spread.md results/ensembles/literature_spread.json
+stage_literature() { /usr/bin/python3 experiments/literature_spread.py --bin "$PUMASIM" --jobs "$jobs"; }
 # writes: results/fuzz/long_run.json
 # shellcheck disable=SC2086
 stage_fuzz() { scripts/fuzz.sh --runs 1000000 --record ${FUZZ_HARNESSES:-}; }

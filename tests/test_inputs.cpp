@@ -70,8 +70,9 @@ TEST(Cli, BadInputExitsWithStatus2AndSaysWhatWasExpected) {
   expect_bad({"dynamics", "--robot", "/nonexistent/robot.toml", "--backend", "crba", "--q=qz"},
              "/nonexistent/robot.toml: cannot be read (no such file)");
   expect_bad({"dynamics", "--robot", "/tmp", "--backend", "crba", "--q=qz"}, "/tmp: cannot be read (a folder, not a file)");
-  expect_bad({"dynamics", "--robot", "kuka", "--backend", "crba", "--q=qz"},
-             "unknown robot 'kuka'; expected a robot file path or one of: panda, planar2, puma560, stanford");
+  expect_bad(
+      {"dynamics", "--robot", "kuka", "--backend", "crba", "--q=qz"},
+      "unknown robot 'kuka'; expected a robot file path or one of: panda, planar2, puma560, puma560_akb, stanford");
   expect_bad({"fly"}, "unknown command 'fly'");
   expect_bad({}, "missing command");
 }

@@ -24,6 +24,8 @@
 namespace pumasim {
 namespace {
 
+using test::scene_path;
+
 std::vector<std::string> shipped_scene_files() {
   std::vector<std::string> out;
   for (const auto& e : std::filesystem::directory_iterator(PUMASIM_SCENES_DIR)) {
