@@ -47,6 +47,7 @@ struct RunRecorder::Sums {
   double E0 = 0;                      // [J] E_mech + E_mag at the first row
   std::vector<long> saturated;        // per joint: rows at a limit
   ReferenceSample ref;                // the reference at the row's time
+  int nearest_piece = 0;              // the path's piece nearest the last row's flange (deviation's hint)
 };
 
 RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::size_t expected_rows)
@@ -185,7 +186,7 @@ void RunRecorder::path_columns(const Eigen::Vector3d& p) {
   const double e = (p - ref.p).norm();
   // Deviation: the distance to the geometric path, whatever the timing
   // (a joint-space interpolation leaves the path between via-points).
-  const double dev = cfg_.reference->deviation(p);
+  const double dev = cfg_.reference->deviation(p, &sums.nearest_piece);
   csv.num(ref.p.x()), csv.num(ref.p.y()), csv.num(ref.p.z()), csv.num(1e3 * e), csv.num(1e3 * dev);
   if (keep_rows_) path_error_.push_back(e), path_deviation_.push_back(dev);
   fig_.max_path_error = std::max(fig_.max_path_error, e);

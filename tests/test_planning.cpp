@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -253,6 +254,28 @@ TEST(PathDistance, OffsetPointsAreTheirOffsetAway) {
       if (inside) {
         EXPECT_NEAR(path.distance(off), std::hypot(d, 0.003), 1e-12) << k;
       }
+    }
+  }
+}
+
+// The hint (the piece to measure first) changes the work, never the
+// distance: for every hint, out of range included, the same double as
+// without one, and the piece it reports is at that distance.
+TEST(PathDistance, TheHintChangesNothingButTheWork) {
+  const Path path({0.4, -0.25}, 0.0, -0.15, {{0.2, 0, 0}, {0, 0.08, M_PI}, {0.2, 0, 0}, {0, 0.05, -M_PI / 2}});
+  std::mt19937_64 g(35);
+  std::uniform_real_distribution<double> x(0.2, 0.9), y(-0.5, 0.3), z(-0.3, 0.0);
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector3d p(x(g), y(g), z(g));
+    const double plain = path.distance(p);
+    for (int hint : {-3, 0, 1, 2, 3, 4, 99}) {
+      int nearest = hint;
+      EXPECT_EQ(path.distance(p, &nearest), plain) << k << " hint " << hint;
+      ASSERT_GE(nearest, 0);
+      ASSERT_LT(nearest, 4);
+      int again = nearest;  // measured first, it is still the nearest
+      EXPECT_EQ(path.distance(p, &again), plain);
+      EXPECT_EQ(again, nearest);
     }
   }
 }

@@ -10,7 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +21,7 @@
 #include "models/plant/plant.hpp"
 #include "models/reference/reference_table.hpp"
 #include "models/scene/scene.hpp"
+#include "simulation/run.hpp"
 #include "tests/scene_paths.hpp"
 
 namespace pumasim {
@@ -108,6 +111,34 @@ TEST(SceneTemplate, ErrorsAsLoadSceneAndNothingKeptOfAFailure) {
   }
   expect_same_load(t.load(), load_scene(f), "after the failures");
   EXPECT_THROW(SceneTemplate(scene_path("no_such_scene")), ConfigError);
+}
+
+// A load reads a copy of the document parsed once, whose values have lost
+// their source lines (toml++ copies none): a refusal that names a line of
+// the file (here scene.held's, too long for one joint fewer) must still
+// name it, as load_scene does, and so must the check of the integrator's
+// name made after the load (load_checked_scene), for a name set in the file.
+TEST(SceneTemplate, ARefusalNamesTheFilesLine) {
+  const std::string f = scene_path("paper_slow_viscous");
+  const SceneTemplate t(f);
+  const std::string plain = config_error_of([&] { load_scene(f, {"scene.joints=2"}); });
+  EXPECT_NE(plain.find(f + ":"), std::string::npos) << plain;  // file:line
+  EXPECT_EQ(config_error_of([&] { t.load({"scene.joints=2"}); }), plain);
+
+  std::ifstream in(f);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string was = "name = \"ab2\"";
+  ASSERT_NE(text.find(was), std::string::npos);
+  text.replace(text.find(was), was.size(), "name = \"no-such-method\"");
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pumasim_template_line";
+  std::filesystem::create_directories(dir);
+  const std::string g = (dir / "unknown_method.toml").string();  // scene.robot is a name: read from anywhere
+  std::ofstream(g) << text;
+  const SceneTemplate u(g);
+  const std::string expected = config_error_of([&] { load_checked_scene(g, {}); });
+  EXPECT_NE(expected.find(g + ":"), std::string::npos) << expected;
+  EXPECT_EQ(config_error_of([&] { load_checked_scene(u, {}); }), expected);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(SceneTemplate, SharesTheReferenceOnlyBetweenEqualInputs) {

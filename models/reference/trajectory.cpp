@@ -89,10 +89,14 @@ std::vector<double> Path::breaks() const {
   return out;
 }
 
-double Path::distance(const Eigen::Vector3d& p) const {
+double Path::distance(const Eigen::Vector3d& p, int* nearest) const {
   const Eigen::Vector2d xy = p.head<2>();
-  double best = std::numeric_limits<double>::infinity();
-  for (const Piece& pc : pieces_) {
+  double best = std::numeric_limits<double>::infinity();  // in the plane; the height once, at the end
+  const int count = static_cast<int>(pieces_.size());
+  const int first = nearest && *nearest >= 0 && *nearest < count ? *nearest : 0;
+  for (int i = 0; i < count; ++i) {  // from `first`: its distance bounds the others' work
+    const int k = (first + i) % count;
+    const Piece& pc = pieces_[static_cast<std::size_t>(k)];
     double d = std::min((xy - pc.a).norm(), (xy - pc.b).norm());  // the ends
     if (pc.curvature == 0.0) {
       const double u = (xy - pc.p0).dot(pc.dir);
@@ -102,8 +106,9 @@ double Path::distance(const Eigen::Vector3d& p) const {
       const Eigen::Vector2d r = xy - pc.centre;
       const double to_circle = std::abs(r.norm() - 1.0 / std::abs(pc.curvature));
       // The circle's nearest point counts only when it is on the arc; it
-      // can lower d only when nearer than the ends (then the angle is taken).
-      if (r.norm() > 0 && to_circle < d) {
+      // can lower the result only when nearer than the ends and than the
+      // best so far (then the angle is taken: the same minimum, exactly).
+      if (r.norm() > 0 && to_circle < d && to_circle < best) {
         const double sg = pc.curvature > 0 ? 1.0 : -1.0;
         const double h = std::atan2(sg * r.x(), -sg * r.y());
         double u = std::remainder(h - pc.heading0, 2 * M_PI) / pc.curvature;
@@ -111,9 +116,12 @@ double Path::distance(const Eigen::Vector3d& p) const {
         if (u < pc.len) d = to_circle;
       }
     }
-    best = std::min(best, std::hypot(d, p.z() - height_));
+    if (d < best) {
+      best = d;
+      if (nearest) *nearest = k;
+    }
   }
-  return best;
+  return std::hypot(best, p.z() - height_);
 }
 
 Reference::Reference(RobotModel robot, int n, Eigen::VectorXd q_held,
@@ -276,8 +284,8 @@ void Reference::build_trace() {
   trace_.push_back(position(q));
 }
 
-double Reference::deviation(const Eigen::Vector3d& p) const {
-  if (path_) return path_->distance(p);
+double Reference::deviation(const Eigen::Vector3d& p, int* nearest) const {
+  if (path_) return path_->distance(p, nearest);
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k + 1 < trace_.size(); ++k) {
     const Eigen::Vector3d a = trace_[k], d = trace_[k + 1] - a;

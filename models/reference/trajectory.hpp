@@ -44,8 +44,11 @@ class Path {
   // continued past its ends: at a break, the limit from inside piece k).
   int piece(double s) const;
   void eval_piece(int k, double s, Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Vector3d& ddp) const;
-  // Distance from p to the nearest point of the path [m] (exact for lines and arcs).
-  double distance(const Eigen::Vector3d& p) const;
+  // Distance from p to the nearest point of the path [m] (exact for lines and
+  // arcs). nearest, when given: the piece to measure first (a hint, such as
+  // the previous call's answer along a run; any value is safe), and on
+  // return the nearest piece. The hint changes the work, never the result.
+  double distance(const Eigen::Vector3d& p, int* nearest = nullptr) const;
   // The arc lengths in (0, L) where the curvature jumps (a line meets an arc,
   // or arcs of different radius or turning direction meet).
   std::vector<double> breaks() const;
@@ -130,8 +133,9 @@ class Reference {
   // Distance from p to the geometric path [m]: exact for a path of lines and
   // arcs; for a joint curve, to the polyline through the flange positions at
   // the curve's knots and at least 4000 points in all, equally spaced in the
-  // parameter within each piece.
-  double deviation(const Eigen::Vector3d& p) const;
+  // parameter within each piece. nearest: Path::distance's hint (unused for
+  // a joint curve).
+  double deviation(const Eigen::Vector3d& p, int* nearest = nullptr) const;
   const Timing& timing() const { return timing_; }
   Interpolation interpolation() const { return interp_; }
   IkMethod ik_method() const { return ik_.method; }

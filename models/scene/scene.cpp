@@ -52,6 +52,11 @@ struct SceneTemplate::Shared {
     std::shared_ptr<const ReferenceTable> table;  // nullptr: not tabulated (ReferenceTable::tabulates)
   };
   std::vector<std::pair<ReferenceKey, Tabulated>> references;
+  // The file parsed once, with the template's sets applied: each load reads
+  // a copy (a twentieth of a parse's cost), whose values have lost their
+  // source lines (toml++ copies none), so a load the reader refuses is read
+  // again from the text, for the message's line (SceneTemplate::load).
+  toml::table doc;
 
   // The robot of `spec`, loaded by the first load that asks (under the lock:
   // the others wait for it rather than read it again); its files recorded
@@ -1153,24 +1158,43 @@ SceneTemplate::SceneTemplate(const std::string& path, const std::vector<std::str
     throw ConfigError(path + ": cannot be read (" + unreadable_reason(path) + "); expected a readable TOML file");
   text_ = *text;
   file_ = record.files().front();
-  toml::table doc = parse_toml_text(text_, path);  // its errors, and the sets', now rather than at every load
-  apply_overrides(doc, sets_);
+  shared_->doc = parse_toml_text(text_, path);  // its errors, and the sets', now rather than at every load
+  apply_overrides(shared_->doc, sets_);
 }
 
 SceneTemplate::~SceneTemplate() = default;
 
-Scene SceneTemplate::load(const std::vector<std::string>& overrides) const {
+namespace {
+
+// A template's load from `doc` (its file's document with its sets), the overrides applied.
+Scene read_template(SceneTemplate::Shared* shared, const InputFile& file, const std::string& path, toml::table& doc,
+                    const std::vector<std::string>& overrides) {
   const InputRecord record;  // every file read from here on, and the scene file read once
-  record_input_file(file_);
-  toml::table doc = parse_toml_text(text_, path_);
-  apply_overrides(doc, sets_);
+  record_input_file(file);
   apply_overrides(doc, overrides);
   struct Scope {  // template_load set for this load (and restored, were loads to nest)
     TemplateLoad load, *outer;
     explicit Scope(SceneTemplate::Shared* s) : load{s, {}}, outer(template_load) { template_load = &load; }
     ~Scope() { template_load = outer; }
-  } scope(shared_.get());
-  return read_scene_document(doc, path_, record);
+  } scope(shared);
+  return read_scene_document(doc, path, record);
+}
+
+}  // namespace
+
+Scene SceneTemplate::load(const std::vector<std::string>& overrides) const {
+  toml::table copy = shared_->doc;  // concurrent loads only read the shared document
+  try {
+    return read_template(shared_.get(), file_, path_, copy, overrides);
+  } catch (const ConfigError&) {
+    return load_exact(overrides);  // the same refusal, with its source line
+  }
+}
+
+Scene SceneTemplate::load_exact(const std::vector<std::string>& overrides) const {
+  toml::table doc = parse_toml_text(text_, path_);
+  apply_overrides(doc, sets_);
+  return read_template(shared_.get(), file_, path_, doc, overrides);
 }
 
 PlanningSetup time_optimal_setup(const PlantConfig& pc, int n, const ReferenceSettings& r) {

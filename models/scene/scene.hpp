@@ -149,12 +149,16 @@ class SceneTemplate {
   SceneTemplate(const SceneTemplate&) = delete;
   SceneTemplate& operator=(const SceneTemplate&) = delete;
   Scene load(const std::vector<std::string>& overrides = {}) const;
+  // The same load from the text parsed again: the values' source lines, for
+  // a message that names them (load's own, when it refuses; the check of
+  // the integrator's name, made after a load).
+  Scene load_exact(const std::vector<std::string>& overrides = {}) const;
   const std::string& path() const { return path_; }
   struct Shared;  // the robots and references built (scene.cpp)
 
  private:
   std::string path_;
-  // The file's text as read, parsed again by each load: toml++ copies a
+  // The file's text as read, parsed again by load_exact: toml++ copies a
   // table without its source positions, which the messages name.
   std::string text_;
   std::vector<std::string> sets_;
