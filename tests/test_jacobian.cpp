@@ -57,6 +57,14 @@ TEST(DualN, ArithmeticAndFunctionsMatchClosedForms) {
   EXPECT_EQ(f.deriv(1), 0.0);
   EXPECT_NEAR(f.deriv(2), dfdy, 1e-14);
   EXPECT_EQ(abs(-X).deriv(0), 1.0);
+  // exp, on both dual types: d/dx x exp(-x^2) = (1 - 2 x^2) exp(-x^2).
+  const DualN<3> g = X * exp(-(X * X));
+  EXPECT_NEAR(g.value(), x * std::exp(-x * x), 1e-15);
+  EXPECT_NEAR(g.deriv(0), (1 - 2 * x * x) * std::exp(-x * x), 1e-15);
+  EXPECT_EQ(g.deriv(1), 0.0);
+  const Dual d = Dual(x, 1.0) * exp(-(Dual(x, 1.0) * Dual(x, 1.0)));
+  EXPECT_NEAR(d.value(), x * std::exp(-x * x), 1e-15);
+  EXPECT_NEAR(d.deriv(), (1 - 2 * x * x) * std::exp(-x * x), 1e-15);
 }
 
 std::vector<RobotModel> arms() {
@@ -249,15 +257,16 @@ void expect_plant_jacobians_agree(Plant& plant, double t, const double* x, const
 
 TEST(PlantJacobian, MultiTangentEqualsPerColumnInEveryKindOfScene) {
   const std::vector<PlantCase> cases = {
-      {"paper_slow", {}},                                              // the paper's rule
-      {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=1e-2"}},  // tanh
-      {"sampled_control", {}},                                         // sampled controller
-      {"passive_arm", {}},                                             // no drive, no controller
-      {"computed_torque", {}},                                         // a law calling inverse dynamics
-      {"energy_long_time", {}},                                        // the ledger (more than 24 states)
-      {"stanford_tracking", {}},                                       // a prismatic joint
-      {"paper_slow_reduced", {}},                                      // no current states
-      {"panda_tracking", {}},  // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
+      {"paper_slow", {}},                                                               // the paper's rule
+      {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=1e-2"}},         // tanh
+      {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.14"}},  // Stribeck (exp, tanh)
+      {"sampled_control", {}},                                                          // sampled controller
+      {"passive_arm", {}},                                                              // no drive, no controller
+      {"computed_torque", {}},     // a law calling inverse dynamics
+      {"energy_long_time", {}},    // the ledger (more than 24 states)
+      {"stanford_tracking", {}},   // a prismatic joint
+      {"paper_slow_reduced", {}},  // no current states
+      {"panda_tracking", {}},      // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.scene);
@@ -306,20 +315,40 @@ TEST(PlantJacobian, HybridFrictionStuckAndSlippingJointsAlongARun) {
 // Against central differences of f, saturations lifted so that the states
 // stay on one side of their kinks.
 TEST(PlantJacobian, MatchesCentralDifferences) {
-  for (const char* scene : {"paper_slow_6dof_hybrid", "paper_slow", "computed_torque"}) {
-    SCOPED_TRACE(scene);
-    const Scene sc = load_scene(test::scene_path(scene), {"amplifier.voltage_limit=1e9", "controller.output_limit=1e9"});
+  struct Case {
+    const char* scene;
+    std::vector<std::string> sets;
+    double qd;    // [rad/s] joint j's speed: qd (j + 1)
+    double step;  // relative to each state's scale
+  };
+  // The Stribeck law at joint speeds whose motor speeds (gear ratios near
+  // 60) straddle its peak, w_St / sqrt(2) = 0.1 rad/s: its exp term matters.
+  // Its third derivative in w_m there, about sqrt(2e) (Fs - Fk) 6 / w_St^3
+  // ~ 100 N m s^3/rad^3, makes the differences' truncation error (h^2 / 6
+  // times it) at the others' step ~1e-5 relative: a tenth of the step, a
+  // hundredth of the error.
+  const std::vector<Case> cases = {
+      {"paper_slow_6dof_hybrid", {}, 0.05, 1e-5},
+      {"paper_slow", {}, 0.05, 1e-5},
+      {"computed_torque", {}, 0.05, 1e-5},
+      {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.14"}, 0.001, 1e-6},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene);
+    std::vector<std::string> sets = {"amplifier.voltage_limit=1e9", "controller.output_limit=1e9"};
+    sets.insert(sets.end(), c.sets.begin(), c.sets.end());
+    const Scene sc = load_scene(test::scene_path(c.scene), sets);
     Plant plant(sc.plant);
     const int m = plant.size();
     std::vector<double> x(m), fp(m), fm(m);
     plant.initial_state(x.data());
     const StateLayout& L = plant.layout();
-    for (int j = 0; j < L.n; ++j) x[L.qd + j] = 0.05 * (j + 1);
+    for (int j = 0; j < L.n; ++j) x[L.qd + j] = c.qd * (j + 1);
     plant.settle_modes(0.3, x.data());
     Eigen::MatrixXd J, C(m, m);
     plant.jacobian_exact(0.3, x.data(), J);
     for (int k = 0; k < m; ++k) {
-      const double step = 1e-5 * std::max(1.0, plant.tolerance_scale(k));
+      const double step = c.step * std::max(1.0, plant.tolerance_scale(k));
       const double xk = x[k];
       x[k] = xk + step, plant.rhs(0.3, x.data(), fp.data());
       x[k] = xk - step, plant.rhs(0.3, x.data(), fm.data());

@@ -62,6 +62,7 @@ void expect_same_drive(const PlantConfig& a, const PlantConfig& b, const std::st
     EXPECT_EQ(a.friction[j].kinetic_torque, b.friction[j].kinetic_torque) << what;
     EXPECT_EQ(a.friction[j].zero_speed, b.friction[j].zero_speed) << what;
     EXPECT_EQ(a.friction[j].speed_scale, b.friction[j].speed_scale) << what;
+    EXPECT_EQ(a.friction[j].stribeck_speed, b.friction[j].stribeck_speed) << what;
   }
 }
 
@@ -199,18 +200,22 @@ TEST(SceneRoundTrip, Overrides) {
       {"paper_slow", {"integrator.rtol=1e-7", "integrator.name=\"cvode-bdf\""}},
       {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=0.05"}},
       {"stick_slip", {"friction.model=\"karnopp\""}},
+      {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.2", "friction.speed_scale=0.02"}},
       {"paper_slow", {"friction.model=\"karnopp\"", "friction.zero_speed=0.01"}},
       {"paper_slow", {"controller.kp=[1, 2, 3]", "amplifier.voltage_limit=30"}},
-      {"paper_slow", {"controller.mode=\"sampled\"", "controller.servo_period=2.5e-4", "controller.setpoint_interval=1e-3"}},
+      {"paper_slow",
+       {"controller.mode=\"sampled\"", "controller.servo_period=2.5e-4", "controller.setpoint_interval=1e-3"}},
       {"paper_slow", {"motor.inductance=0"}},
       {"paper_slow_6dof", {"scene.energy_ledger=true", "scene.rotor_inertia=false"}},
       {"paper_slow", {"scene.held=[0.1, -0.2, 0.3]", "scene.backend=\"aba\""}},
       {"smooth_line_quintic", {"reference.timing=\"scurve\"", "reference.blend=0.3"}},
-      {"paper_slow", {"reference.interpolation=\"joint-quintic\"", "reference.via_segments=4", "reference.arm=\"right\""}},
+      {"paper_slow",
+       {"reference.interpolation=\"joint-quintic\"", "reference.via_segments=4", "reference.arm=\"right\""}},
       {"planning", {"planning.grid=100", "planning.current_limit=[4.0, 5.0, 6.0]", "planning.joint_speed_limit=2.0"}},
       // Angles whose degrees do not all read back simply (deg -> rad -> deg).
-      {"paper_slow", {"reference.segments=[{line = 0.1}, {arc_radius = 0.08, turn_degrees = 13.7}, "
-                      "{arc_radius = 0.08, turn_degrees = -45.1}, {arc_radius = 0.08, turn_degrees = 91.3}]"}},
+      {"paper_slow",
+       {"reference.segments=[{line = 0.1}, {arc_radius = 0.08, turn_degrees = 13.7}, "
+        "{arc_radius = 0.08, turn_degrees = -45.1}, {arc_radius = 0.08, turn_degrees = 91.3}]"}},
   };
   for (const auto& [scene, set] : sets) expect_round_trip(scene_path(scene), set);
   expect_round_trip(scene_path("passive_arm"), {"initial.pose=\"qr\""});
@@ -231,6 +236,26 @@ TEST(SceneRoundTrip, UnlimitedPlanningLoadsBack) {
   const Scene a = load_scene(scene_path("planning"));
   EXPECT_TRUE(std::isinf(a.reference.current_limit[0]));
   expect_round_trip(scene_path("planning"), {});
+}
+
+// The Stribeck law's break-away torque is its peak: one below the Coulomb
+// level on some joint is refused, naming the key, the joint and both levels;
+// and the law needs its Stribeck speed.
+TEST(SceneEntries, StribeckNeedsItsPeakAboveCoulomb) {
+  const std::vector<std::string> stribeck = {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.14"};
+  std::vector<std::string> low = stribeck;
+  low.push_back("friction.static_torque=[0.146, 0.1, 0.146]");
+  try {
+    load_scene(scene_path("stick_slip"), low);
+    ADD_FAILURE() << "a break-away torque below the Coulomb level loaded";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("friction.static_torque"), std::string::npos) << m;
+    EXPECT_NE(m.find("joint 2: static_torque 0.1 N m below kinetic_torque 0.124 N m"), std::string::npos) << m;
+  }
+  EXPECT_THROW(load_scene(scene_path("stick_slip"), {"friction.model=\"stribeck\""}), ConfigError);  // no w_St
+  const Scene ok = load_scene(scene_path("stick_slip"), stribeck);
+  for (const FrictionParams& f : ok.plant.friction) EXPECT_EQ(f.stribeck_speed, 0.14);
 }
 
 // Per-joint arrays are checked against the simulated joints, and the robot's
@@ -272,6 +297,7 @@ TEST(SceneKeyDocs, ConditionsFollowTheLawsDeclarations) {
   EXPECT_EQ(applies("friction", "zero_speed"), laws_reading(&FrictionKeys::zero_speed));
   EXPECT_EQ(applies("friction", "speed_scale"), laws_reading(&FrictionKeys::speed_scale));
   EXPECT_EQ(applies("friction", "sigmoid_level"), laws_reading(&FrictionKeys::sigmoid));
+  EXPECT_EQ(applies("friction", "stribeck_speed"), laws_reading(&FrictionKeys::stribeck_speed));
   EXPECT_EQ(applies("friction", "model"), "");
   ControllerLaws::for_each([&](auto tag) {
     using Law = typename decltype(tag)::Law;

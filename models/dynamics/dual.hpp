@@ -55,6 +55,10 @@ class Dual {
     const double th = std::tanh(a.v_);
     return Dual(th, (1.0 - th * th) * a.d_);
   }
+  friend Dual exp(Dual a) {
+    const double e = std::exp(a.v_);
+    return Dual(e, e * a.d_);
+  }
   friend Dual abs(Dual a) { return a.v_ < 0 ? -a : a; }
   friend bool isfinite(Dual a) { return std::isfinite(a.v_) && std::isfinite(a.d_); }
 

@@ -92,6 +92,10 @@ class DualN {
     const double th = std::tanh(a.v_);
     return a.scaled(0.0, th, 1.0 - th * th);
   }
+  friend PUMASIM_DUALN_INLINE DualN exp(const DualN& a) {
+    const double e = std::exp(a.v_);
+    return a.scaled(0.0, e, e);
+  }
   friend PUMASIM_DUALN_INLINE DualN abs(const DualN& a) { return a.v_ < 0 ? -a : a; }
   friend PUMASIM_DUALN_INLINE bool isfinite(const DualN& a) {
     bool ok = std::isfinite(a.v_);

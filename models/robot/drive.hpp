@@ -52,6 +52,9 @@ struct FrictionParams {
   double sigmoid_level = 0.0;   // phi1 [N m]
   double sigmoid_slope = 0.0;   // phi2 [s/rad]
   double sigmoid_offset = 0.0;  // phi3 [rad/s]
+  // The smooth Stribeck law's speed scale (models/plant/friction/stribeck.hpp),
+  // Simscape's default sqrt(2) x 0.1 rad/s (its break-away speed 0.1 rad/s).
+  double stribeck_speed = 0.14142135623730951;  // w_St [rad/s]
 };
 
 // Slip state of a joint under the hybrid model.

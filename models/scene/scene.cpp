@@ -310,6 +310,20 @@ bool coulomb(const PlantConfig& pc) { return keys_of(pc).levels; }
 bool banded(const PlantConfig& pc) { return keys_of(pc).zero_speed; }
 bool smooth(const PlantConfig& pc) { return keys_of(pc).speed_scale; }
 bool sigmoid(const PlantConfig& pc) { return keys_of(pc).sigmoid; }
+bool stribeck(const PlantConfig& pc) { return keys_of(pc).stribeck_speed; }
+
+// The Stribeck law's break-away torque is its peak: at least the Coulomb
+// level on every joint, or the law would push near rest (stribeck.hpp).
+void check_breakaway(StrictTable& t, PlantConfig& pc) {
+  for (int j = 0; j < pc.n; ++j) {
+    const FrictionParams& f = pc.friction[static_cast<std::size_t>(j)];
+    if (f.static_torque >= f.kinetic_torque) continue;
+    char got[160];
+    std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m below kinetic_torque %.6g N m", j + 1,
+                  f.static_torque, f.kinetic_torque);
+    t.fail("static_torque", "a break-away torque >= kinetic_torque (stribeck: its peak above the Coulomb level)", got);
+  }
+}
 
 // The law's default band, before zero_speed is read (when it is).
 void default_band(StrictTable&, PlantConfig& pc) {
@@ -364,13 +378,15 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      {dissipative, "model"}},
     {"static_torque",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
-     "Fs [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|; required when it gives none)",
+     "Fs [N m] (paper, hybrid, karnopp, tanh; stribeck: the break-away torque; default: the robot file's friction / "
+     "|Z|; required when it gives none)",
      Need::kOptional,
      {coulomb, "model"},
      need_static},
     {"kinetic_torque",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh; default: the robot file's friction / |Z|; required when it gives none)",
+     "Fk [N m] (paper, hybrid, karnopp, tanh; stribeck: the Coulomb level; default: the robot file's friction / |Z|; "
+     "required when it gives none)",
      Need::kOptional,
      {coulomb, "model"},
      need_kinetic},
@@ -381,9 +397,15 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      {banded, "model"}},
     {"speed_scale",
      scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].speed_scale)),
-     "[rad/s] tanh(w / speed_scale) (tanh)",
+     "[rad/s] tanh(w / speed_scale) (tanh; stribeck: its Coulomb term's scale w_C)",
      Need::kOptional,
      {smooth, "model"}},
+    {"stribeck_speed",
+     scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].stribeck_speed)),
+     "[rad/s] w_St, the Stribeck term's speed scale (stribeck: its peak at w_St / sqrt(2))",
+     Need::kRequired,
+     {stribeck, "model"},
+     check_breakaway},
     {"sigmoid_level",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
      "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)",

@@ -25,6 +25,7 @@
 #include "models/plant/friction/none.hpp"
 #include "models/plant/friction/sigmoid.hpp"
 #include "models/plant/friction/stick_band.hpp"
+#include "models/plant/friction/stribeck.hpp"
 #include "models/plant/friction/tanh.hpp"
 #include "models/plant/friction/viscous.hpp"
 
@@ -74,9 +75,8 @@ struct FrictionLawList {
   }
 };
 
-using FrictionLaws =
-    FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction, TanhFriction,
-                     SigmoidFriction>;
+using FrictionLaws = FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction,
+                                     TanhFriction, SigmoidFriction, StribeckFriction>;
 
 template <class Law>
 constexpr FrictionModel friction_model() {
