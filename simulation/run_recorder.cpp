@@ -26,6 +26,7 @@ std::string unit_of_state(const std::string& state, const RobotModel* robot) {
   if (state.rfind("q", 0) == 0) return prismatic_state(state, 1, robot) ? "m" : "rad";
   if (state.rfind("i_motor", 0) == 0) return "A";
   if (state.rfind("z_piv", 0) == 0) return "rad s";
+  if (state.rfind("z_fric", 0) == 0) return "rad";
   if (state.rfind("e_", 0) == 0) return "J";
   return "-";
 }

@@ -260,13 +260,16 @@ TEST(PlantJacobian, MultiTangentEqualsPerColumnInEveryKindOfScene) {
       {"paper_slow", {}},                                                               // the paper's rule
       {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=1e-2"}},         // tanh
       {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.14"}},  // Stribeck (exp, tanh)
-      {"sampled_control", {}},                                                          // sampled controller
-      {"passive_arm", {}},                                                              // no drive, no controller
-      {"computed_torque", {}},     // a law calling inverse dynamics
-      {"energy_long_time", {}},    // the ledger (more than 24 states)
-      {"stanford_tracking", {}},   // a prismatic joint
-      {"paper_slow_reduced", {}},  // no current states
-      {"panda_tracking", {}},      // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
+      {"stick_slip",
+       {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0",
+        "friction.bristle_damping=0.6"}},  // LuGre: a state per joint
+      {"sampled_control", {}},             // sampled controller
+      {"passive_arm", {}},                 // no drive, no controller
+      {"computed_torque", {}},             // a law calling inverse dynamics
+      {"energy_long_time", {}},            // the ledger (more than 24 states)
+      {"stanford_tracking", {}},           // a prismatic joint
+      {"paper_slow_reduced", {}},          // no current states
+      {"panda_tracking", {}},              // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.scene);
@@ -332,6 +335,11 @@ TEST(PlantJacobian, MatchesCentralDifferences) {
       {"paper_slow", {}, 0.05, 1e-5},
       {"computed_torque", {}, 0.05, 1e-5},
       {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.14"}, 0.001, 1e-6},
+      {"stick_slip",
+       {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0",
+        "friction.bristle_damping=0.6"},
+       0.001,
+       1e-6},  // LuGre's G(w) as Stribeck's exp
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene);

@@ -3,14 +3,20 @@
 // layout, time events, inverse kinematics, and scene files.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
+
+#include "core/errors.hpp"
 #include "experiments/cli.hpp"
 #include "integrators/registry.hpp"
+#include "models/dynamics/backend.hpp"
 #include "models/plant/plant.hpp"
 #include "models/robot/kinematics.hpp"
 #include "models/robot/random_chain.hpp"
@@ -658,6 +664,59 @@ TEST_F(BadScene, ViaSegmentsNotWhole) {
 }
 TEST_F(BadScene, UnknownBackend) {
   expect_rejected("backend = \"crba\"", "backend = \"newton\"", "scene.backend: expected one of: aba, crba");
+}
+
+// LuGre's bristle mode (models/plant/friction/lugre.hpp): at rest with
+// z = 0, dz/dt = w_m to first order, so a joint held by its bristles obeys
+// H q'' = -Z^2 sigma0 (q - q0) - Z^2 (sigma1 + B) q' (joint side; z = Z (q -
+// q0), the law on the motor shaft). The plant's Jacobian at that state has
+// the eigenvalue 0 (z - Z q is constant) and the two roots of
+// H s^2 + Z^2 (sigma1 + B) s + Z^2 sigma0 = 0: the stiffness analysis sees
+// the bristles. A passive PUMA 560 with only joint 1 simulated (a vertical
+// axis: no gravity torque), H from the back-end at q0.
+TEST(PlantStiffness, LuGreShowsTheBristleModeOfAStuckJoint) {
+  const Scene sc =
+      load_scene(scene_path("passive_arm"),
+                 {"scene.joints=1", "friction.model=\"lugre\"", "friction.static_torque=0.146",
+                  "friction.kinetic_torque=0.124", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0",
+                  "friction.bristle_damping=0.6", "friction.viscous=0.001"});
+  Plant plant(sc.plant);
+  ASSERT_EQ(plant.size(), 3);  // q1, qd1, z_fric1
+  std::vector<double> x(3);
+  plant.initial_state(x.data());
+  EXPECT_EQ(x[2], 0.0);
+  Eigen::MatrixXd J;
+  plant.jacobian_exact(0.0, x.data(), J);
+  const RobotModel sim = simulated_robot(sc.plant.robot, 1, sc.plant.q_held);
+  Eigen::MatrixXd H(1, 1);
+  find_backend("crba").make(sim)->mass_matrix(Eigen::VectorXd::Constant(1, x[0]), H);
+  const double Z = sc.plant.robot.joints[0].gear_ratio, a = H(0, 0), b = Z * Z * (0.6 + 0.001), c = Z * Z * 100.0;
+  const std::complex<double> disc = std::sqrt(std::complex<double>(b * b - 4 * a * c));
+  std::vector<std::complex<double>> want = {0.0, (-b + disc) / (2 * a), (-b - disc) / (2 * a)};
+  const Eigen::EigenSolver<Eigen::MatrixXd> es(J, false);
+  std::vector<std::complex<double>> got(es.eigenvalues().data(), es.eigenvalues().data() + 3);
+  const auto order = [](const std::complex<double>& u, const std::complex<double>& v) {
+    return u.real() != v.real() ? u.real() < v.real() : u.imag() < v.imag();
+  };
+  std::sort(want.begin(), want.end(), order);
+  std::sort(got.begin(), got.end(), order);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(got[k].real(), want[k].real(), 1e-9 * std::abs(want[1])) << k;
+    EXPECT_NEAR(got[k].imag(), want[k].imag(), 1e-9 * std::abs(want[1])) << k;
+  }
+}
+
+// The energy ledger has no account for the bristles' potential energy: a
+// scene with both is refused, naming the law.
+TEST(PlantStiffness, LuGreWithTheLedgerIsRefused) {
+  try {
+    load_scene(scene_path("energy_long_time"),
+               {"friction.model=\"lugre\"", "friction.static_torque=0.146", "friction.kinetic_torque=0.124",
+                "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0", "friction.bristle_damping=0.6"});
+    ADD_FAILURE() << "loaded";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("lugre's bristles"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

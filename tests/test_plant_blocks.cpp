@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <string>
@@ -212,6 +213,82 @@ TEST(FrictionRegistry, StribeckBreaksAwayAtItsPeak) {
   const double g = std::pow(4.0, 2.0 / 3.0);  // the fold's order: excess ~ r^(2/3)
   const double peak = 0.146 + (g * excess[2] - excess[1]) / (g - 1);
   EXPECT_NEAR(peak, 0.146, 0.01 * (0.146 - 0.124));
+}
+
+// LuGre (Canudas de Wit et al., IEEE TAC 40(3), 1995; models/plant/friction/
+// lugre.hpp) at a constant speed w: dz/dt = w - a z with a = sigma0 |w| / G(w),
+// so z(t) = (w / a)(1 - exp(-a t)) from z = 0, and it settles at
+// z_ss = sgn(w) G(w) / sigma0, where the friction is the Stribeck curve
+// sgn(w) G(w) + B w (the paper's eq. (5)), G(w) = Fk + (Fs - Fk) exp(-(w/vs)^2):
+// Fs just off rest, Fk + B w at speed. The registry's torque without the
+// state is that curve.
+TEST(FrictionRegistry, LuGreSteadyStateIsItsStribeckCurve) {
+  FrictionParams f;
+  f.model = friction_model<LuGreFriction>();
+  f.static_torque = 0.146, f.kinetic_torque = 0.124, f.viscous = 0.002;          // the paper's Fs, Fk; B chosen
+  f.stribeck_speed = 0.1, f.bristle_stiffness = 100.0, f.bristle_damping = 0.6;  // chosen
+  ASSERT_EQ(friction_states(f.model), 1);
+  for (double w : {-3.0, -0.1, -0.02, 0.001, 0.05, 0.1, 0.4, 20.0}) {
+    const double G = 0.124 + 0.022 * std::exp(-(w / 0.1) * (w / 0.1));
+    const double z_ss = (w > 0 ? 1 : -1) * G / 100.0;
+    EXPECT_NEAR(friction_rate(f, w, z_ss), 0.0, 1e-15 * std::max(1.0, std::abs(w))) << w;
+    const double curve = (w > 0 ? 1 : -1) * G + 0.002 * w;
+    EXPECT_NEAR(friction_state_torque(f, w, z_ss, 0.0), curve, 1e-15) << w;
+    EXPECT_NEAR(friction_torque(f, w, 0.0, SlipMode::kStuck), curve, 1e-15) << w;
+    // The transient from z = 0, in closed form, against the law's rate at its points.
+    const double a = 100.0 * std::abs(w) / G;
+    for (double t : {0.0, 0.3 / a, 2.0 / a}) {
+      const double z = w / a * (1 - std::exp(-a * t)), dz = w * std::exp(-a * t);
+      EXPECT_NEAR(friction_rate(f, w, z), dz, 1e-14 * std::max(1.0, std::abs(w))) << w << " " << t;
+      EXPECT_NEAR(friction_state_torque(f, w, z, dz), 100.0 * z + 0.6 * dz + 0.002 * w, 1e-15);
+    }
+  }
+  EXPECT_NEAR(friction_torque(f, 1e-9, 0.0, SlipMode::kStuck), 0.146, 1e-9);
+  EXPECT_NEAR(friction_torque(f, 50.0, 0.0, SlipMode::kStuck), 0.124 + 0.002 * 50.0, 1e-15);
+  EXPECT_NEAR(friction_state_bound(f), 0.146 / 100.0, 1e-18);  // Property 1: |z| <= Fs / sigma0
+}
+
+// Break-away under a slow torque ramp, J w' = r t - tau_f(w, z) with the
+// bristles' state: below Fs the bristles hold (z follows r t / sigma0, the
+// shaft creeps at about r / sigma0); the steady-state curve falls from Fs
+// at rest, so the shaft breaks away (speed past 10 vs) once the ramp passes
+// Fs, later by less the slower the ramp: each ramp a quarter of the last,
+// the excess shrinks, and the slowest breaks away within 1 % of the Stribeck
+// rise Fs - Fk above Fs. No run's bristles leave |z| <= Fs / sigma0.
+TEST(FrictionRegistry, LuGreBreaksAwayAtFs) {
+  FrictionParams f;
+  f.model = friction_model<LuGreFriction>();
+  f.static_torque = 0.146, f.kinetic_torque = 0.124, f.viscous = 0.0;
+  f.stribeck_speed = 0.1, f.bristle_stiffness = 100.0, f.bristle_damping = 0.6;
+  const double J = 1e-3;  // [kg m^2]; the bristle mode sqrt(sigma0 / J) = 316 rad/s, damped (ratio 0.95)
+  double previous = HUGE_VAL, z_max = 0;
+  for (double r : {0.02, 0.005, 0.00125}) {  // [N m/s]
+    const auto rates = [&](double t, const std::array<double, 2>& y) {
+      const double zd = friction_rate(f, y[0], y[1]);
+      return std::array<double, 2>{(r * t - friction_state_torque(f, y[0], y[1], zd)) / J, zd};
+    };
+    // From 90 % of Fs on the presliding regime's quasi-static point: z = r t / sigma0, w = r / sigma0.
+    double t = 0.9 * 0.146 / r;
+    std::array<double, 2> y{r / 100.0, r * t / 100.0};
+    const double dt = 1e-4;  // [s] RK4, 0.03 rad of the bristle mode per step
+    const auto axpy = [](const std::array<double, 2>& a, double h, const std::array<double, 2>& b) {
+      return std::array<double, 2>{a[0] + h * b[0], a[1] + h * b[1]};
+    };
+    while (y[0] < 10 * 0.1 && t < 2 * 0.146 / r) {
+      const auto k1 = rates(t, y), k2 = rates(t + dt / 2, axpy(y, dt / 2, k1)),
+                 k3 = rates(t + dt / 2, axpy(y, dt / 2, k2)), k4 = rates(t + dt, axpy(y, dt, k3));
+      for (int i = 0; i < 2; ++i) y[i] += dt / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
+      t += dt;
+      z_max = std::max(z_max, std::abs(y[1]));
+    }
+    ASSERT_GE(y[0], 1.0) << r;
+    const double excess = r * t - 0.146;
+    EXPECT_GT(excess, 0.0) << r;
+    EXPECT_LT(excess, previous) << r;
+    previous = excess;
+  }
+  EXPECT_LT(previous, 0.01 * (0.146 - 0.124));
+  EXPECT_LE(z_max, 0.146 / 100.0 * (1 + 1e-12));
 }
 
 // u = sat(Kp e + Ki z - Kv Z qd + Kvff Z qd_ref + Kaff Z qdd_ref + offset), by hand.

@@ -63,6 +63,8 @@ void expect_same_drive(const PlantConfig& a, const PlantConfig& b, const std::st
     EXPECT_EQ(a.friction[j].zero_speed, b.friction[j].zero_speed) << what;
     EXPECT_EQ(a.friction[j].speed_scale, b.friction[j].speed_scale) << what;
     EXPECT_EQ(a.friction[j].stribeck_speed, b.friction[j].stribeck_speed) << what;
+    EXPECT_EQ(a.friction[j].bristle_stiffness, b.friction[j].bristle_stiffness) << what;
+    EXPECT_EQ(a.friction[j].bristle_damping, b.friction[j].bristle_damping) << what;
   }
 }
 
@@ -201,6 +203,9 @@ TEST(SceneRoundTrip, Overrides) {
       {"stick_slip", {"friction.model=\"tanh\"", "friction.speed_scale=0.05"}},
       {"stick_slip", {"friction.model=\"karnopp\""}},
       {"stick_slip", {"friction.model=\"stribeck\"", "friction.stribeck_speed=0.2", "friction.speed_scale=0.02"}},
+      {"stick_slip",
+       {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=[100.0, 200.0, 300.0]",
+        "friction.bristle_damping=0.5"}},
       {"paper_slow", {"friction.model=\"karnopp\"", "friction.zero_speed=0.01"}},
       {"paper_slow", {"controller.kp=[1, 2, 3]", "amplifier.voltage_limit=30"}},
       {"paper_slow",
@@ -254,6 +259,15 @@ TEST(SceneEntries, StribeckNeedsItsPeakAboveCoulomb) {
     EXPECT_NE(m.find("joint 2: static_torque 0.1 N m below kinetic_torque 0.124 N m"), std::string::npos) << m;
   }
   EXPECT_THROW(load_scene(scene_path("stick_slip"), {"friction.model=\"stribeck\""}), ConfigError);  // no w_St
+  // LuGre divides by its levels' G(w): a zero level is refused, naming it.
+  try {
+    load_scene(scene_path("stick_slip"),
+               {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0",
+                "friction.bristle_damping=0.6", "friction.kinetic_torque=0.0"});
+    ADD_FAILURE() << "a LuGre law with Fk = 0 loaded";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("friction.kinetic_torque"), std::string::npos) << e.what();
+  }
   const Scene ok = load_scene(scene_path("stick_slip"), stribeck);
   for (const FrictionParams& f : ok.plant.friction) EXPECT_EQ(f.stribeck_speed, 0.14);
 }
@@ -298,6 +312,8 @@ TEST(SceneKeyDocs, ConditionsFollowTheLawsDeclarations) {
   EXPECT_EQ(applies("friction", "speed_scale"), laws_reading(&FrictionKeys::speed_scale));
   EXPECT_EQ(applies("friction", "sigmoid_level"), laws_reading(&FrictionKeys::sigmoid));
   EXPECT_EQ(applies("friction", "stribeck_speed"), laws_reading(&FrictionKeys::stribeck_speed));
+  EXPECT_EQ(applies("friction", "bristle_stiffness"), laws_reading(&FrictionKeys::bristles));
+  EXPECT_EQ(applies("friction", "bristle_damping"), laws_reading(&FrictionKeys::bristles));
   EXPECT_EQ(applies("friction", "model"), "");
   ControllerLaws::for_each([&](auto tag) {
     using Law = typename decltype(tag)::Law;

@@ -87,6 +87,14 @@ PlantConfig PlantModel::checked(PlantConfig c) {
   } else if (c.q0.size() != n) {
     throw std::invalid_argument("plant: a passive arm needs n initial angles");
   }
+  for (const FrictionParams& f : c.friction) {
+    if (c.energy_ledger && friction_states(f.model) > 0) {
+      throw std::invalid_argument(std::string("plant: the energy ledger does not count the potential energy of ") +
+                                  to_string(f.model) +
+                                  "'s bristles (sigma0 z^2 / 2); expected scene.energy_ledger = false, or a law "
+                                  "without a state");
+    }
+  }
   if (c.controller == ControllerMode::kSampled && !(c.servo_period > 0)) {
     throw std::invalid_argument("plant: a sampled controller needs a servo period > 0");
   }
@@ -129,6 +137,7 @@ PlantModel::PlantModel(PlantConfig config, const PlantModel* shared)
   }
   motor_.declare(layout_, full_command);
   std::visit([&](const auto& c) { c.declare(layout_); }, controller_);
+  friction_.declare(layout_);
   ledger_.declare(layout_);
   declare_bounds(full_command);
   for (int j = 0; j < n; ++j) {
@@ -261,7 +270,8 @@ void PlantModel::drive(const S* x, S* xdot, PlantWorkspace<S>& w) const {
 // Friction, the joint torques and the accelerations (constrained where the
 // hybrid model holds a joint).
 template <class S>
-void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part) const {
+void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
+                                            S* xdot) const {
   const bool all = part == FrictionPart::kAll;
   const bool need_bias = all && friction_.needs_applied_torque();
   if (need_bias) {
@@ -282,8 +292,15 @@ void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspac
     const S wm = S(Z) * w.qd[j];
     w.applied[j] = need_bias ? S(w.tm[j] - w.h[j] / S(Z)) : w.tm[j];
     S tf(0);
-    if (all) tf = friction_.torque(j, wm, w.applied[j], c.modes);
-    if (part == FrictionPart::kSmooth) tf = friction_.smooth_torque(j, wm);
+    if (friction_.has_state(j)) {  // smooth: all of it in the smooth part; none of it (z held) without friction
+      S zdot(0);
+      if (part != FrictionPart::kNone) tf = friction_.state_torque(j, wm, x[layout_.zf + j], zdot);
+      xdot[layout_.zf + j] = zdot;
+    } else if (all) {
+      tf = friction_.torque(j, wm, w.applied[j], c.modes);
+    } else if (part == FrictionPart::kSmooth) {
+      tf = friction_.smooth_torque(j, wm);
+    }
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
@@ -303,7 +320,7 @@ void PlantModel::eval(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart 
   controller_output(c, w, t, x);
   ledger_.reset(w);
   drive(x, xdot, w);
-  friction_and_accelerations(c, w, part);
+  friction_and_accelerations(c, w, part, x, xdot);
   body_.store(layout_, w, xdot);
   ledger_.store(layout_, w, xdot);
   if (cfg_.controller == ControllerMode::kContinuous) {

@@ -246,7 +246,8 @@ class PlantModel {
   template <class S>
   void drive(const S* x, S* xdot, PlantWorkspace<S>& w) const;
   template <class S>
-  void friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part) const;
+  void friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
+                                  S* xdot) const;
   void hold_gravity(PlantContext& c, PlantWorkspace<double>& w, const Eigen::VectorXd& q, double* x) const;
 
   const PlantConfig cfg_;

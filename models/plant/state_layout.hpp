@@ -14,6 +14,7 @@ struct StateLayout {
   int qd = 0;
   int i = -1;
   int z = -1;
+  int zf = -1;    // a friction law's state per joint (LuGre's bristles), when the law has one
   int e = -1;     // energy ledger: e_in, e_copper, e_friction
   int size = 0;
   std::vector<std::string> names;  // q1.., qd1.., i_motor1.., z_piv1.., e_in, e_copper, e_friction

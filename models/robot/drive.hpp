@@ -55,6 +55,9 @@ struct FrictionParams {
   // The smooth Stribeck law's speed scale (models/plant/friction/stribeck.hpp),
   // Simscape's default sqrt(2) x 0.1 rad/s (its break-away speed 0.1 rad/s).
   double stribeck_speed = 0.14142135623730951;  // w_St [rad/s]
+  // LuGre's bristles (models/plant/friction/lugre.hpp, motor side).
+  double bristle_stiffness = 0.0;  // sigma0 [N m/rad]
+  double bristle_damping = 0.0;    // sigma1 [N m s/rad]
 };
 
 // Slip state of a joint under the hybrid model.

@@ -311,14 +311,24 @@ bool banded(const PlantConfig& pc) { return keys_of(pc).zero_speed; }
 bool smooth(const PlantConfig& pc) { return keys_of(pc).speed_scale; }
 bool sigmoid(const PlantConfig& pc) { return keys_of(pc).sigmoid; }
 bool stribeck(const PlantConfig& pc) { return keys_of(pc).stribeck_speed; }
+bool bristles(const PlantConfig& pc) { return keys_of(pc).bristles; }
 
 // The Stribeck law's break-away torque is its peak: at least the Coulomb
 // level on every joint, or the law would push near rest (stribeck.hpp).
+// LuGre's levels make its G(w) = Fk + (Fs - Fk) exp(-(w/vs)^2), which the
+// bristles' rate divides by: both levels > 0 (lugre.hpp).
 void check_breakaway(StrictTable& t, PlantConfig& pc) {
   for (int j = 0; j < pc.n; ++j) {
     const FrictionParams& f = pc.friction[static_cast<std::size_t>(j)];
-    if (f.static_torque >= f.kinetic_torque) continue;
     char got[160];
+    if (bristles(pc)) {
+      if (f.static_torque > 0 && f.kinetic_torque > 0) continue;
+      std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m, kinetic_torque %.6g N m", j + 1,
+                    f.static_torque, f.kinetic_torque);
+      t.fail(f.static_torque > 0 ? "kinetic_torque" : "static_torque",
+             "levels > 0 (lugre: the bristles' rate divides by Fk + (Fs - Fk) exp(-(w/vs)^2))", got);
+    }
+    if (f.static_torque >= f.kinetic_torque) continue;
     std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m below kinetic_torque %.6g N m", j + 1,
                   f.static_torque, f.kinetic_torque);
     t.fail("static_torque", "a break-away torque >= kinetic_torque (stribeck: its peak above the Coulomb level)", got);
@@ -378,14 +388,16 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      {dissipative, "model"}},
     {"static_torque",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].static_torque)),
-     "Fs [N m] (paper, hybrid, karnopp, tanh; stribeck: the break-away torque; default: the robot file's friction / "
+     "Fs [N m] (paper, hybrid, karnopp, tanh, lugre; stribeck: the break-away torque; default: the robot file's "
+     "friction / "
      "|Z|; required when it gives none)",
      Need::kOptional,
      {coulomb, "model"},
      need_static},
     {"kinetic_torque",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh; stribeck: the Coulomb level; default: the robot file's friction / |Z|; "
+     "Fk [N m] (paper, hybrid, karnopp, tanh, lugre; stribeck: the Coulomb level; default: the robot file's friction / "
+     "|Z|; "
      "required when it gives none)",
      Need::kOptional,
      {coulomb, "model"},
@@ -402,10 +414,20 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      {smooth, "model"}},
     {"stribeck_speed",
      scene_io::shared_number(kPositive, PUMASIM_AT(s.friction[j].stribeck_speed)),
-     "[rad/s] w_St, the Stribeck term's speed scale (stribeck: its peak at w_St / sqrt(2))",
+     "[rad/s] w_St, the Stribeck term's speed scale (stribeck: its peak at w_St / sqrt(2); lugre: vs)",
      Need::kRequired,
      {stribeck, "model"},
      check_breakaway},
+    {"bristle_stiffness",
+     scene_io::per_joint(kPositive, PUMASIM_AT(s.friction[j].bristle_stiffness)),
+     "sigma0 [N m/rad] (lugre: the bristles' stiffness, motor side)",
+     Need::kRequired,
+     {bristles, "model"}},
+    {"bristle_damping",
+     scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].bristle_damping)),
+     "sigma1 [N m s/rad] (lugre: the bristles' damping, motor side)",
+     Need::kRequired,
+     {bristles, "model"}},
     {"sigmoid_level",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
      "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)",

@@ -1,12 +1,14 @@
 // Friction block: one law per joint from the registry (models/plant/friction/),
-// on the motor shaft. No continuous state; the hybrid law's stuck/slipping
-// modes are discrete state (FrictionModes), switched by the plant's root
+// on the motor shaft. A law with an internal state (LuGre's bristles) gets
+// the slice z_fric1..n of the state; the hybrid law's stuck/slipping modes
+// are discrete state (FrictionModes), switched by the plant's root
 // functions.
 #pragma once
 
 #include <vector>
 
 #include "models/plant/friction/registry.hpp"
+#include "models/plant/state_layout.hpp"
 #include "models/plant/workspace.hpp"
 
 namespace pumasim {
@@ -28,7 +30,29 @@ class FrictionBlock {
       events_ |= joint_events_.back();
       law_set_valued_.push_back(is_set_valued(f.model));
       joint_set_valued_.push_back(law_set_valued_.back() && (f.static_torque > 0 || f.kinetic_torque > 0));
+      joint_state_.push_back(friction_states(f.model) > 0);
+      state_ |= joint_state_.back();
     }
+  }
+  // The slice z_fric1..n when some joint's law has a state (every joint
+  // gets one; a law without a state leaves its component at 0).
+  void declare(StateLayout& L) const {
+    if (!state_) return;
+    std::vector<double> scale;
+    for (const auto& f : p_) scale.push_back(friction_state_scale(f));
+    L.zf = L.add(joint_names("z_fric", static_cast<int>(p_.size())), scale);
+    for (std::size_t j = 0; j < p_.size(); ++j) {
+      L.set_bound(L.zf + static_cast<int>(j), friction_state_bound(p_[j]),
+                  "max(Fs, Fk) / sigma0 (LuGre's bristles: Canudas de Wit et al. 1995, property 1)");
+    }
+  }
+  bool has_state() const { return state_; }
+  bool has_state(int j) const { return joint_state_[static_cast<std::size_t>(j)]; }
+  // A stateful law's torque at (w_m, z), and dz/dt into zdot.
+  template <class S>
+  S state_torque(int j, const S& wm, const S& z, S& zdot) const {
+    zdot = friction_rate(params(j), wm, z);
+    return friction_state_torque(params(j), wm, z, zdot);
   }
   const FrictionParams& params(int j) const { return p_[static_cast<std::size_t>(j)]; }
   // Some joint's law reads the torque it must resist at rest (so f needs h).
@@ -61,6 +85,8 @@ class FrictionBlock {
   const std::vector<FrictionParams> p_;
   std::vector<bool> joint_events_;  // per joint: its law has stick/slip events
   std::vector<bool> law_set_valued_, joint_set_valued_;  // per joint: the law's, and with a level > 0
+  std::vector<bool> joint_state_;                        // per joint: its law has a state
+  bool state_ = false;
   bool needs_applied_ = false;
   bool events_ = false;
 };

@@ -13,7 +13,8 @@ struct FrictionKeys {
   bool speed_scale = false;  // speed_scale: tanh(w / speed_scale) [rad/s]
   double default_zero_speed = 1e-6;  // [rad/s], when zero_speed is read
   bool sigmoid = false;      // sigmoid_level, sigmoid_slope, sigmoid_offset [N m, s/rad, rad/s] (sigmoid.hpp)
-  bool stribeck_speed = false;  // stribeck_speed: the Stribeck speed scale w_St [rad/s] (stribeck.hpp)
+  bool stribeck_speed = false;  // stribeck_speed: the Stribeck speed scale w_St [rad/s] (stribeck.hpp, lugre.hpp)
+  bool bristles = false;        // bristle_stiffness sigma0 [N m/rad], bristle_damping sigma1 [N m s/rad] (lugre.hpp)
 };
 
 }  // namespace pumasim

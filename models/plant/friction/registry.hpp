@@ -13,6 +13,7 @@
 // call and no lookup by name in the right-hand side.
 #pragma once
 
+#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "models/plant/friction/hybrid.hpp"
+#include "models/plant/friction/lugre.hpp"
 #include "models/plant/friction/none.hpp"
 #include "models/plant/friction/sigmoid.hpp"
 #include "models/plant/friction/stick_band.hpp"
@@ -76,7 +78,7 @@ struct FrictionLawList {
 };
 
 using FrictionLaws = FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction,
-                                     TanhFriction, SigmoidFriction, StribeckFriction>;
+                                     TanhFriction, SigmoidFriction, StribeckFriction, LuGreFriction>;
 
 template <class Law>
 constexpr FrictionModel friction_model() {
@@ -101,6 +103,65 @@ S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, Sli
   S tf(0);
   FrictionLaws::visit(f.model, [&](auto law) { tf = decltype(law)::torque(f, w, tau_applied, mode); });
   return tf;
+}
+
+// A law with an internal state (LuGre's bristles) declares
+//   kStates = 1, rate<S>(params, w_m, z) -> dz/dt, state_torque<S>(params,
+//   w_m, z, dz/dt) -> its torque, state_scale(params) and state_bound(params)
+//   (a typical and the largest possible |z|),
+// and its torque<S>(...) is then the steady-state curve. Laws without one
+// declare nothing (0 states).
+template <class L>
+constexpr int law_states() {
+  if constexpr (requires { L::kStates; }) {
+    return L::kStates;
+  } else {
+    return 0;
+  }
+}
+
+inline int friction_states(FrictionModel m) {
+  int r = 0;
+  FrictionLaws::visit(m, [&](auto law) { r = law_states<decltype(law)>(); });
+  return r;
+}
+
+template <class S>
+S friction_rate(const FrictionParams& f, const S& w, const S& z) {
+  S r(0);
+  FrictionLaws::visit(f.model, [&](auto law) {
+    using L = decltype(law);
+    if constexpr (law_states<L>() > 0) r = L::rate(f, w, z);
+  });
+  return r;
+}
+
+template <class S>
+S friction_state_torque(const FrictionParams& f, const S& w, const S& z, const S& zdot) {
+  S r(0);
+  FrictionLaws::visit(f.model, [&](auto law) {
+    using L = decltype(law);
+    if constexpr (law_states<L>() > 0) r = L::state_torque(f, w, z, zdot);
+  });
+  return r;
+}
+
+// A typical and the largest possible |z| of the law's state (1 and +inf without one).
+inline double friction_state_scale(const FrictionParams& f) {
+  double r = 1.0;
+  FrictionLaws::visit(f.model, [&](auto law) {
+    using L = decltype(law);
+    if constexpr (law_states<L>() > 0) r = L::state_scale(f);
+  });
+  return r;
+}
+inline double friction_state_bound(const FrictionParams& f) {
+  double r = HUGE_VAL;
+  FrictionLaws::visit(f.model, [&](auto law) {
+    using L = decltype(law);
+    if constexpr (law_states<L>() > 0) r = L::state_bound(f);
+  });
+  return r;
 }
 
 inline bool needs_applied_torque(FrictionModel m) {
