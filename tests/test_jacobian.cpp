@@ -65,6 +65,9 @@ TEST(DualN, ArithmeticAndFunctionsMatchClosedForms) {
   const Dual d = Dual(x, 1.0) * exp(-(Dual(x, 1.0) * Dual(x, 1.0)));
   EXPECT_NEAR(d.value(), x * std::exp(-x * x), 1e-15);
   EXPECT_NEAR(d.deriv(), (1 - 2 * x * x) * std::exp(-x * x), 1e-15);
+  // log: d/dx x log x = log x + 1.
+  EXPECT_NEAR((X * log(X)).deriv(0), std::log(x) + 1, 1e-15);
+  EXPECT_NEAR((Dual(x, 1.0) * log(Dual(x, 1.0))).deriv(), std::log(x) + 1, 1e-15);
 }
 
 std::vector<RobotModel> arms() {
@@ -263,13 +266,16 @@ TEST(PlantJacobian, MultiTangentEqualsPerColumnInEveryKindOfScene) {
       {"stick_slip",
        {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=100.0",
         "friction.bristle_damping=0.6"}},  // LuGre: a state per joint
-      {"sampled_control", {}},             // sampled controller
-      {"passive_arm", {}},                 // no drive, no controller
-      {"computed_torque", {}},             // a law calling inverse dynamics
-      {"energy_long_time", {}},            // the ledger (more than 24 states)
-      {"stanford_tracking", {}},           // a prismatic joint
-      {"paper_slow_reduced", {}},          // no current states
-      {"panda_tracking", {}},              // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
+      {"paper_slow_viscous",
+       {"friction.model=\"dahl\"", "friction.kinetic_torque=0.124", "friction.bristle_stiffness=100.0",
+        "friction.dahl_exponent=2.0"}},  // Dahl, alpha = 2 (exp, log)
+      {"sampled_control", {}},           // sampled controller
+      {"passive_arm", {}},               // no drive, no controller
+      {"computed_torque", {}},           // a law calling inverse dynamics
+      {"energy_long_time", {}},          // the ledger (more than 24 states)
+      {"stanford_tracking", {}},         // a prismatic joint
+      {"paper_slow_reduced", {}},        // no current states
+      {"panda_tracking", {}},            // the sigmoid law, 7 joints, the redundancy rule's inverse kinematics
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.scene);
@@ -340,6 +346,11 @@ TEST(PlantJacobian, MatchesCentralDifferences) {
         "friction.bristle_damping=0.6"},
        0.001,
        1e-6},  // LuGre's G(w) as Stribeck's exp
+      {"paper_slow_viscous",
+       {"friction.model=\"dahl\"", "friction.kinetic_torque=0.124", "friction.bristle_stiffness=100.0",
+        "friction.dahl_exponent=2.0"},
+       0.001,
+       1e-6},  // Dahl, alpha = 2
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.scene);

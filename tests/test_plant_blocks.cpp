@@ -291,6 +291,60 @@ TEST(FrictionRegistry, LuGreBreaksAwayAtFs) {
   EXPECT_LE(z_max, 0.146 / 100.0 * (1 + 1e-12));
 }
 
+// Dahl (1968, 1976; models/plant/friction/dahl.hpp) at a constant speed
+// settles at Coulomb friction Fc sgn(w) + B w; its hysteresis is a function
+// of the path x alone. For alpha = 1, dF/dx = sigma0 (1 - F sgn(w) / Fc):
+// a cycle of x between -A and A (here x = A sin(Omega t)) settles on the
+// loop whose ends are +-Fc tanh(sigma0 A / Fc), and the ascending branch
+// from -F* at x = -A is F = Fc - (Fc + F*) exp(-sigma0 (x + A) / Fc), at any
+// Omega. For alpha = 2, dF/dx = sigma0 (1 - F / Fc)^2 (F < Fc) integrates to
+// 1 / (1 - F / Fc) = 1 / (1 - F0 / Fc) + sigma0 (x - x0) / Fc.
+TEST(FrictionRegistry, DahlHysteresisIsItsClosedForm) {
+  FrictionParams f;
+  f.model = friction_model<DahlFriction>();
+  f.kinetic_torque = 0.124, f.viscous = 0.0, f.bristle_stiffness = 100.0;  // the paper's Fk; sigma0 chosen
+  ASSERT_EQ(friction_states(f.model), 1);
+  for (double w : {-2.0, -0.01, 0.3}) {
+    const double z_ss = (w > 0 ? 1 : -1) * 0.124 / 100.0;
+    EXPECT_NEAR(friction_rate(f, w, z_ss), 0.0, 1e-15) << w;
+    EXPECT_NEAR(friction_torque(f, w, 0.0, SlipMode::kStuck), (w > 0 ? 0.124 : -0.124), 1e-15) << w;
+  }
+  const double A = 0.002;  // [rad] about the deflection Fc / sigma0 = 1.24 mrad: a fat loop
+  const double F_end = 0.124 * std::tanh(100.0 * A / 0.124);
+  for (double Omega : {2.0, 50.0}) {  // [rad/s]: the loop must not depend on it
+    const double T = 2 * M_PI / Omega;
+    // RK4 in t on dz/dt = w(t) s(1 - sigma0 z sgn(w) / Fc), whose kinks in t
+    // (where w changes sign, at T/4 + k T/2) fall on step boundaries.
+    const int steps = 20000;  // per period
+    const double dt = T / steps;
+    const auto zdot = [&](double t, double z) { return friction_rate(f, A * Omega * std::cos(Omega * t), z); };
+    double z = 0;
+    double F_top = 0, F_mid = 0;
+    for (int k = 0; k < 4 * steps;
+         ++k) {  // four periods: z(0) = 0 is forgotten as exp(-2 sigma0 A / Fc) per half cycle
+      const double t = k * dt;
+      const double k1 = zdot(t, z), k2 = zdot(t + dt / 2, z + dt / 2 * k1), k3 = zdot(t + dt / 2, z + dt / 2 * k2),
+                   k4 = zdot(t + dt, z + dt * k3);
+      z += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      if (k == 3 * steps + steps / 4 - 1) F_top = 100.0 * z;  // x = A (t = 3T + T/4)
+      if (k == 4 * steps - 1) F_mid = 100.0 * z;              // x = 0 on the way up (t = 4T), from x = -A at 3T + 3T/4
+    }
+    EXPECT_NEAR(F_top, F_end, 1e-9) << Omega;
+    EXPECT_NEAR(F_mid, 0.124 - (0.124 + F_end) * std::exp(-100.0 * A / 0.124), 1e-9) << Omega;
+  }
+  // alpha = 2: along w > 0 from F0 = 0, F(x) in closed form.
+  f.dahl_exponent = 2.0;
+  const double w = 0.5, dt = 1e-6;
+  double z = 0;
+  const auto zd = [&](double zz) { return friction_rate(f, w, zz); };
+  for (int k = 0; k < 4000; ++k) {  // x = w t = 2 mrad
+    const double k1 = zd(z), k2 = zd(z + dt / 2 * k1), k3 = zd(z + dt / 2 * k2), k4 = zd(z + dt * k3);
+    z += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+  }
+  const double x = w * 4000 * dt;
+  EXPECT_NEAR(100.0 * z, 0.124 * (1 - 1 / (1 + 100.0 * x / 0.124)), 1e-9);
+}
+
 // u = sat(Kp e + Ki z - Kv Z qd + Kvff Z qd_ref + Kaff Z qdd_ref + offset), by hand.
 TEST(PivLaw, IsTheCardsFormulaAndSaturates) {
   PivParams P;

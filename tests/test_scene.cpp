@@ -4,6 +4,8 @@
 // section is read and written over one table of entries).
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -65,6 +67,7 @@ void expect_same_drive(const PlantConfig& a, const PlantConfig& b, const std::st
     EXPECT_EQ(a.friction[j].stribeck_speed, b.friction[j].stribeck_speed) << what;
     EXPECT_EQ(a.friction[j].bristle_stiffness, b.friction[j].bristle_stiffness) << what;
     EXPECT_EQ(a.friction[j].bristle_damping, b.friction[j].bristle_damping) << what;
+    EXPECT_EQ(a.friction[j].dahl_exponent, b.friction[j].dahl_exponent) << what;
   }
 }
 
@@ -206,6 +209,9 @@ TEST(SceneRoundTrip, Overrides) {
       {"stick_slip",
        {"friction.model=\"lugre\"", "friction.stribeck_speed=0.1", "friction.bristle_stiffness=[100.0, 200.0, 300.0]",
         "friction.bristle_damping=0.5"}},
+      {"paper_slow_viscous",  // no static_torque in the file: Dahl has no static level
+       {"friction.model=\"dahl\"", "friction.kinetic_torque=0.124", "friction.bristle_stiffness=100.0",
+        "friction.dahl_exponent=2.0"}},
       {"paper_slow", {"friction.model=\"karnopp\"", "friction.zero_speed=0.01"}},
       {"paper_slow", {"controller.kp=[1, 2, 3]", "amplifier.voltage_limit=30"}},
       {"paper_slow",
@@ -297,22 +303,27 @@ TEST(SceneKeyDocs, ConditionsFollowTheLawsDeclarations) {
     EXPECT_EQ(found.size(), 1u) << section << "." << key;
     return found.empty() ? std::string() : found[0];
   };
-  const auto laws_reading = [](bool FrictionKeys::*flag) {
+  const auto laws_where = [](const std::function<bool(const FrictionKeys&)>& reads) {
     std::string r;
     FrictionLaws::for_each([&](auto law) {
-      if (decltype(law)::kKeys.*flag)
+      if (reads(decltype(law)::kKeys))
         r += (r.empty() ? "" : " or ") + ("\"" + std::string(decltype(law)::kName) + "\"");
     });
     return "model = " + r;
   };
+  const auto laws_reading = [&](bool FrictionKeys::*flag) {
+    return laws_where([flag](const FrictionKeys& k) { return k.*flag; });
+  };
   EXPECT_EQ(applies("friction", "viscous"), laws_reading(&FrictionKeys::viscous));
-  EXPECT_EQ(applies("friction", "static_torque"), laws_reading(&FrictionKeys::levels));
+  EXPECT_EQ(applies("friction", "static_torque"),
+            laws_where([](const FrictionKeys& k) { return k.levels && !k.kinetic_only; }));
   EXPECT_EQ(applies("friction", "kinetic_torque"), laws_reading(&FrictionKeys::levels));
   EXPECT_EQ(applies("friction", "zero_speed"), laws_reading(&FrictionKeys::zero_speed));
   EXPECT_EQ(applies("friction", "speed_scale"), laws_reading(&FrictionKeys::speed_scale));
   EXPECT_EQ(applies("friction", "sigmoid_level"), laws_reading(&FrictionKeys::sigmoid));
   EXPECT_EQ(applies("friction", "stribeck_speed"), laws_reading(&FrictionKeys::stribeck_speed));
-  EXPECT_EQ(applies("friction", "bristle_stiffness"), laws_reading(&FrictionKeys::bristles));
+  EXPECT_EQ(applies("friction", "bristle_stiffness"), laws_reading(&FrictionKeys::stiffness));
+  EXPECT_EQ(applies("friction", "dahl_exponent"), laws_reading(&FrictionKeys::dahl));
   EXPECT_EQ(applies("friction", "bristle_damping"), laws_reading(&FrictionKeys::bristles));
   EXPECT_EQ(applies("friction", "model"), "");
   ControllerLaws::for_each([&](auto tag) {

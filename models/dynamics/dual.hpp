@@ -59,6 +59,7 @@ class Dual {
     const double e = std::exp(a.v_);
     return Dual(e, e * a.d_);
   }
+  friend Dual log(Dual a) { return Dual(std::log(a.v_), a.d_ / a.v_); }
   friend Dual abs(Dual a) { return a.v_ < 0 ? -a : a; }
   friend bool isfinite(Dual a) { return std::isfinite(a.v_) && std::isfinite(a.d_); }
 

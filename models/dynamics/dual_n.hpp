@@ -96,6 +96,7 @@ class DualN {
     const double e = std::exp(a.v_);
     return a.scaled(0.0, e, e);
   }
+  friend PUMASIM_DUALN_INLINE DualN log(const DualN& a) { return a.scaled(0.0, std::log(a.v_), 1.0 / a.v_); }
   friend PUMASIM_DUALN_INLINE DualN abs(const DualN& a) { return a.v_ < 0 ? -a : a; }
   friend PUMASIM_DUALN_INLINE bool isfinite(const DualN& a) {
     bool ok = std::isfinite(a.v_);

@@ -58,6 +58,7 @@ struct FrictionParams {
   // LuGre's bristles (models/plant/friction/lugre.hpp, motor side).
   double bristle_stiffness = 0.0;  // sigma0 [N m/rad]
   double bristle_damping = 0.0;    // sigma1 [N m s/rad]
+  double dahl_exponent = 1.0;      // alpha (models/plant/friction/dahl.hpp)
 };
 
 // Slip state of a joint under the hybrid model.

@@ -312,26 +312,38 @@ bool smooth(const PlantConfig& pc) { return keys_of(pc).speed_scale; }
 bool sigmoid(const PlantConfig& pc) { return keys_of(pc).sigmoid; }
 bool stribeck(const PlantConfig& pc) { return keys_of(pc).stribeck_speed; }
 bool bristles(const PlantConfig& pc) { return keys_of(pc).bristles; }
+bool stiff(const PlantConfig& pc) { return keys_of(pc).stiffness; }
+bool dahl(const PlantConfig& pc) { return keys_of(pc).dahl; }
+bool coulomb_static(const PlantConfig& pc) { return coulomb(pc) && !keys_of(pc).kinetic_only; }
 
 // The Stribeck law's break-away torque is its peak: at least the Coulomb
 // level on every joint, or the law would push near rest (stribeck.hpp).
-// LuGre's levels make its G(w) = Fk + (Fs - Fk) exp(-(w/vs)^2), which the
-// bristles' rate divides by: both levels > 0 (lugre.hpp).
 void check_breakaway(StrictTable& t, PlantConfig& pc) {
+  if (stiff(pc)) return;  // a law with a state: check_state_levels
   for (int j = 0; j < pc.n; ++j) {
     const FrictionParams& f = pc.friction[static_cast<std::size_t>(j)];
     char got[160];
-    if (bristles(pc)) {
-      if (f.static_torque > 0 && f.kinetic_torque > 0) continue;
-      std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m, kinetic_torque %.6g N m", j + 1,
-                    f.static_torque, f.kinetic_torque);
-      t.fail(f.static_torque > 0 ? "kinetic_torque" : "static_torque",
-             "levels > 0 (lugre: the bristles' rate divides by Fk + (Fs - Fk) exp(-(w/vs)^2))", got);
-    }
     if (f.static_torque >= f.kinetic_torque) continue;
     std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m below kinetic_torque %.6g N m", j + 1,
                   f.static_torque, f.kinetic_torque);
     t.fail("static_torque", "a break-away torque >= kinetic_torque (stribeck: its peak above the Coulomb level)", got);
+  }
+}
+
+// The stateful laws' rates divide by their levels: LuGre's by
+// G(w) = Fk + (Fs - Fk) exp(-(w/vs)^2), Dahl's by Fc: levels > 0 (lugre.hpp, dahl.hpp).
+void check_state_levels(StrictTable& t, PlantConfig& pc) {
+  const bool kinetic_only = keys_of(pc).kinetic_only;
+  for (int j = 0; j < pc.n; ++j) {
+    const FrictionParams& f = pc.friction[static_cast<std::size_t>(j)];
+    if (f.kinetic_torque > 0 && (kinetic_only || f.static_torque > 0)) continue;
+    char got[160];
+    std::snprintf(got, sizeof got, "joint %d: static_torque %.6g N m, kinetic_torque %.6g N m", j + 1, f.static_torque,
+                  f.kinetic_torque);
+    t.fail(f.kinetic_torque > 0 ? "static_torque" : "kinetic_torque",
+           kinetic_only ? "a level > 0 (dahl: its rate divides by Fc)"
+                        : "levels > 0 (lugre: the bristles' rate divides by Fk + (Fs - Fk) exp(-(w/vs)^2))",
+           got);
   }
 }
 
@@ -392,11 +404,12 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      "friction / "
      "|Z|; required when it gives none)",
      Need::kOptional,
-     {coulomb, "model"},
+     {coulomb_static, "model"},
      need_static},
     {"kinetic_torque",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].kinetic_torque)),
-     "Fk [N m] (paper, hybrid, karnopp, tanh, lugre; stribeck: the Coulomb level; default: the robot file's friction / "
+     "Fk [N m] (paper, hybrid, karnopp, tanh, lugre; stribeck: the Coulomb level; dahl: Fc; default: the robot file's "
+     "friction / "
      "|Z|; "
      "required when it gives none)",
      Need::kOptional,
@@ -420,14 +433,20 @@ const std::vector<Entry<PlantConfig>> kFrictionEntries = {
      check_breakaway},
     {"bristle_stiffness",
      scene_io::per_joint(kPositive, PUMASIM_AT(s.friction[j].bristle_stiffness)),
-     "sigma0 [N m/rad] (lugre: the bristles' stiffness, motor side)",
+     "sigma0 [N m/rad] (lugre: the bristles' stiffness; dahl: the stiffness at rest; motor side)",
      Need::kRequired,
-     {bristles, "model"}},
+     {stiff, "model"},
+     check_state_levels},
     {"bristle_damping",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].bristle_damping)),
      "sigma1 [N m s/rad] (lugre: the bristles' damping, motor side)",
      Need::kRequired,
      {bristles, "model"}},
+    {"dahl_exponent",
+     scene_io::shared_number(Bounds{1.0, 100.0}, PUMASIM_AT(s.friction[j].dahl_exponent)),
+     "alpha (dahl: dF/dx = sigma0 |1 - F sgn(w) / Fc|^alpha sgn(...); >= 1, 1 the usual)",
+     Need::kOptional,
+     {dahl, "model"}},
     {"sigmoid_level",
      scene_io::per_joint(kNonNegative, PUMASIM_AT(s.friction[j].sigmoid_level)),
      "phi1 [N m] (sigmoid: Gaz et al. 2019's level, motor side)",
@@ -477,7 +496,7 @@ void friction_sources(StrictTable& t, const PlantConfig& pc, std::vector<std::st
                               : std::string("the default, 0")));
   };
   line("viscous", dissipative(pc), damping, "damping (<dynamics damping>)");
-  line("static_torque", coulomb(pc), level, "friction (<dynamics friction>)");
+  line("static_torque", coulomb_static(pc), level, "friction (<dynamics friction>)");
   line("kinetic_torque", coulomb(pc), level, "friction (<dynamics friction>)");
 }
 

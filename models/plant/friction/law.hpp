@@ -14,7 +14,10 @@ struct FrictionKeys {
   double default_zero_speed = 1e-6;  // [rad/s], when zero_speed is read
   bool sigmoid = false;      // sigmoid_level, sigmoid_slope, sigmoid_offset [N m, s/rad, rad/s] (sigmoid.hpp)
   bool stribeck_speed = false;  // stribeck_speed: the Stribeck speed scale w_St [rad/s] (stribeck.hpp, lugre.hpp)
-  bool bristles = false;        // bristle_stiffness sigma0 [N m/rad], bristle_damping sigma1 [N m s/rad] (lugre.hpp)
+  bool bristles = false;        // bristle_damping sigma1 [N m s/rad] (lugre.hpp)
+  bool stiffness = false;       // bristle_stiffness sigma0 [N m/rad] (lugre.hpp, dahl.hpp)
+  bool kinetic_only = false;    // of the levels, kinetic_torque alone: no static level (dahl.hpp)
+  bool dahl = false;            // dahl_exponent alpha (dahl.hpp)
 };
 
 }  // namespace pumasim

@@ -32,7 +32,8 @@ struct LuGreFriction {
   static constexpr bool kNeedsAppliedTorque = false;
   static constexpr bool kStickSlipEvents = false;
   static constexpr bool kSetValued = false;
-  static constexpr FrictionKeys kKeys{.viscous = true, .levels = true, .stribeck_speed = true, .bristles = true};
+  static constexpr FrictionKeys kKeys{
+      .viscous = true, .levels = true, .stribeck_speed = true, .bristles = true, .stiffness = true};
   static constexpr int kStates = 1;  // z, the bristles' deflection
 
   template <class S>

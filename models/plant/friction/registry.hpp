@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "models/plant/friction/dahl.hpp"
 #include "models/plant/friction/hybrid.hpp"
 #include "models/plant/friction/lugre.hpp"
 #include "models/plant/friction/none.hpp"
@@ -78,7 +79,7 @@ struct FrictionLawList {
 };
 
 using FrictionLaws = FrictionLawList<NoFriction, ViscousFriction, PaperRuleFriction, HybridFriction, KarnoppFriction,
-                                     TanhFriction, SigmoidFriction, StribeckFriction, LuGreFriction>;
+                                     TanhFriction, SigmoidFriction, StribeckFriction, LuGreFriction, DahlFriction>;
 
 template <class Law>
 constexpr FrictionModel friction_model() {
