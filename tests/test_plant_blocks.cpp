@@ -291,6 +291,42 @@ TEST(FrictionRegistry, LuGreBreaksAwayAtFs) {
   EXPECT_LE(z_max, 0.146 / 100.0 * (1 + 1e-12));
 }
 
+// LuGre's presliding hysteresis: at speeds far below vs, G(w) ~ Fs and the
+// bristles obey Dahl's law with Fc = Fs (dz/dx = 1 - sigma0 z sgn(w) / Fs),
+// whose loop under x = A sin(Omega t) ends at +-Fs tanh(sigma0 A / Fs)
+// (dahl.hpp). LuGre's loop tends to it as the speed A Omega goes to 0: G
+// falls short of Fs by (Fs - Fk)(w / vs)^2 to first order, so the loop's end
+// (where w = 0 and tau_f = sigma0 z) lies below Dahl's, by a gap that
+// shrinks at order 2 in Omega: a quarter of the speed, less than an eighth
+// of the gap.
+TEST(FrictionRegistry, LuGrePreslidingLoopTendsToDahls) {
+  FrictionParams f;
+  f.model = friction_model<LuGreFriction>();
+  f.static_torque = 0.146, f.kinetic_torque = 0.124, f.viscous = 0.0;
+  f.stribeck_speed = 0.1, f.bristle_stiffness = 100.0, f.bristle_damping = 0.6;
+  const double A = 0.002, dahl_end = 0.146 * std::tanh(100.0 * A / 0.146);
+  std::vector<double> gap;
+  for (double Omega : {0.5, 0.125}) {  // [rad/s]: peak speeds 1e-3 and 2.5e-4 rad/s, far below vs
+    const double T = 2 * M_PI / Omega;
+    const int steps = 4000;  // per period; w's sign changes (T/4 + k T/2) on step boundaries
+    const double dt = T / steps;
+    const auto zdot = [&](double t, double z) { return friction_rate(f, A * Omega * std::cos(Omega * t), z); };
+    double z = 0, top = 0;
+    for (int k = 0; k < 4 * steps; ++k) {
+      const double t = k * dt;
+      const double k1 = zdot(t, z), k2 = zdot(t + dt / 2, z + dt / 2 * k1), k3 = zdot(t + dt / 2, z + dt / 2 * k2),
+                   k4 = zdot(t + dt, z + dt * k3);
+      z += dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      if (k == 3 * steps + steps / 4 - 1) top = 100.0 * z;  // x = A, w = 0: tau_f = sigma0 z
+    }
+    gap.push_back(dahl_end - top);
+    EXPECT_GT(gap.back(), 0.0) << Omega;
+    const double speed = A * Omega / 0.1;                             // the peak speed against vs
+    EXPECT_LT(gap.back(), (0.146 - 0.124) * speed * speed) << Omega;  // G's shortfall at the peak speed
+  }
+  EXPECT_GT(gap[0] / gap[1], 8.0);
+}
+
 // Dahl (1968, 1976; models/plant/friction/dahl.hpp) at a constant speed
 // settles at Coulomb friction Fc sgn(w) + B w; its hysteresis is a function
 // of the path x alone. For alpha = 1, dF/dx = sigma0 (1 - F sgn(w) / Fc):
