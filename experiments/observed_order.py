@@ -79,7 +79,7 @@ ASYMPTOTIC_FACTOR = 100  # the floor: this times reference vs check (order_fit: 
 ASYMPTOTIC_MAX = 1e-2    # the range's upper end (order_fit: "too coarse" at or above it)
 UNSTABLE = order_fit.UNSTABLE  # e at or above this (or not finite): unstable
 ORDER_TOLERANCE = 0.3    # a fixed-step method reaches its order p if |slope - p| <= this
-STATE = re.compile(r"(q|qd|i_motor|z_piv)\d+")
+STATE = re.compile(r"(q|qd|i_motor|z_piv|z_fric)\d+")
 
 
 def private_copy(work):

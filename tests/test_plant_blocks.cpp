@@ -267,9 +267,10 @@ TEST(FrictionRegistry, LuGreBreaksAwayAtFs) {
       const double zd = friction_rate(f, y[0], y[1]);
       return std::array<double, 2>{(r * t - friction_state_torque(f, y[0], y[1], zd)) / J, zd};
     };
-    // From 90 % of Fs on the presliding regime's quasi-static point: z = r t / sigma0, w = r / sigma0.
+    // From 90 % of Fs on the presliding regime's quasi-static point: sigma0 z = r t, so
+    // dz/dt = r / sigma0 = w (1 - sigma0 z / G(0)) gives w = (r / sigma0) / (1 - 0.9).
     double t = 0.9 * 0.146 / r;
-    std::array<double, 2> y{r / 100.0, r * t / 100.0};
+    std::array<double, 2> y{r / 100.0 / (1 - 0.9), r * t / 100.0};
     const double dt = 1e-4;  // [s] RK4, 0.03 rad of the bristle mode per step
     const auto axpy = [](const std::array<double, 2>& a, double h, const std::array<double, 2>& b) {
       return std::array<double, 2>{a[0] + h * b[0], a[1] + h * b[1]};

@@ -74,7 +74,7 @@ def compare(ref, run):
     currents = [h for h in ref if re.fullmatch(r"i_motor\d+", h)]
     dq = _max(abs(ref[h][k] - run[h][k]) for h in joints for k in range(n))
     di = _max(abs(ref[h][k] - run[h][k]) for h in currents for k in range(n))
-    states = [h for h in ref if re.fullmatch(r"(q|qd|i_motor|z_piv)\d+", h) and h in run]
+    states = [h for h in ref if re.fullmatch(r"(q|qd|i_motor|z_piv|z_fric)\d+", h) and h in run]
     final = math.nan
     if len(ref["t"]) == len(run["t"]) and abs(ref["t"][-1] - run["t"][-1]) < 1e-9:
         final = _max(abs(ref[h][-1] - run[h][-1]) / max(1.0, abs(ref[h][-1])) for h in states)

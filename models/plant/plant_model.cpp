@@ -296,10 +296,10 @@ void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspac
       S zdot(0);
       if (part != FrictionPart::kNone) tf = friction_.state_torque(j, wm, x[layout_.zf + j], zdot);
       xdot[layout_.zf + j] = zdot;
-    } else if (all) {
-      tf = friction_.torque(j, wm, w.applied[j], c.modes);
-    } else if (part == FrictionPart::kSmooth) {
-      tf = friction_.smooth_torque(j, wm);
+    } else {
+      if (all) tf = friction_.torque(j, wm, w.applied[j], c.modes);
+      if (part == FrictionPart::kSmooth) tf = friction_.smooth_torque(j, wm);
+      if (friction_.has_state()) xdot[layout_.zf + j] = S(0);  // a stateless law's component stays at 0
     }
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss

@@ -42,8 +42,7 @@ class FrictionBlock {
     for (const auto& f : p_) scale.push_back(friction_state_scale(f));
     L.zf = L.add(joint_names("z_fric", static_cast<int>(p_.size())), scale);
     for (std::size_t j = 0; j < p_.size(); ++j) {
-      L.set_bound(L.zf + static_cast<int>(j), friction_state_bound(p_[j]),
-                  "max(Fs, Fk) / sigma0 (LuGre's bristles: Canudas de Wit et al. 1995, property 1)");
+      L.set_bound(L.zf + static_cast<int>(j), friction_state_bound(p_[j]), friction_state_bound_why(p_[j]));
     }
   }
   bool has_state() const { return state_; }

@@ -36,6 +36,7 @@ struct DahlFriction {
   static constexpr FrictionKeys kKeys{
       .viscous = true, .levels = true, .stiffness = true, .kinetic_only = true, .dahl = true};
   static constexpr int kStates = 1;  // z = F / sigma0
+  static constexpr const char* kStateBoundWhy = "Fc / sigma0 (Dahl: F moves toward Fc sgn(w) and never crosses it)";
 
   template <class S>
   static S rate(const FrictionParams& f, const S& w, const S& z) {  // dz/dt [rad/s]
@@ -44,7 +45,8 @@ struct DahlFriction {
     using std::log;
     const S sgn(static_cast<double>((w > S(0)) - (w < S(0))));
     const S u = S(1) - S(f.bristle_stiffness / f.kinetic_torque) * z * sgn;
-    if (f.dahl_exponent == 1.0 || u == S(0)) return w * u;
+    if (f.dahl_exponent == 1.0) return w * u;
+    if (u == S(0)) return S(0);  // alpha > 1: the value and its derivative are 0 there
     // |u|^alpha sgn(u) = u |u|^(alpha - 1), alpha > 1: by exp and log, defined for every scalar type.
     return w * u * exp(S(f.dahl_exponent - 1.0) * log(abs(u)));
   }

@@ -35,6 +35,8 @@ struct LuGreFriction {
   static constexpr FrictionKeys kKeys{
       .viscous = true, .levels = true, .stribeck_speed = true, .bristles = true, .stiffness = true};
   static constexpr int kStates = 1;  // z, the bristles' deflection
+  static constexpr const char* kStateBoundWhy =
+      "max(Fs, Fk) / sigma0 (LuGre's bristles: Canudas de Wit et al. 1995, property 1)";
 
   template <class S>
   static S level(const FrictionParams& f, const S& w) {  // G(w) [N m]

@@ -109,7 +109,7 @@ S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, Sli
 // A law with an internal state (LuGre's bristles) declares
 //   kStates = 1, rate<S>(params, w_m, z) -> dz/dt, state_torque<S>(params,
 //   w_m, z, dz/dt) -> its torque, state_scale(params) and state_bound(params)
-//   (a typical and the largest possible |z|),
+//   (a typical and the largest possible |z|), kStateBoundWhy (the bound's source),
 // and its torque<S>(...) is then the steady-state curve. Laws without one
 // declare nothing (0 states).
 template <class L>
@@ -153,6 +153,15 @@ inline double friction_state_scale(const FrictionParams& f) {
   FrictionLaws::visit(f.model, [&](auto law) {
     using L = decltype(law);
     if constexpr (law_states<L>() > 0) r = L::state_scale(f);
+  });
+  return r;
+}
+// Where the bound comes from, in words (the run's physical_bounds).
+inline std::string friction_state_bound_why(const FrictionParams& f) {
+  std::string r;
+  FrictionLaws::visit(f.model, [&](auto law) {
+    using L = decltype(law);
+    if constexpr (law_states<L>() > 0) r = L::kStateBoundWhy;
   });
   return r;
 }
