@@ -139,9 +139,10 @@ Scene load_checked_scene_text(const std::string& text, const std::string& file) 
 }
 
 Scene load_checked_scene(const SceneTemplate& scene, const std::vector<std::string>& overrides) {
+  Scene sc = scene.load(overrides);  // its own refusals name their lines (it reads the text again for them)
   try {
-    return with_known_integrator(scene.load(overrides));
-  } catch (const ConfigError&) {  // the refusal again, from the text: the line it names
+    return with_known_integrator(std::move(sc));
+  } catch (const ConfigError&) {  // an unknown integrator: its name's line, from the text
     return with_known_integrator(scene.load_exact(overrides));
   }
 }

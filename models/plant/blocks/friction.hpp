@@ -5,6 +5,7 @@
 // functions.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "models/plant/friction/registry.hpp"
@@ -38,8 +39,11 @@ class FrictionBlock {
   // gets one; a law without a state leaves its component at 0).
   void declare(StateLayout& L) const {
     if (!state_) return;
-    std::vector<double> scale;
-    for (const auto& f : p_) scale.push_back(friction_state_scale(f));
+    std::vector<double> scale;  // the bound, the deflection the law tends to at speed
+    for (const auto& f : p_) {
+      const double b = friction_state_bound(f);
+      scale.push_back(std::isfinite(b) ? b : 1.0);
+    }
     L.zf = L.add(joint_names("z_fric", static_cast<int>(p_.size())), scale);
     for (std::size_t j = 0; j < p_.size(); ++j) {
       L.set_bound(L.zf + static_cast<int>(j), friction_state_bound(p_[j]), friction_state_bound_why(p_[j]));

@@ -43,8 +43,7 @@ struct DahlFriction {
     using std::abs;
     using std::exp;
     using std::log;
-    const S sgn(static_cast<double>((w > S(0)) - (w < S(0))));
-    const S u = S(1) - S(f.bristle_stiffness / f.kinetic_torque) * z * sgn;
+    const S u = S(1) - S(f.bristle_stiffness / f.kinetic_torque) * z * sign_of(w);
     if (f.dahl_exponent == 1.0) return w * u;
     if (u == S(0)) return S(0);  // alpha > 1: the value and its derivative are 0 there
     // |u|^alpha sgn(u) = u |u|^(alpha - 1), alpha > 1: by exp and log, defined for every scalar type.
@@ -57,10 +56,7 @@ struct DahlFriction {
   // Without its state: the steady-state curve Fc sgn(w) + B w (0 at rest).
   template <class S>
   static S torque(const FrictionParams& f, const S& w, const S&, SlipMode) {
-    return S(static_cast<double>((w > S(0)) - (w < S(0))) * f.kinetic_torque) + S(f.viscous) * w;
-  }
-  static double state_scale(const FrictionParams& f) {
-    return f.bristle_stiffness > 0 && f.kinetic_torque > 0 ? f.kinetic_torque / f.bristle_stiffness : 1.0;
+    return S(f.kinetic_torque) * sign_of(w) + S(f.viscous) * w;
   }
   static double state_bound(const FrictionParams& f) {
     return f.bristle_stiffness > 0 && f.kinetic_torque > 0 ? f.kinetic_torque / f.bristle_stiffness : HUGE_VAL;

@@ -56,10 +56,7 @@ struct LuGreFriction {
   // Without its state: the steady-state curve sgn(w) G(w) + B w (0 at rest).
   template <class S>
   static S torque(const FrictionParams& f, const S& w, const S&, SlipMode) {
-    return S(static_cast<double>((w > S(0)) - (w < S(0)))) * level(f, w) + S(f.viscous) * w;
-  }
-  static double state_scale(const FrictionParams& f) {  // a typical |z|: the Coulomb deflection
-    return f.bristle_stiffness > 0 ? std::max(f.kinetic_torque, f.static_torque) / f.bristle_stiffness : 1.0;
+    return sign_of(w) * level(f, w) + S(f.viscous) * w;
   }
   static double state_bound(const FrictionParams& f) {  // Property 1: |z| <= Fs / sigma0
     return f.bristle_stiffness > 0 ? std::max(f.static_torque, f.kinetic_torque) / f.bristle_stiffness : HUGE_VAL;

@@ -108,8 +108,8 @@ S friction_torque(const FrictionParams& f, const S& w, const S& tau_applied, Sli
 
 // A law with an internal state (LuGre's bristles) declares
 //   kStates = 1, rate<S>(params, w_m, z) -> dz/dt, state_torque<S>(params,
-//   w_m, z, dz/dt) -> its torque, state_scale(params) and state_bound(params)
-//   (a typical and the largest possible |z|), kStateBoundWhy (the bound's source),
+//   w_m, z, dz/dt) -> its torque, state_bound(params) (the largest possible
+//   |z|, also its typical magnitude) and kStateBoundWhy (the bound's source),
 // and its torque<S>(...) is then the steady-state curve. Laws without one
 // declare nothing (0 states).
 template <class L>
@@ -127,51 +127,31 @@ inline int friction_states(FrictionModel m) {
   return r;
 }
 
+// get(law) for the model's law when it has a state, else `otherwise`.
+template <class R, class F>
+R with_state_law(FrictionModel m, R otherwise, F&& get) {
+  FrictionLaws::visit(m, [&](auto law) {
+    if constexpr (law_states<decltype(law)>() > 0) otherwise = get(law);
+  });
+  return otherwise;
+}
+
 template <class S>
 S friction_rate(const FrictionParams& f, const S& w, const S& z) {
-  S r(0);
-  FrictionLaws::visit(f.model, [&](auto law) {
-    using L = decltype(law);
-    if constexpr (law_states<L>() > 0) r = L::rate(f, w, z);
-  });
-  return r;
+  return with_state_law(f.model, S(0), [&](auto law) { return decltype(law)::rate(f, w, z); });
 }
 
 template <class S>
 S friction_state_torque(const FrictionParams& f, const S& w, const S& z, const S& zdot) {
-  S r(0);
-  FrictionLaws::visit(f.model, [&](auto law) {
-    using L = decltype(law);
-    if constexpr (law_states<L>() > 0) r = L::state_torque(f, w, z, zdot);
-  });
-  return r;
+  return with_state_law(f.model, S(0), [&](auto law) { return decltype(law)::state_torque(f, w, z, zdot); });
 }
 
-// A typical and the largest possible |z| of the law's state (1 and +inf without one).
-inline double friction_state_scale(const FrictionParams& f) {
-  double r = 1.0;
-  FrictionLaws::visit(f.model, [&](auto law) {
-    using L = decltype(law);
-    if constexpr (law_states<L>() > 0) r = L::state_scale(f);
-  });
-  return r;
-}
-// Where the bound comes from, in words (the run's physical_bounds).
-inline std::string friction_state_bound_why(const FrictionParams& f) {
-  std::string r;
-  FrictionLaws::visit(f.model, [&](auto law) {
-    using L = decltype(law);
-    if constexpr (law_states<L>() > 0) r = L::kStateBoundWhy;
-  });
-  return r;
-}
+// The largest possible |z| of the law's state (+inf without one), and where it comes from in words.
 inline double friction_state_bound(const FrictionParams& f) {
-  double r = HUGE_VAL;
-  FrictionLaws::visit(f.model, [&](auto law) {
-    using L = decltype(law);
-    if constexpr (law_states<L>() > 0) r = L::state_bound(f);
-  });
-  return r;
+  return with_state_law(f.model, HUGE_VAL, [&](auto law) { return decltype(law)::state_bound(f); });
+}
+inline std::string friction_state_bound_why(const FrictionParams& f) {
+  return with_state_law(f.model, std::string(), [](auto law) { return std::string(decltype(law)::kStateBoundWhy); });
 }
 
 inline bool needs_applied_torque(FrictionModel m) {
