@@ -114,6 +114,7 @@ std::unique_ptr<Integrator> make_moreau_jean_075(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rosenbrock4(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rodas4p(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_radau5(const IntegratorOptions&);
 }  // namespace detail
 
 namespace {
@@ -461,6 +462,26 @@ constexpr auto kIntegrators = std::to_array<IntegratorInfo>({
         .make = &detail::make_odeint_rosenbrock4,
         .kind = IntegratorKind::kAdaptive,
         .order = 4,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 3,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = false,
+        .finds_roots = true,
+        .set_valued_friction = false,
+    },
+    {
+        .name = "radau5",
+        .summary = "Radau IIA of order 5 after Hairer & Wanner's RADAU5: simplified Newton on the real and complex "
+                   "transformed systems, embedded order-3 error estimate, Gustafsson's predictive step control, "
+                   "collocation dense output; adaptive",
+        .make = &detail::make_radau5,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 5,
         .variable_order = false,
         .implicit = true,
         .rhs_per_step = 0,

@@ -112,7 +112,11 @@ stage_order() {
 }
 # writes: results/testset/README.md results/testset/testset.csv results/testset/problems.csv
 # writes: results/testset/observed_slopes.csv results/testset/*.png results/testset/*.pdf
-stage_testset() { /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"; }
+# writes: results/testset/radau5_vs_scipy.csv results/testset/radau5_vs_scipy.md
+stage_testset() {
+  /usr/bin/python3 experiments/testset.py --bin "$PUMASIM_BIN/testset"
+  /usr/bin/python3 experiments/radau_scipy.py --bin "$PUMASIM_BIN/testset"   # radau5 against scipy's Radau
+}
 # writes: results/output_grid/
 stage_outputgrid() { /usr/bin/python3 experiments/output_grid.py; }
 # writes: results/reliability/extreme_runs.csv results/reliability/extreme_runs_summary.csv

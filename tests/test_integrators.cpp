@@ -350,9 +350,9 @@ TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
   // exact_jacobian true and false: E exact (calls OdeSystem::jacobian), D its
   // own difference quotients.
   const std::map<std::string, std::string> documented = {
-      {"cvode-bdf", "ED"},     {"cvode-adams", "ED"},        {"arkode-dirk", "ED"},
-      {"arkode-imex", "DD"},   {"odeint-rosenbrock4", "EE"}, {"odeint-rodas4p", "EE"},
-      {"moreau-jean", "EE"},   {"moreau-jean-075", "EE"}};
+      {"cvode-bdf", "ED"},   {"cvode-adams", "ED"},        {"arkode-dirk", "ED"},
+      {"arkode-imex", "DD"}, {"odeint-rosenbrock4", "EE"}, {"odeint-rodas4p", "EE"},
+      {"moreau-jean", "EE"}, {"moreau-jean-075", "EE"},    {"radau5", "EE"}};
   int seen = 0;
   for (const std::string& name : integrator_names()) {
     IntegratorOptions o = fixed_step(1e-3);

@@ -198,17 +198,36 @@ int usage(const char* why) {
   return 2;
 }
 
-void list_problems() {
-  std::cout << "problem,equations,stiff,t_end,atol_per_rtol,fixed_steps,description,reference_source\n";
-  for (const auto& p : pumasim::testset::make_problems()) {
-    std::string dts;
-    for (double d : p->fixed_steps()) {
-      if (!dts.empty()) dts += ' ';
-      dts += num(d);
+// Values separated by spaces, at full precision (17 significant digits) when `exact`.
+template <class Values>
+std::string spaced(const Values& v, bool exact) {
+  std::string s;
+  char buf[32];
+  for (double d : v) {
+    if (!s.empty()) s += ' ';
+    if (exact) {
+      std::snprintf(buf, sizeof buf, "%.17g", d);
+      s += buf;
+    } else {
+      s += num(d);
     }
+  }
+  return s;
+}
+
+// The problems, with their initial values and references at full precision
+// (experiments/radau_scipy.py reads them, to run scipy on the same problems).
+void list_problems() {
+  std::cout << "problem,equations,stiff,t_end,atol_per_rtol,fixed_steps,description,reference_source,initial_value,"
+               "reference\n";
+  for (const auto& p : pumasim::testset::make_problems()) {
+    const Eigen::VectorXd& y0 = p->initial_value();
+    const Eigen::VectorXd& yr = p->reference();
     std::cout << p->name() << ',' << p->size() << ',' << (p->stiff() ? 1 : 0) << ',' << num(p->t_end()) << ','
-              << num(p->tolerance_scale(0)) << ',' << dts << ',' << csv_text(p->description()) << ','
-              << csv_text(p->reference_source()) << '\n';
+              << num(p->tolerance_scale(0)) << ',' << spaced(p->fixed_steps(), false) << ','
+              << csv_text(p->description()) << ',' << csv_text(p->reference_source()) << ','
+              << spaced(std::vector<double>(y0.data(), y0.data() + y0.size()), true) << ','
+              << spaced(std::vector<double>(yr.data(), yr.data() + yr.size()), true) << '\n';
   }
 }
 
