@@ -324,6 +324,20 @@ def modes_section(summary, folder, rel):
     return out
 
 
+def decision_section(folder, rel):
+    """A sweep folder's decision table (decision.md, experiments/friction_decision.py), its headings
+    moved under the sweep's."""
+    path = os.path.join(folder, "decision.md")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        lines = f.read().splitlines()
+    out = ["", f"#### Which method for which law (`{rel}/decision.md`)"]
+    for line in lines[1:]:
+        out.append("#####" + line[2:] if line.startswith("## ") else line)
+    return out
+
+
 def sweep_section(summary, folder, rel, checks):
     """The report's section on one sweep (its summary, its CSV in folder; rel:
     folder relative to the report, for links; checks: its findings')."""
@@ -356,6 +370,7 @@ def sweep_section(summary, folder, rel, checks):
             + (f" ({', '.join(pin['methods'])})" if pin["methods"] else "") + "; each repeat's time is in the CSV."]
     out += ledger_table(rows)
     out += modes_section(summary, folder, rel)
+    out += decision_section(folder, rel)
     out += ["", f"![{name}: {rlabel} against cost; hollow markers below the reference's accuracy]({rel}/{name}.png)",
             ""]
     if summary.get("has_cost_plot"):

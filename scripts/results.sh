@@ -89,14 +89,16 @@ if [ ${#stages[@]} -eq 0 ]; then stages=("${all[@]}"); full=1; fi
 # writes: results/{folder}/{name}.csv results/{folder}/{name}.png results/{folder}/{name}_cost.png
 # writes: results/{folder}/{name}.pdf results/{folder}/{name}_cost.pdf
 # writes: results/{folder}/{name}_precision.md results/{folder}/{name}_modes.md results/{folder}/{name}_summary.json
+# writes: results/friction_axis/decision.md results/friction_axis/decision.csv
 stage_sweeps() {
-  # The work-precision sweeps (wall time is their headline) run one at a time,
+  # The work-precision sweeps and the friction axis (wall time is their headline) run one at a time,
   # so that no run shares the machine with another; the others in parallel.
   for f in experiments/sweeps/*.toml; do
     local j=$jobs
-    if grep -q '^folder = "work_precision"' "$f"; then j=1; fi
+    if grep -Eq '^folder = "(work_precision|friction_axis)"' "$f"; then j=1; fi
     /usr/bin/python3 experiments/sweep.py "$f" --jobs "$j"
   done
+  /usr/bin/python3 experiments/friction_decision.py   # the friction axis: which method for which law
 }
 # writes: results/stiffness/
 stage_stiffness() { /usr/bin/python3 experiments/stiffness_table.py; }

@@ -67,6 +67,8 @@ def run_options(s, run):
     """pumasim run's options for a run, besides the scene file and the folder."""
     rid, variant, tag, name, opts, repeats = run
     args = ["--integrator", name] + opts
+    for o in variant.get("unset", []):
+        args += ["--unset", o]
     for o in s["set"] + variant["set"]:
         args += ["--set", o]
     if s["t_end"]:
@@ -96,14 +98,16 @@ def program_identity(pumasim):
 
 
 @functools.lru_cache(maxsize=None)
-def resolved_scene(pumasim, scene, sets):
-    """The scene as pumasim resolves it with the --set values `sets` (a
-    tuple): `pumasim check`'s text (every default, the state layout, and the
+def resolved_scene(pumasim, scene, sets, unsets=()):
+    """The scene as pumasim resolves it with the --unset keys `unsets` and the
+    --set values `sets` (tuples): `pumasim check`'s text (every default, the state layout, and the
     hash of every file the scene read: the footer's `# input file:` lines)
     without the paths, so that the key says what a run computes, not where
     its files lie (the scene file's path; each input file's path, its hash
     kept)."""
     cmd = [pumasim, "check", scene]
+    for o in unsets:
+        cmd += ["--unset", o]
     for o in sets:
         cmd += ["--set", o]
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
@@ -126,7 +130,8 @@ def run_key(s, run):
     (integrator, its settings, t_end, budget), the repeats and the program."""
     variant, repeats = run[1], run[5]
     doc = {"program": program_identity(PUMASIM),
-           "scene": resolved_scene(PUMASIM, scene_file(s), tuple(s["set"] + variant["set"])),
+           "scene": resolved_scene(PUMASIM, scene_file(s), tuple(s["set"] + variant["set"]),
+                                   tuple(variant.get("unset", []))),
            "options": run_options(s, run), "repeats": repeats}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 

@@ -95,10 +95,13 @@ def _variants(path, doc, s):
     variants = []
     for k, v in enumerate(doc.get("variant", [{"label": "base", "set": []}])):
         for key in v:
-            if key not in ("label", "value", "set", "reference", "check", "methods", "if_integrator"):
+            if key not in ("label", "value", "set", "unset", "reference", "check", "methods", "if_integrator"):
                 raise SweepError(f"{path}: unknown key 'variant[{k}].{key}'")
         lab = _need(path, v, "label", str, f"variant[{k}]")
         variants.append({"label": lab, "value": v.get("value", k), "set": list(v.get("set", [])),
+                         # keys of the scene file removed before the --set values (pumasim run --unset):
+                         # a law that has no use for one of the scene's keys
+                         "unset": list(v.get("unset", [])),
                          "reference": _method_of(path, v["reference"], f"variant[{k}].reference")
                          if "reference" in v else s["reference"],
                          "check": _method_of(path, v["check"], f"variant[{k}].check") if "check" in v else s["check"],
