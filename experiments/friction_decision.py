@@ -109,7 +109,7 @@ def verdict(explicit_failed, explicit_runs, implicit_failed, implicit_runs):
     if implicit_runs and 2 * implicit_failed >= implicit_runs:
         return "chattering: most implicit runs fail too"
     if explicit_runs and 2 * explicit_failed >= explicit_runs:
-        return "stiff: most explicit runs fail, the implicit ones finish"
+        return "stiff: most explicit runs fail, most implicit ones finish"
     return ""
 
 

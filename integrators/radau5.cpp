@@ -19,15 +19,18 @@
 //     stages (order 3 uniformly; the step's end has order 5).
 // Tolerances as RADAU5 takes them: its error estimate is of order 3, so the
 // given rtol becomes 0.1 rtol^(2/3) (and each atol_i the same multiple of
-// itself) before use, which makes the end error roughly proportional to the
-// given rtol; so runs at equal rtol compare with the published RADAU5 runs.
+// itself) before use, which brings the end error closer to proportional to
+// the given rtol than the raw estimate would; so a given rtol means what it
+// means to RADAU5's users.
 // The Newton tolerance is max(10 eps / rtol', min(0.03, sqrt(rtol'))).
 // Roots: after an accepted step over which a root function changes sign, the
 // zero is located on the collocation polynomial by the Illinois variant of
 // regula falsi, and the run stops just past it, like CVODE; the polynomial
 // still covers the shortened step. A reset (an event) starts afresh, as the
 // interface asks: a new starting step, Jacobian and factorisations.
-// No allocation after reset(): every vector and factorisation is sized there.
+// No allocation after reset() with a system's own Jacobian (every vector and
+// factorisation is sized there; OdeSystem's default difference Jacobian
+// allocates, and its n + 1 right-hand sides are counted).
 #include "integrators/radau5.hpp"
 
 #include <algorithm>
@@ -213,6 +216,7 @@ void Radau5::reset(OdeSystem& sys, double t0, const double* x0) {
 void Radau5::evaluate_jacobian() {
   sys_->jacobian(t_, y_.data(), J_);
   ++stats_.jacobian_evaluations;
+  if (!sys_->has_exact_jacobian()) stats_.rhs_evaluations += n_ + 1;  // OdeSystem's forward differences
   jac_fresh_ = true;
   h_lu_ = 0;
 }
@@ -408,8 +412,10 @@ Outcome Radau5::step(double t_stop) {
       quot = std::clamp(std::pow(err, 0.25) / fac, 1 / kGrowMax, kShrinkMax);
       if (err < 1) return accept(t_, h, err, quot, last ? t_stop : t_ + h, last);
     }
-    ++stats_.rejected_steps;
+    // Rejected steps are error-test failures, as CVODE and RADAU5 count them;
+    // a Newton failure shows in the iterations.
     if (nw == Newton::kConverged) {
+      ++stats_.rejected_steps;
       h_ = first_ ? 0.1 * h : h / quot;
     } else {
       h_ = h * (nw == Newton::kSlow ? slow_factor_ : 0.5);
@@ -441,8 +447,14 @@ Outcome Radau5::accept(double t0, double h, double err, double quot, double t1, 
   // Fast contraction and almost the same step: keep h and the factorisations.
   if (jac_keep_ && h_new >= kKeepLow * h && h_new <= kKeepHigh * h) h_new = h;
   // After a step shortened to a stop, the earlier proposal stands unless the
-  // shortened step asks for less.
-  h_ = last && h < h_ && h_new >= h ? h_ : h_new;
+  // shortened step's error predicts a smaller one (its proposal without the
+  // growth cap: the error estimate scales as h^4).
+  if (last && h < h_) {
+    const double fac = std::min(kSafe, kSafe * (1 + 2 * kNewtonMax) / (newton_taken_ + 2 * kNewtonMax));
+    h_ = std::min(h_, h * fac * std::pow(err, -0.25));
+  } else {
+    h_ = h_new;
+  }
   if (!g_.empty()) {
     sys_->roots(t_, y_.data(), g_new_.data());
     if (first_crossing(g_, g_new_) >= 0) return {Outcome::kRoot, locate_root(t0, h), ""};

@@ -7,9 +7,9 @@
 // approximant as its stability function); its order 5
 // at a constant step on Prothero-Robinson, whose solution is known; the
 // dense output exact on a cubic solution (collocation of degree 3); and the
-// adaptive driver's error proportional to the tolerance it was given.
-// The registry-wide suites (conformance, roots, no allocation, the plant
-// scenes) run it as every other method.
+// adaptive method ending within 10 rtol on stiff Prothero-Robinson. The
+// registry-wide suites (conformance, with the error proportional to the
+// tolerance; roots; the plant scenes) run it as every other method.
 #include <gtest/gtest.h>
 
 #include <cmath>
