@@ -100,9 +100,10 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
   return 3;
 }
 
-void Plant::on_time_event(double t, double* x) {
+void Plant::on_time_event(double t, double* x, bool settle_modes) {
   PUMASIM_PROFILE_CONTEXT(kEvents);
   if (!model_->time_event(context_, *evaluator_, t, x)) return;  // no controller: nothing happens at a time event
+  if (!settle_modes) return;
   stick_slip_.settle(context_, *evaluator_, t, x);
   stick_slip_.record(context_, *evaluator_, t);
 }

@@ -84,7 +84,11 @@ class Plant {
   // strictly after t (+inf if none); at such a time, update the discrete state.
   double next_time_event(double t) const { return model_->next_time_event(t); }
   // May release stuck hybrid-friction joints (settle_modes), hence x non-const.
-  void on_time_event(double t, double* x);
+  // settle_modes false: the discrete update alone, for a method that solves
+  // the set-valued friction itself (moreau-jean): the hybrid modes are then
+  // not kept along the run, and settling them would stop a moving joint whose
+  // stale mode says it passed a reversal.
+  void on_time_event(double t, double* x, bool settle_modes = true);
 
   // Root functions (hybrid friction, one per joint) and the mode switches:
   // friction/stick_slip.hpp.
