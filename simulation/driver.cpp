@@ -198,11 +198,12 @@ std::string unstable_failure(const OdeSystem& sys, int i, double t, const double
 // The discrete changes due at t, applied to the state x: the root found, or
 // the time events due (stopping at events, exactly the one stopped at;
 // otherwise every event passed since the last stop, each applied now, late).
-// True when the integrator must restart. settle_modes: the hybrid friction's
-// modes are settled at time events (false for a method that solves the
-// set-valued friction itself: Plant::on_time_event).
-bool apply_events(Plant& plant, const Outcome& o, double t, double t_end, bool time_event_now, double& t_event,
-                  double* x, RunResult& res, bool settle_modes) {
+// True when the integrator must restart. The hybrid friction's modes are
+// settled at time events, except for a method that solves the set-valued
+// friction itself (Plant::on_time_event).
+bool apply_events(Plant& plant, const Integrator& integrator, const Outcome& o, double t, double t_end,
+                  bool time_event_now, double& t_event, double* x, RunResult& res) {
+  const bool settle_modes = !integrator.capabilities().set_valued_friction;
   if (o.status == Outcome::kRoot) {
     plant.on_root(o.root, t, x);
     ++res.root_events;
@@ -334,7 +335,6 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
   RunResult res;
   if (observe) observe(0.0, x.data());
   const bool stop_at_events = stops != Stops::kOutputsLateEvents;
-  const bool settle_modes = !integrator.capabilities().set_valued_friction;
   const bool stop_at_outputs = stops != Stops::kEvents;
   long k_out = 1;
   // The spec's fields, not the bindings: clang 14 cannot capture those (P1091).
@@ -385,7 +385,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
     const bool time_event_now = !before(t, t_event, t_end) && (stop_at_events || !before(t, output_time(), t_end));
     if (!output_now && !time_event_now && o.status != Outcome::kRoot) continue;
     x.assign(xs, xs + plant.size());
-    if (apply_events(plant, o, t, t_end, time_event_now, t_event, x.data(), res, settle_modes)) {
+    if (apply_events(plant, integrator, o, t, t_end, time_event_now, t_event, x.data(), res)) {
       PUMASIM_PROFILE_CONTEXT(kEvents);
       integrator.reset(sys, t, x.data());
     }
