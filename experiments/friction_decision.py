@@ -27,7 +27,6 @@ Writes results/friction_axis/decision.md and decision.csv.
 """
 import argparse
 import csv
-import io
 import json
 import math
 import os
@@ -215,12 +214,7 @@ def main():
     ap.add_argument("--work", default=os.path.join(ROOT, "build", "sweeps", "friction_axis"))
     args = ap.parse_args()
     rows = gather(args.results, args.work)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=FIELDS, lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
-    pumasim_io.write_text_atomic(os.path.join(args.results, "decision.csv"), buf.getvalue())
+    pumasim_io.write_table(os.path.join(args.results, "decision.csv"), rows, FIELDS, lineterminator="\n")
     pumasim_io.write_text_atomic(os.path.join(args.results, "decision.md"),
                                  readme(rows, "experiments/friction_decision.py"))
     return 0

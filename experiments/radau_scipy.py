@@ -235,12 +235,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "testset"))
     args = ap.parse_args()
     rows = gather(args.bin)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=FIELDS, lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items()})
-    pumasim_io.write_text_atomic(os.path.join(args.out, "radau5_vs_scipy.csv"), buf.getvalue())
+    pumasim_io.write_table(os.path.join(args.out, "radau5_vs_scipy.csv"), rows, FIELDS, lineterminator="\n")
     pumasim_io.write_text_atomic(os.path.join(args.out, "radau5_vs_scipy.md"), readme(rows, "experiments/radau_scipy.py"))
     return 0
 

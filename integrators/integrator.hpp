@@ -7,6 +7,7 @@
 // for every method. Options a method cannot honour are errors, not no-ops.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 #include <memory>
 #include <string>
@@ -221,6 +222,51 @@ int first_crossing(const std::vector<double>& g_old, const std::vector<double>& 
 // The same rule for one root function.
 inline bool crossed(double before, double after) {
   return (before > 0 && after <= 0) || (before < 0 && after >= 0);
+}
+
+// Of the root functions that crossed between g0 and g1, the one whose zero
+// linear interpolation puts first; -1 if none crossed.
+inline int earliest_crossing(const std::vector<double>& g0, const std::vector<double>& g1) {
+  int k = -1;
+  double frac = 2.0;
+  for (std::size_t i = 0; i < g0.size(); ++i) {
+    if (!crossed(g0[i], g1[i])) continue;
+    const double f = g0[i] / (g0[i] - g1[i]);
+    if (f < frac) frac = f, k = static_cast<int>(i);
+  }
+  return k;
+}
+
+// The earliest zero of the root functions in [a, b], where ga (at a) and gb
+// (at b) show a crossing: the Illinois variant of regula falsi narrows the
+// bracket until it is at most tol wide, g_at(s, gs) giving the functions at
+// s (into gs, scratch of their size). On return ga and gb hold the
+// functions at the bracket's ends; the result is the crossing root
+// function's index. The steppers' root location (odeint.cpp, radau5.cpp).
+template <class G>
+int locate_earliest_root(std::vector<double>& ga, std::vector<double>& gb, std::vector<double>& gs, double& a,
+                         double& b, double tol, G&& g_at) {
+  int k = earliest_crossing(ga, gb);
+  double wa = 1.0, wb = 1.0;  // Illinois weights on the retained end's g
+  int side = 0;
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    const double fa = wa * ga[k], fb = wb * gb[k];
+    double s = fa != fb ? a + (b - a) * fa / (fa - fb) : 0.5 * (a + b);
+    s = std::clamp(s, a + 0.5 * tol, b - 0.5 * tol);
+    g_at(s, gs);
+    if (const int k2 = earliest_crossing(ga, gs); k2 >= 0) {  // a zero in [a, s]
+      b = s, gb = gs, k = k2;
+      wb = 1.0;
+      if (side == -1) wa *= 0.5;
+      side = -1;
+    } else {
+      a = s, ga = gs;
+      wa = 1.0;
+      if (side == 1) wb *= 0.5;
+      side = 1;
+    }
+  }
+  return k;
 }
 
 // "non-finite state at t = 0.123 s: qd2 = nan, i_motor2 = inf" -- or "" if all finite.

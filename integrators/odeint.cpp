@@ -148,41 +148,10 @@ class OdeintBase : public Integrator {
     std::vector<double> ga = g_, gb = g_new_, gs(m), xs(n);
     double a = 0.0, b = t_ - t0;
     const double tol = 100 * std::numeric_limits<double>::epsilon() * (std::abs(t0) + b);
-    // The crossing that linear interpolation puts first.
-    auto earliest = [&](const std::vector<double>& g0, const std::vector<double>& g1, double& frac) {
-      int k = -1;
-      frac = 2.0;
-      for (int i = 0; i < m; ++i) {
-        if (!crossed(g0[i], g1[i])) continue;
-        const double f = g0[i] / (g0[i] - g1[i]);
-        if (f < frac) frac = f, k = i;
-      }
-      return k;
-    };
-    double frac;
-    int k = earliest(ga, gb, frac);
-    double wa = 1.0, wb = 1.0;  // Illinois weights on the retained end's g
-    int side = 0;
-    for (int it = 0; it < 200 && b - a > tol; ++it) {
-      const double fa = wa * ga[k], fb = wb * gb[k];
-      double s = fa != fb ? a + (b - a) * fa / (fa - fb) : 0.5 * (a + b);
-      s = std::clamp(s, a + 0.5 * tol, b - 0.5 * tol);
+    const int k = locate_earliest_root(ga, gb, gs, a, b, tol, [&](double s, std::vector<double>& g) {
       step_from(x_start_.data(), t0, s, xs.data());
-      sys_->roots(t0 + s, xs.data(), gs.data());
-      double f2;
-      const int k2 = earliest(ga, gs, f2);
-      if (k2 >= 0) {  // a zero in [a, s]
-        b = s, gb = gs, k = k2;
-        wb = 1.0;
-        if (side == -1) wa *= 0.5;
-        side = -1;
-      } else {
-        a = s, ga = gs;
-        wa = 1.0;
-        if (side == 1) wb *= 0.5;
-        side = 1;
-      }
-    }
+      sys_->roots(t0 + s, xs.data(), g.data());
+    });
     retake_step(x_start_.data(), t0, b);  // the state xb again, with the step's dense output
     t_ = t0 + b;
     g_ = gb;

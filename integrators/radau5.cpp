@@ -467,45 +467,16 @@ Outcome Radau5::accept(double t0, double h, double err, double quot, double t1, 
 // variant of regula falsi on the collocation polynomial brackets the earliest
 // zero to 100 eps (|t0| + h); the run moves to the bracket's end past it.
 int Radau5::locate_root(double t0, double h) {
-  const int m = static_cast<int>(g_.size());
-  auto earliest = [m](const std::vector<double>& g0, const std::vector<double>& g1) {
-    int k = -1;
-    double frac = 2.0;
-    for (int i = 0; i < m; ++i) {
-      if (!crossed(g0[i], g1[i])) continue;
-      const double f = g0[i] / (g0[i] - g1[i]);
-      if (f < frac) frac = f, k = i;
-    }
-    return k;
-  };
-  std::vector<double>&ga = g_, &gb = g_new_, &gs = g_try_;
   double a = 0.0, b = (t_ - t0) / h;
   const double tol = 100 * kEps * (std::abs(t0) + h) / h;
-  int k = earliest(ga, gb);
-  double wa = 1.0, wb = 1.0;  // Illinois weights on the retained end's g
-  int side = 0;
-  for (int it = 0; it < 200 && b - a > tol; ++it) {
-    const double fa = wa * ga[k], fb = wb * gb[k];
-    double s = fa != fb ? a + (b - a) * fa / (fa - fb) : 0.5 * (a + b);
-    s = std::clamp(s, a + 0.5 * tol, b - 0.5 * tol);
+  const int k = locate_earliest_root(g_, g_new_, g_try_, a, b, tol, [&](double s, std::vector<double>& g) {
     polynomial_at(s, ytmp_);
-    sys_->roots(t0 + s * h, ytmp_.data(), gs.data());
-    if (const int k2 = earliest(ga, gs); k2 >= 0) {  // a zero in [a, s]
-      b = s, gb.swap(gs), k = k2;
-      wb = 1.0;
-      if (side == -1) wa *= 0.5;
-      side = -1;
-    } else {
-      a = s, ga.swap(gs);
-      wa = 1.0;
-      if (side == 1) wb *= 0.5;
-      side = 1;
-    }
-  }
+    sys_->roots(t0 + s * h, ytmp_.data(), g.data());
+  });
   t_ = t0 + b * h;
   polynomial_at(b, y_);
   rhs(t_, y_.data(), f0_.data());
-  g_ = gb;
+  g_ = g_new_;
   jac_keep_ = false;
   return k;
 }
