@@ -12,7 +12,10 @@
 // 1e-10 of the scale; 1e-6 is the bound.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -173,8 +176,30 @@ TEST(RneaDerivatives, MatchDualRneaPerDirection) {
   }
 }
 
-// Above 12 joints the many right-hand sides go to Eigen's blocked triangular
-// solves (Cholesky::solve_columns_in_place): the same oracle on 13 and 48.
+// Above 12 joints the partials' assembly goes to matrix products
+// (RneaDerivatives::compute): the same oracle on 13 and 48. dFD/dtau is H^-1
+// formed from the Cholesky factor (Cholesky::inverse), on every n: its
+// residual H X - I is within the forward-error bound of an inverse computed
+// from a Cholesky factor, c n u cond(H) (Higham, Accuracy and Stability of
+// Numerical Algorithms, 2nd ed., sec. 14.1; c = 10 is this test's margin).
+TEST(DynamicsDerivatives, TheTorqueColumnsAreTheInverseOfH) {
+  for (const RobotModel& m :
+       {load_robot("puma560"), random_chain(13, 8, DhConvention::kModified, "RRRPRRRRRRRRR"), random_chain(48, 9)}) {
+    const int n = m.dof();
+    Rng rng(7);
+    const Eigen::VectorXd q = rng.uniform_vector(n, -1.5, 1.5), qd = rng.uniform_vector(n, -1, 1);
+    const Eigen::VectorXd tau = rng.uniform_vector(n, -10, 10);
+    DynamicsDerivatives d(m, find_backend("crba").make(m));
+    Eigen::VectorXd qdd(n);
+    Eigen::MatrixXd Dq(n, n), Dqd(n, n), Dt(n, n);
+    d.forward_dynamics(q, qd, tau, qdd, Dq, Dqd, Dt);
+    const Eigen::MatrixXd& H = d.mass_matrix();
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+    const double bound = 10.0 * n * std::numeric_limits<double>::epsilon() * ev.maxCoeff() / ev.minCoeff();
+    EXPECT_LT((H * Dt - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(), bound) << m.name;
+  }
+}
+
 TEST(DynamicsDerivatives, LargeChainsMatchDualColumns) {
   for (const RobotModel& m : {random_chain(13, 8, DhConvention::kModified, "RRRPRRRRRRRRR"), random_chain(48, 9)}) {
     const int n = m.dof();

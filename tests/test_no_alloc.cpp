@@ -23,6 +23,7 @@
 #include "integrators/radau5.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/dynamics_derivatives.hpp"
 #include "models/plant/plant.hpp"
 #include "models/robot/robot_file.hpp"
 #include "models/scene/scene.hpp"
@@ -85,6 +86,31 @@ TEST(NoAllocation, EveryBackendThroughTheInterface) {
       }
       EXPECT_EQ(g_allocations.load() - before, 0) << info.name << " " << m.name;
     }
+  }
+}
+
+// The exact derivatives of the forward dynamics, on small chains and on the
+// large ones whose assembly and products with H^-1 go through Eigen's
+// matrix products (n > 12: their work buffers on the stack), allocate
+// nothing once constructed.
+TEST(NoAllocation, ForwardDynamicsDerivatives) {
+  for (const RobotModel& m :
+       {load_robot("puma560"), random_chain(24, 5), random_chain(48, 5, DhConvention::kStandard, "RRRP")}) {
+    const int n = m.dof();
+    DynamicsDerivatives d(m, find_backend("crba").make(m));
+    Rng rng(2);
+    const Eigen::VectorXd q = rng.uniform_vector(n, -1, 1), qd = rng.uniform_vector(n, -1, 1);
+    const Eigen::VectorXd tau = rng.uniform_vector(n, -1, 1);
+    Eigen::VectorXd qdd(n);
+    Eigen::MatrixXd Dq(n, n), Dqd(n, n), Dt(n, n);
+    const long before = g_allocations.load();
+    Eigen::internal::set_is_malloc_allowed(false);
+    for (int rep = 0; rep < 3; ++rep) {
+      d.forward_dynamics(q, qd, tau, qdd, Dq, Dqd, Dt);
+      d.id_partials(q.data(), qd.data(), qdd.data(), false, Dq, Dqd);
+    }
+    Eigen::internal::set_is_malloc_allowed(true);
+    EXPECT_EQ(g_allocations.load() - before, 0) << m.name;
   }
 }
 

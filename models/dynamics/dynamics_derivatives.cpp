@@ -8,7 +8,11 @@ DynamicsDerivatives::DynamicsDerivatives(const RobotModel& model, std::unique_pt
       partials_(model),
       H_(n_, n_),
       h_(n_),
-      chol_(n_) {}
+      chol_(n_),
+      Pq_(n_, n_),
+      Pqd_(n_, n_),
+      Y_(n_, n_),
+      c_(n_) {}
 
 DynamicsDerivatives::~DynamicsDerivatives() = default;
 
@@ -22,6 +26,8 @@ void DynamicsDerivatives::factor_mass_matrix(ConstVecRef q) {
   chol_.factor(H_);
 }
 
+// dtau = H^-1 once, then dq = -H^-1 dID/dq and dqd = -H^-1 dID/dqd as two
+// matrix products (Cholesky::inverse says why).
 void DynamicsDerivatives::forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstVecRef tau, VecRef qdd, MatRef dq,
                                            MatRef dqd, MatRef dtau) {
   const int n = n_;
@@ -29,13 +35,10 @@ void DynamicsDerivatives::forward_dynamics(ConstVecRef q, ConstVecRef qd, ConstV
   factor_mass_matrix(q);
   for (int j = 0; j < n; ++j) qdd[j] = tau[j] - h_[j];
   chol_.solve_in_place(qdd);
-  id_partials(q.data(), qd.data(), qdd.data(), true, dq, dqd);
-  dtau.setIdentity();
-  dq = -dq;
-  dqd = -dqd;
-  chol_.solve_columns_in_place(dq);
-  chol_.solve_columns_in_place(dqd);
-  chol_.solve_columns_in_place(dtau);
+  id_partials(q.data(), qd.data(), qdd.data(), true, Pq_, Pqd_);
+  chol_.inverse(dtau, Y_, c_);
+  dq.noalias() = -dtau * Pq_;
+  dqd.noalias() = -dtau * Pqd_;
 }
 
 }  // namespace pumasim

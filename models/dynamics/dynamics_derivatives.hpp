@@ -5,7 +5,8 @@
 //   dFD/dq = -H^-1 dID/dq,   dFD/dqd = -H^-1 dID/dqd,   dFD/dtau = H^-1.
 // The partials dID/dq and dID/dqd come from the analytical recursions of
 // rnea_derivatives.hpp, in double; the values (h, H, qdd) and the Cholesky
-// factor of H from the given back-end. Every back-end
+// factor of H from the given back-end, and H^-1 formed from it once per call
+// (dFD/dtau itself, then two matrix products). Every back-end
 // computes the same ID up to rounding, so the partials serve every back-end
 // without instantiating it on a new scalar. No allocation after construction.
 #pragma once
@@ -54,6 +55,8 @@ class DynamicsDerivatives {
   Eigen::MatrixXd H_;
   Eigen::VectorXd h_;
   Cholesky<double, Eigen::Dynamic> chol_;
+  Eigen::MatrixXd Pq_, Pqd_, Y_;  // forward_dynamics' workspace: dID/dq, dID/dqd, L^-T
+  Eigen::VectorXd c_;
 };
 
 }  // namespace pumasim

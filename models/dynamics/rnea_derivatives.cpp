@@ -30,7 +30,14 @@ RneaDerivatives::RneaDerivatives(const RobotModel& model)
     : chain_(model),
       rot_(model.dof()),
       j_(static_cast<std::size_t>(model.dof())),
-      tau_(static_cast<std::size_t>(model.dof())) {}
+      tau_(static_cast<std::size_t>(model.dof())),
+      left_(model.dof(), 9),
+      St_(model.dof(), 6),
+      right_q_(9, model.dof()),
+      right_qd_(9, model.dof()),
+      u_(6, model.dof()),
+      w_(6, model.dof()),
+      upper_(model.dof(), model.dof()) {}
 
 // World-frame kinematics, the bodies' spatial inertias, their forces and B maps.
 void RneaDerivatives::forward(const double* q, const double* qd, const double* qdd, bool gravity) {
@@ -68,10 +75,12 @@ void RneaDerivatives::forward_kinds(const double* qd, const double* qdd, bool gr
     J.f = I * J.a + cross_force(J.v, p);
     J.P = p.tail<3>();
     const Eigen::Vector3d w = J.v.head<3>(), u = J.v.tail<3>();
-    const Eigen::Matrix3d W = skew<double>(w);
-    J.B.noalias() = W * I.IO - I.IO * W;
+    // [w x] I_O - I_O [w x] - u h^T - h u^T = Z + Z^T with Z = [w x] I_O - u h^T
+    // (I_O is symmetric and [w x] skew): one product, its columns w x I_O(:, c).
+    Eigen::Matrix3d Z;
+    for (int c = 0; c < 3; ++c) Z.col(c) = w.cross(I.IO.col(c)) - I.h[c] * u;
+    J.B = Z + Z.transpose();
     J.B -= skew<double>(p.head<3>());
-    J.B.noalias() -= u * I.h.transpose() + I.h * u.transpose();
     J.B.diagonal().array() += 2.0 * I.h.dot(u);
     v_p = J.v;
     a_p = J.a;
@@ -98,11 +107,16 @@ void RneaDerivatives::backward() {
     Bc += J.B;
     Pc += J.P;
     tau_[k] = J.S.dot(F);
-    J.r1 = Ic * J.S;
-    J.r2.noalias() = Bc.transpose() * J.S.head<3>();
-    J.r2 += 2.0 * Pc.cross(J.S.tail<3>());
-    J.u = cross_force(J.S, F) + Bc_times(J.d) + Ic * J.e;
-    J.w = 2.0 * (Ic * J.d) + Bc_times(J.S);
+    // Row k of the left factors, column k of the right ones (see compute()).
+    Eigen::Vector3d r2 = Bc.transpose() * J.S.head<3>();
+    r2 += 2.0 * Pc.cross(J.S.tail<3>());
+    left_.row(k).head<3>() = r2.transpose();
+    left_.row(k).tail<6>() = (Ic * J.S).transpose();
+    St_.row(k) = J.S.transpose();
+    right_q_.col(k) << J.d.head<3>(), J.e;
+    right_qd_.col(k) << J.S.head<3>(), 2.0 * J.d;
+    u_.col(k) = cross_force(J.S, F) + Bc_times(J.d) + Ic * J.e;
+    w_.col(k) = 2.0 * (Ic * J.d) + Bc_times(J.S);
   }
 }
 
@@ -111,17 +125,30 @@ void RneaDerivatives::compute(const double* q, const double* qd, const double* q
   const int n = chain_.n;
   forward(q, qd, qdd, gravity);
   backward();
-  for (int k = 0; k < n; ++k) {
-    const Joint& K = j_[k];
-    for (int i = 0; i < k; ++i) {
-      dq(i, k) = j_[i].S.dot(K.u);
-      dqd(i, k) = j_[i].S.dot(K.w);
+  // The O(n^2) assembly: with r1_i = Ic_i S_i and r2_i = Bc_i^T S_i, i >= k reads
+  //   dtau_i/dq_k = (r2_i; r1_i) . (d_k,ang; e_k),  dtau_i/dqd_k = (r2_i; r1_i) . (S_k,ang; 2 d_k),
+  // and i < k reads S_i . u_k and S_i . w_k. On small chains one dot product
+  // per entry; on large ones four small matrix products (inner size 9 or 6;
+  // each computed whole, the triangle it is for kept), which Eigen's GEMM
+  // runs faster than n^2 short dot products.
+  if (n <= 12) {
+    for (int k = 0; k < n; ++k) {
+      for (int i = 0; i < k; ++i) {
+        dq(i, k) = St_.row(i).dot(u_.col(k));
+        dqd(i, k) = St_.row(i).dot(w_.col(k));
+      }
+      for (int i = k; i < n; ++i) {
+        dq(i, k) = left_.row(i).dot(right_q_.col(k));
+        dqd(i, k) = left_.row(i).dot(right_qd_.col(k));
+      }
     }
-    for (int i = k; i < n; ++i) {
-      const Joint& I = j_[i];
-      dq(i, k) = I.r2.dot(K.d.head<3>()) + I.r1.dot(K.e);
-      dqd(i, k) = 2.0 * I.r1.dot(K.d) + I.r2.dot(K.S.head<3>());
-    }
+  } else {
+    dq.noalias() = left_ * right_q_;
+    dqd.noalias() = left_ * right_qd_;
+    upper_.noalias() = St_ * u_;
+    dq.triangularView<Eigen::StrictlyUpper>() = upper_;
+    upper_.noalias() = St_ * w_;
+    dqd.triangularView<Eigen::StrictlyUpper>() = upper_;
   }
   if (tau) {
     for (int k = 0; k < n; ++k) tau[k] = tau_[k] + chain_.armature[k] * qdd[k];

@@ -88,11 +88,17 @@ class RneaDerivatives {
     Inertia I;
     Eigen::Matrix3d B;              // B's top-left block
     Eigen::Vector3d P;              // the linear momentum (B's bottom-left block is -2 [P x])
-    Vec6 r1, u, w;                  // Ic S and the columns for i < k
-    Eigen::Vector3d r2;             // Bc^T S (its linear part is zero)
   };
   std::vector<Joint> j_;
   std::vector<double> tau_;
+  // The assembly's factors (compute()): rows (Bc_k^T S_k; Ic_k S_k) (the
+  // first's linear part is zero) and S_k^T, columns (d_k,ang; e_k),
+  // (S_k,ang; 2 d_k), and the columns u_k, w_k for i < k.
+  Eigen::Matrix<double, Eigen::Dynamic, 9> left_;
+  Eigen::Matrix<double, Eigen::Dynamic, 6> St_;
+  Eigen::Matrix<double, 9, Eigen::Dynamic> right_q_, right_qd_;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> u_, w_;
+  Eigen::MatrixXd upper_;
 };
 
 }  // namespace pumasim
