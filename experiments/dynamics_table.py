@@ -308,7 +308,7 @@ def jacobian_section(rows, robots, backends):
         return out
     w("## Exact derivatives of the forward dynamics\n")
     w("`jacobian` = dqdd/d(q, qd, tau) exactly (`DynamicsDerivatives`: the back-end's h and H in double, "
-      "the Cholesky factor of H, and dID/dq, dID/dqd from analytical world-frame recursions in double "
+      "the Cholesky factor of H and H⁻¹ formed from it once (dFD/dtau, then two matrix products), and dID/dq, dID/dqd from analytical world-frame recursions in double "
       "(`models/dynamics/rnea_derivatives.hpp`, after Carpentier & Mansard 2018, RSS): dFD/dq = -H⁻¹ dID/dq, dFD/dqd = -H⁻¹ dID/dqd, "
       "dFD/dtau = H⁻¹), beside the same back-end's `fd`, same state, same run. A forward difference "
       "of the forward dynamics costs 3n + 1 `fd` calls.\n")

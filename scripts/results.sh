@@ -44,6 +44,10 @@
 #               results/cost_breakdown.json, the other labels kept.
 #   ci          only when named: CI's wall time on a fresh clone (scripts/measure_ci.sh;
 #               as long as CI, on a committed tree with nothing else running).
+#   abjacobian  only when named: the exact forward-dynamics Jacobian's benchmark rows, this tree's
+#               release build against revision 4331408's (scripts/ab_revision.sh builds it in a git worktree
+#               under build/; scripts/ab_bench.py interleaves the two, 7 rounds), on -march=native builds;
+#               results/bench/ab_jacobian_large_n.txt. Needs an otherwise idle machine.
 #   slurm       only when named: an ensemble as a job array on a one-node Slurm on localhost
 #               (scripts/slurm_one_node.sh: as root, it installs slurm-wlm and munge when missing and
 #               writes /etc/slurm/slurm.conf when absent; the release build's binary).
@@ -69,7 +73,7 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
      partitioned filippov panda bench ensembles literature report)
-named_only=(fuzz cost ci slurm)
+named_only=(fuzz cost ci slurm abjacobian)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
 while [ $# -gt 0 ]; do
@@ -185,6 +189,11 @@ stage_cost() {
 }
 # writes: results/reliability/ci_phases.txt
 stage_ci() { scripts/measure_ci.sh; }
+# writes: results/bench/ab_jacobian_large_n.txt
+stage_abjacobian() {
+  scripts/ab_revision.sh --base 4331408 --bench bench_dynamics --rounds 7 \
+    --filter 'jacobian/(puma560|puma560-3|random(6|12|24|48))/|plant_' --out results/bench/ab_jacobian_large_n.txt
+}
 # writes: results/ensembles/slurm_one_node.log
 stage_slurm() { scripts/slurm_one_node.sh; }
 # writes: results/README.md results/report_run.json
