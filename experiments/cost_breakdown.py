@@ -9,7 +9,9 @@ The scenes (issue 17):
 
 For each, three measurements:
   1. the normal (release) build, run --repeats times: the integration wall time
-     (stats.json, the fastest run) and the counts (f, steps, Jacobians);
+     (stats.json, the fastest run) and the counts (f, steps, Jacobians); and
+     the process around the run: each process's wall from start to exit
+     against its own wall_time_s (the median of the runs' ratios);
   2. the profiled build (preset "profile", option PUMASIM_PROFILE: timers in
      the plant and the driver, models/plant/profile.hpp), run --repeats
      times, each entry's smallest value over the runs kept: exclusive time per context
@@ -43,7 +45,9 @@ import json
 import os
 import re
 import shutil
+import statistics
 import subprocess
+import time
 import sys
 import tempfile
 
@@ -72,22 +76,35 @@ PUMASIM_NEWTON = re.compile(r"pumasim::detail::\(anonymous namespace\)::newton_\
 OTHER_SUNDIALS = "other SUNDIALS (CVODE's step, error test, root finding)"
 
 
-def run(binary, args, out, env=None):
+def run(binary, args, out, env=None, timed=None):
+    """The run's stats.json; with timed (a list), the process's wall time [s]
+    from start to exit (Python's subprocess: its fork and exec included) appended."""
+    start = time.perf_counter()
     subprocess.run([binary, "run", *args, "--out", out, "--force", "-q"], cwd=ROOT, check=True,
                    stdout=subprocess.DEVNULL, env=env)
+    if timed is not None:
+        timed.append(time.perf_counter() - start)
     with open(os.path.join(out, "stats.json"), encoding="utf-8") as f:
         return json.load(f)
 
 
 def release_runs(binary, args, repeats, tmp):
-    best = None
+    best, process, walls = None, [], []
     for _ in range(repeats):
-        s = run(binary, args, os.path.join(tmp, "release"))
+        s = run(binary, args, os.path.join(tmp, "release"), timed=process)
+        walls.append(s["wall_time_s"])
         if best is None or s["integration_wall_time_s"] < best["integration_wall_time_s"]:
             best = s
     keys = ["integration_wall_time_s", "rhs_evaluations", "steps", "jacobian_evaluations", "linear_solves",
             "rejected_steps", "restarts", "root_events", "time_events", "max_path_error_mm", "rms_path_error_mm"]
-    return {k: best[k] for k in keys}
+    out = {k: best[k] for k in keys}
+    # The process around the run: its wall against the run's own wall_time_s (stats.json), run by run.
+    out["process_wall_s"] = statistics.median(process)
+    out["run_wall_time_s"] = statistics.median(walls)
+    out["process_over_run"] = statistics.median(p / w for p, w in zip(process, walls))
+    out["process_over_run_range"] = [min(p / w for p, w in zip(process, walls)),
+                                     max(p / w for p, w in zip(process, walls))]
+    return out
 
 
 def profile_runs(binary, args, repeats, tmp):
@@ -212,7 +229,12 @@ def scene_section(title, m):
              f"{rel['rhs_evaluations']} f, {rel['steps']} steps, {rel['jacobian_evaluations']} Jacobians, "
              f"{rel['linear_solves']} Newton matrix set-ups, {rel['restarts']} restarts, "
              f"{rel['root_events']} roots; {wall_us / nf:.2f} us of wall per f. "
-             f"Path error max {rel['max_path_error_mm']:.6g} mm, rms {rel['rms_path_error_mm']:.6g} mm.",
+             f"Path error max {rel['max_path_error_mm']:.6g} mm, rms {rel['rms_path_error_mm']:.6g} mm." +
+             (f" The process (`pumasim run` from start to exit, through Python's subprocess): median "
+              f"{rel['process_wall_s'] * 1e3:.1f} ms against the run's own wall_time_s median "
+              f"{rel['run_wall_time_s'] * 1e3:.1f} ms, {rel['process_over_run']:.2f}x (median of the runs' ratios; "
+              f"{rel['process_over_run_range'][0]:.2f}-{rel['process_over_run_range'][1]:.2f})."
+              if "process_wall_s" in rel else ""),
              f"Profiled build: {total / 1e6:.1f} ms in all (each entry's minimum over the runs; the timers' own cost included); "
              "\"normal\" columns scale its times by the two walls' ratio "
              f"({scale:.2f}).", "",

@@ -4,7 +4,12 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include <Eigen/Geometry>
 
@@ -59,6 +64,20 @@ struct RunRecorder::Sums {
   int nearest_piece = 0;              // the path's piece nearest the last row's flange (deviation's hint)
 };
 
+struct RunRecorder::Writer {
+  struct Chunk {
+    std::vector<double> saved, signals;  // rows [t, x...] and their drive signals, as the run filled them
+  };
+  std::mutex lock;
+  std::condition_variable wake;  // the thread: a chunk or the end; the run: a spare chunk
+  std::deque<Chunk> full;        // handed over, in the run's order
+  std::vector<Chunk> spare;      // formatted, their capacity kept
+  int chunks = 1;                // made so far, the run's own included (at most kWriterChunks)
+  bool done = false;             // no chunk will follow
+  std::exception_ptr error;      // the first the formatting threw (then the rest is only recycled)
+  std::thread thread;
+};
+
 RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::size_t expected_rows)
     : plant_(plant),
       rows_plant_(plant.shared_model()),
@@ -71,18 +90,32 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
       now_(static_cast<std::size_t>(plant.layout().n)),
       csv_(std::make_unique<Csv>()),
       sums_(std::make_unique<Sums>()) {
-  const std::size_t width = static_cast<std::size_t>(m_ + 1);
-  saved_.reserve(keep_rows ? (expected_rows + 1) * width : kChunkValues + width);
+  const bool threaded = text != nullptr && !keep_rows;
+  const std::size_t width = static_cast<std::size_t>(m_ + 1), chunk = threaded ? kWriterChunkValues : kChunkValues;
+  saved_.reserve(keep_rows ? (expected_rows + 1) * width : chunk + width);
   if (keep_rows && cfg_.reference) path_error_.reserve(expected_rows + 1), path_deviation_.reserve(expected_rows + 1);
-  if (drive_) signals_.reserve((kChunkValues / static_cast<std::size_t>(m_ + 1) + 1) * 3 * static_cast<std::size_t>(n_));
+  if (drive_) signals_.reserve((chunk / width + 1) * 3 * static_cast<std::size_t>(n_));
   csv_->on = text_ != nullptr;
   if (text_) *text_ << header(plant_);
   fig_.ledger = plant_.layout().e >= 0;
   fig_.peak_u.assign(n_, 0.0), fig_.peak_ea.assign(n_, 0.0), fig_.peak_i.assign(n_, 0.0);
   sums_->saturated.assign(n_, 0);
+  if (threaded) {
+    writer_ = std::make_unique<Writer>();
+    writer_->thread = std::thread([this] { writer_loop(); });
+  }
 }
 
-RunRecorder::~RunRecorder() = default;
+RunRecorder::~RunRecorder() {
+  if (!writer_ || !writer_->thread.joinable()) return;
+  {  // left without finish() (the run threw): the rows not formatted are dropped
+    const std::lock_guard<std::mutex> g(writer_->lock);
+    writer_->full.clear();
+    writer_->done = true;
+  }
+  writer_->wake.notify_all();
+  writer_->thread.join();
+}
 
 void RunRecorder::observe(double t, const double* x) {
   saved_.push_back(t);
@@ -95,7 +128,71 @@ void RunRecorder::observe(double t, const double* x) {
     output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   const std::size_t width = static_cast<std::size_t>(m_ + 1);
-  if (saved_.size() - formatted_ * width >= kChunkValues) format_pending();
+  if (writer_) {
+    if (saved_.size() >= kWriterChunkValues) hand_over(false);
+  } else if (saved_.size() - formatted_ * width >= kChunkValues) {
+    format_pending();
+  }
+}
+
+// The run's rows so far to the writer thread; unless they are the last, a
+// spare chunk (or a new one, below kWriterChunks) becomes the run's.
+void RunRecorder::hand_over(bool last) {
+  const auto start = std::chrono::steady_clock::now();
+  Writer& w = *writer_;
+  Writer::Chunk next;
+  bool fresh = false;
+  {
+    std::unique_lock<std::mutex> g(w.lock);
+    if (!last) {
+      if (w.spare.empty() && w.chunks >= kWriterChunks) w.wake.wait(g, [&w] { return !w.spare.empty(); });
+      if (w.spare.empty()) {
+        ++w.chunks, fresh = true;
+      } else {
+        next = std::move(w.spare.back());
+        w.spare.pop_back();
+      }
+    }
+    w.full.push_back({std::move(saved_), std::move(signals_)});
+    if (last) w.done = true;
+  }
+  w.wake.notify_all();
+  saved_ = std::move(next.saved), signals_ = std::move(next.signals);
+  if (fresh) {
+    const std::size_t width = static_cast<std::size_t>(m_ + 1);
+    saved_.reserve(kWriterChunkValues + width);
+    if (drive_) signals_.reserve((kWriterChunkValues / width + 1) * 3 * static_cast<std::size_t>(n_));
+  }
+  output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The writer thread: formats the chunks in the order handed over, until the last.
+void RunRecorder::writer_loop() {
+  Writer& w = *writer_;
+  const std::size_t width = static_cast<std::size_t>(m_ + 1);
+  for (;;) {
+    Writer::Chunk c;
+    {
+      std::unique_lock<std::mutex> g(w.lock);
+      w.wake.wait(g, [&w] { return !w.full.empty() || w.done; });
+      if (w.full.empty()) return;
+      c = std::move(w.full.front());
+      w.full.pop_front();
+    }
+    if (!w.error) {  // only this thread sets it
+      try {
+        format_rows(c.saved.data(), c.saved.size() / width, c.signals.data());
+      } catch (...) {
+        w.error = std::current_exception();
+      }
+    }
+    c.saved.clear(), c.signals.clear();
+    {
+      const std::lock_guard<std::mutex> g(w.lock);
+      w.spare.push_back(std::move(c));
+    }
+    w.wake.notify_all();
+  }
 }
 
 std::string RunRecorder::header(const Plant& plant) {
@@ -124,20 +221,13 @@ int RunRecorder::columns(const Plant& plant) {
   return static_cast<int>(std::count(h.begin(), h.end(), ',')) + 1;
 }
 
-// The rows not yet formatted: their text to the stream, their figures, then
-// (without keep_rows) they are let go.
+// The rows not yet formatted, on the run's thread: their text to the stream,
+// their figures, then (without keep_rows) they are let go.
 void RunRecorder::format_pending() {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t width = static_cast<std::size_t>(m_ + 1);
   const std::size_t rows = saved_.size() / width;
-  csv_->text.clear();
-  for (std::size_t row = formatted_; row < rows; ++row) {
-    ++fig_.rows;
-    const double* signals = drive_ ? &signals_[3 * static_cast<std::size_t>(n_) * (row - formatted_)] : nullptr;
-    write_row(saved_[row * width], &saved_[row * width + 1], signals);
-    if (csv_->on) csv_->text += '\n';
-  }
-  if (text_) text_->write(csv_->text.data(), static_cast<std::streamsize>(csv_->text.size()));
+  format_rows(saved_.data() + formatted_ * width, rows - formatted_, signals_.data());
   signals_.clear();
   if (keep_rows_) {
     formatted_ = rows;
@@ -147,8 +237,27 @@ void RunRecorder::format_pending() {
   output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Rows [t, x...] and their drive signals (3 n per row, with a drive): their
+// text to the stream and their figures.
+void RunRecorder::format_rows(const double* saved, std::size_t rows, const double* signals) {
+  const std::size_t width = static_cast<std::size_t>(m_ + 1), per_row = 3 * static_cast<std::size_t>(n_);
+  csv_->text.clear();
+  for (std::size_t row = 0; row < rows; ++row) {
+    ++fig_.rows;
+    write_row(saved[row * width], &saved[row * width + 1], drive_ ? signals + per_row * row : nullptr);
+    if (csv_->on) csv_->text += '\n';
+  }
+  if (text_) text_->write(csv_->text.data(), static_cast<std::streamsize>(csv_->text.size()));
+}
+
 void RunRecorder::finish() {
-  format_pending();
+  if (writer_) {
+    hand_over(true);
+    writer_->thread.join();
+    if (writer_->error) std::rethrow_exception(writer_->error);
+  } else {
+    format_pending();
+  }
   csv_->text = std::string();  // its memory back
   summarise();
   if (text_) text_->flush();

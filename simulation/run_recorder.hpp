@@ -8,6 +8,12 @@
 // chunk, whatever the run's length (unless the rows are kept for the
 // caller), and the formatting time, spent inside the run, is counted apart
 // (output_seconds) so that the run's wall time stays the simulation's.
+// With text and without keep_rows (the command line's trajectory.csv), the
+// formatting runs on a thread of its own while the run goes on: the run
+// hands over chunks of kWriterChunkValues numbers, at most kWriterChunks at
+// a time (it waits for a free one beyond that: the memory stays bounded),
+// and that one thread formats them in order, so the text and the figures
+// are the same as formatted on the run's thread.
 #pragma once
 
 #include <cstddef>
@@ -39,6 +45,10 @@ class RunRecorder {
  public:
   // The numbers (times and states) held before a chunk is formatted: 512 KiB.
   static constexpr std::size_t kChunkValues = std::size_t{1} << 16;
+  // The writer thread's chunk (32 KiB of numbers, about a hundred rows of a
+  // six-joint plant) and the chunks in flight, the one being filled included.
+  static constexpr std::size_t kWriterChunkValues = std::size_t{1} << 12;
+  static constexpr int kWriterChunks = 4;
   // text: where trajectory.csv's text goes (one header line, one row per
   // output), chunk by chunk; nullptr: no text, the figures only. keep_rows:
   // every row is also kept, for take_rows(), room reserved for expected_rows
@@ -52,8 +62,9 @@ class RunRecorder {
   // Formats the rows left and completes the figures. Call once, after the run.
   void finish();
   const RunFigures& figures() const { return fig_; }
-  // [s] of wall-clock time spent taking the drive signals, formatting rows
-  // and computing their figures.
+  // [s] of wall-clock time the run's thread spent taking the drive signals,
+  // formatting rows and computing their figures (or, with the writer thread,
+  // handing chunks over to it and waiting for a free one).
   double output_seconds() const { return output_seconds_; }
   // After finish(), with keep_rows: the observed rows, [t, x...] per output,
   // and each row's path error and deviation [m] (empty without a
@@ -70,7 +81,11 @@ class RunRecorder {
  private:
   struct Csv;   // the text of a chunk of trajectory.csv, numbers at full precision
   struct Sums;  // what the figures accumulate over the rows
+  struct Writer;  // the formatting thread and its chunks
   void format_pending();
+  void format_rows(const double* saved, std::size_t rows, const double* signals);
+  void hand_over(bool last);
+  void writer_loop();
   void write_row(double t, const double* x, const double* signals);
   void path_columns(const Eigen::Vector3d& p);
   void drive_columns(const double* signals);
@@ -99,6 +114,7 @@ class RunRecorder {
   std::unique_ptr<Sums> sums_;
   RunFigures fig_;
   double output_seconds_ = 0;
+  std::unique_ptr<Writer> writer_;  // last: its thread starts when everything else is made
 };
 
 // The unit of a state component, from its name (q1 rad, qd1 rad/s, ...);

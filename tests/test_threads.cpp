@@ -6,13 +6,14 @@
 // tsan, which builds this binary alone); the release build runs them too.
 // Also here: loading a scene builds no plant and no back-end; and an
 // ensemble (simulation/ensemble.hpp) on 1, 2 and 8 threads, each sample's
-// result bitwise the serial one.
+// result bitwise the serial one; and the run recorder's writer thread.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,6 +22,9 @@
 #include "models/plant/plant.hpp"
 #include "models/scene/scene.hpp"
 #include "simulation/ensemble.hpp"
+#include "simulation/run.hpp"
+#include "simulation/run_recorder.hpp"
+#include "simulation/scene_run.hpp"
 #include "tests/ensemble_helpers.hpp"
 
 namespace pumasim {
@@ -242,6 +246,38 @@ TEST(Ensemble, OneTwoAndEightThreadsGiveTheSerialResultsBitForBit) {
       testing::expect_same_result(par[k], serial[k], std::to_string(threads) + " threads");
     }
   }
+}
+
+// The run recorder's writer thread (simulation/run_recorder.hpp): with
+// trajectory text and no rows kept, the rows are formatted on a thread of
+// their own, chunk by chunk, while the run goes on; with the rows kept, on
+// the run's thread. The same code runs on the same rows in the same order, so
+// the text must be byte for byte the same and so must every figure -- here
+// over many more chunks than can be in flight, so that the run also waits
+// for a spare one.
+TEST(RunRecorder, TheWriterThreadWritesWhatTheRunsThreadWrites) {
+  const double t_end = 0.01, interval = 2e-6;
+  const RunPlan plan =
+      plan_run(load_scene(kScenes + "/paper_slow_6dof_hybrid.toml"), {.t_end = t_end, .output_interval = interval});
+  std::ostringstream on_writer, on_run;
+  const SceneRun a = simulate_scene(plan.scene, plan.controls, {.trajectory = &on_writer});
+  const SceneRun b = simulate_scene(plan.scene, plan.controls, {.keep_rows = true, .trajectory = &on_run});
+  ASSERT_TRUE(a.result.ok) << a.result.failure;
+  ASSERT_TRUE(b.result.ok) << b.result.failure;
+  EXPECT_EQ(a.figures.rows, std::lround(t_end / interval) + 1);  // an output at 0 and at every interval
+  const std::size_t values = static_cast<std::size_t>(a.figures.rows) * (a.state_names.size() + 1);
+  EXPECT_GT(values, 4 * RunRecorder::kWriterChunks * RunRecorder::kWriterChunkValues);
+  EXPECT_TRUE(on_writer.str() == on_run.str()) << "the texts differ";
+  EXPECT_EQ(a.figures.rows, b.figures.rows);
+  const auto same = [](const std::vector<double>& u, const std::vector<double>& v) { return bitwise_equal(u, v); };
+  EXPECT_TRUE(same({a.figures.max_path_error, a.figures.rms_path_error, a.figures.max_path_deviation,
+                    a.figures.rms_path_deviation, a.figures.max_ledger_residual, a.figures.ledger_energy_scale},
+                   {b.figures.max_path_error, b.figures.rms_path_error, b.figures.max_path_deviation,
+                    b.figures.rms_path_deviation, b.figures.max_ledger_residual, b.figures.ledger_energy_scale}));
+  EXPECT_TRUE(same(a.figures.peak_u, b.figures.peak_u) && same(a.figures.peak_ea, b.figures.peak_ea) &&
+              same(a.figures.peak_i, b.figures.peak_i) &&
+              same(a.figures.saturated_fraction, b.figures.saturated_fraction));
+  EXPECT_TRUE(same(a.figures.final_state, b.figures.final_state));
 }
 
 }  // namespace
