@@ -21,7 +21,19 @@ Plant::Plant(std::shared_ptr<const PlantModel> model)
 
 Plant::~Plant() = default;
 
+// The integrator's f: the profiled build's f context (models/plant/profile.hpp).
+void Plant::rhs(double t, const double* x, double* xdot) {
+  PUMASIM_PROFILE_CONTEXT(kRhs);
+  model_->rhs(context_, *evaluator_, t, x, xdot);
+}
+
+void Plant::rhs_smooth(double t, const double* x, double* xdot) {
+  PUMASIM_PROFILE_CONTEXT(kRhs);
+  model_->rhs(context_, *evaluator_, t, x, xdot, FrictionPart::kSmooth);
+}
+
 void Plant::rhs_split(double t, const double* x, double* fe, double* fi) {
+  PUMASIM_PROFILE_CONTEXT(kRhs);
   model_->rhs(context_, *evaluator_, t, x, fi);                       // the whole f
   model_->rhs(context_, *evaluator_, t, x, fe, FrictionPart::kNone);  // f without friction
   const StateLayout& L = layout();

@@ -50,7 +50,7 @@ class Plant {
   void initial_state(double* x);
 
   // f(t, x). Allocation-free.
-  void rhs(double t, const double* x, double* xdot) { model_->rhs(context_, *evaluator_, t, x, xdot); }
+  void rhs(double t, const double* x, double* xdot);
   // IMEX split f = fe + fi: fi holds the stiff parts, the armature current
   // equation and the friction torques' effect on qdd (f minus f without
   // friction); fe the rigid body (q' = qd, qdd without friction) and the PIV
@@ -135,9 +135,7 @@ class Plant {
   // left out (B w_m stays) and no stuck-joint constraint; the other laws'
   // torques (tanh, viscous) whole. The paper's and Karnopp's zero-speed bands
   // play no part there. Allocation-free.
-  void rhs_smooth(double t, const double* x, double* xdot) {
-    model_->rhs(context_, *evaluator_, t, x, xdot, FrictionPart::kSmooth);
-  }
+  void rhs_smooth(double t, const double* x, double* xdot);
   // d f_smooth / dx, exactly (dual numbers).
   void jacobian_smooth(double t, const double* x, Eigen::MatrixXd& J) { jacobian(FrictionPart::kSmooth, t, x, J); }
   int set_valued_joints() const { return model_->set_valued_joints(); }
