@@ -101,9 +101,9 @@ def release_runs(binary, args, repeats, tmp):
     # The process around the run: its wall against the run's own wall_time_s (stats.json), run by run.
     out["process_wall_s"] = statistics.median(process)
     out["run_wall_time_s"] = statistics.median(walls)
-    out["process_over_run"] = statistics.median(p / w for p, w in zip(process, walls))
-    out["process_over_run_range"] = [min(p / w for p, w in zip(process, walls)),
-                                     max(p / w for p, w in zip(process, walls))]
+    ratios = [p / w for p, w in zip(process, walls)]
+    out["process_over_run"] = statistics.median(ratios)
+    out["process_over_run_range"] = [min(ratios), max(ratios)]
     return out
 
 

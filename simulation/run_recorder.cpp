@@ -71,8 +71,7 @@ struct RunRecorder::Writer {
   std::mutex lock;
   std::condition_variable wake;  // the thread: a chunk or the end; the run: a spare chunk
   std::deque<Chunk> full;        // handed over, in the run's order
-  std::vector<Chunk> spare;      // formatted, their capacity kept
-  int chunks = 1;                // made so far, the run's own included (at most kWriterChunks)
+  std::vector<Chunk> spare;      // free (all but the run's at the start), their capacity kept
   bool done = false;             // no chunk will follow
   std::exception_ptr error;      // the first the formatting threw (then the rest is only recycled)
   std::thread thread;
@@ -91,10 +90,9 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
       csv_(std::make_unique<Csv>()),
       sums_(std::make_unique<Sums>()) {
   const bool threaded = text != nullptr && !keep_rows;
-  const std::size_t width = static_cast<std::size_t>(m_ + 1), chunk = threaded ? kWriterChunkValues : kChunkValues;
-  saved_.reserve(keep_rows ? (expected_rows + 1) * width : chunk + width);
+  reserve_chunk(saved_, signals_, threaded ? kWriterChunkValues : kChunkValues);
+  if (keep_rows) saved_.reserve((expected_rows + 1) * static_cast<std::size_t>(m_ + 1));
   if (keep_rows && cfg_.reference) path_error_.reserve(expected_rows + 1), path_deviation_.reserve(expected_rows + 1);
-  if (drive_) signals_.reserve((chunk / width + 1) * 3 * static_cast<std::size_t>(n_));
   csv_->on = text_ != nullptr;
   if (text_) *text_ << header(plant_);
   fig_.ledger = plant_.layout().e >= 0;
@@ -102,6 +100,8 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
   sums_->saturated.assign(n_, 0);
   if (threaded) {
     writer_ = std::make_unique<Writer>();
+    writer_->spare.resize(kWriterChunks - 1);
+    for (Writer::Chunk& c : writer_->spare) reserve_chunk(c.saved, c.signals, kWriterChunkValues);
     writer_->thread = std::thread([this] { writer_loop(); });
   }
 }
@@ -135,34 +135,31 @@ void RunRecorder::observe(double t, const double* x) {
   }
 }
 
+// Room for a chunk of `values` numbers of rows and their drive signals.
+void RunRecorder::reserve_chunk(std::vector<double>& saved, std::vector<double>& signals, std::size_t values) const {
+  const std::size_t width = static_cast<std::size_t>(m_ + 1);
+  saved.reserve(values + width);
+  if (drive_) signals.reserve((values / width + 1) * 3 * static_cast<std::size_t>(n_));
+}
+
 // The run's rows so far to the writer thread; unless they are the last, a
-// spare chunk (or a new one, below kWriterChunks) becomes the run's.
+// spare chunk becomes the run's (waiting for one while all are in flight).
 void RunRecorder::hand_over(bool last) {
   const auto start = std::chrono::steady_clock::now();
   Writer& w = *writer_;
   Writer::Chunk next;
-  bool fresh = false;
   {
     std::unique_lock<std::mutex> g(w.lock);
     if (!last) {
-      if (w.spare.empty() && w.chunks >= kWriterChunks) w.wake.wait(g, [&w] { return !w.spare.empty(); });
-      if (w.spare.empty()) {
-        ++w.chunks, fresh = true;
-      } else {
-        next = std::move(w.spare.back());
-        w.spare.pop_back();
-      }
+      w.wake.wait(g, [&w] { return !w.spare.empty(); });
+      next = std::move(w.spare.back());
+      w.spare.pop_back();
     }
     w.full.push_back({std::move(saved_), std::move(signals_)});
-    if (last) w.done = true;
+    w.done = last;
   }
   w.wake.notify_all();
   saved_ = std::move(next.saved), signals_ = std::move(next.signals);
-  if (fresh) {
-    const std::size_t width = static_cast<std::size_t>(m_ + 1);
-    saved_.reserve(kWriterChunkValues + width);
-    if (drive_) signals_.reserve((kWriterChunkValues / width + 1) * 3 * static_cast<std::size_t>(n_));
-  }
   output_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -84,6 +84,7 @@ class RunRecorder {
   struct Writer;  // the formatting thread and its chunks
   void format_pending();
   void format_rows(const double* saved, std::size_t rows, const double* signals);
+  void reserve_chunk(std::vector<double>& saved, std::vector<double>& signals, std::size_t values) const;
   void hand_over(bool last);
   void writer_loop();
   void write_row(double t, const double* x, const double* signals);
