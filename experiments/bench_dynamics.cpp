@@ -25,13 +25,13 @@
 #include <string>
 #include <vector>
 
+#include "experiments/bench_main.hpp"
 #include "models/dynamics/backend.hpp"
 #include "models/dynamics/dynamics_derivatives.hpp"
 #include "models/plant/plant.hpp"
-#include "models/scene/scene.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
-#include "pumasim_build_info.hpp"  // generated at build time
+#include "models/scene/scene.hpp"
 
 namespace {
 
@@ -163,13 +163,5 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark(name.c_str(), run_plant, std::string(scene), jac)->Unit(benchmark::kNanosecond);
     }
   }
-  benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);
-  benchmark::AddCustomContext("pumasim_compiler", pumasim::build_info::kCompiler);
-  benchmark::AddCustomContext("pumasim_flags", pumasim::build_info::kFlags);
-  benchmark::AddCustomContext("pumasim_build_type", pumasim::build_info::kBuildType);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return pumasim::run_registered_benchmarks(argc, argv);
 }

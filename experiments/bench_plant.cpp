@@ -26,11 +26,11 @@
 
 #include <unistd.h>
 
+#include "experiments/bench_main.hpp"
 #include "models/plant/plant.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_writer.hpp"
 #include "models/scene/scene.hpp"
-#include "pumasim_build_info.hpp"  // generated at build time
 
 namespace {
 
@@ -118,11 +118,5 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kNanosecond);
     }
   }
-  benchmark::AddCustomContext("pumasim_git_revision", pumasim::build_info::kGitRevision);
-  benchmark::AddCustomContext("pumasim_flags", pumasim::build_info::kFlags);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  return pumasim::run_registered_benchmarks(argc, argv);
 }

@@ -30,6 +30,8 @@
 #include "integrators/integrator.hpp"
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/regressor.hpp"
+#include "models/robot/base_parameters.hpp"
 #include "models/robot/dynamics_query.hpp"
 #include "models/robot/random_chain.hpp"
 #include "models/robot/robot_file.hpp"
@@ -365,6 +367,81 @@ void add_dynamics(CLI::App* app, DynamicsArgs& a) {
   add_text(app, "--qdd", a.qdd, "joint accelerations [rad/s^2; m/s^2]: prints tau = ID(q, qd, qdd)", "CSV");
   add_text(app, "--tau", a.tau, "joint torques [N m; N for a prismatic joint]: prints qdd = FD(q, qd, tau)", "CSV");
   app->add_flag("--no-rotor-inertia", a.no_rotor_inertia, "the robot without its rotor inertias");
+}
+
+// ---------------------------------------------------------------- base-parameters
+
+struct BaseArgs {
+  std::string robot;
+  bool no_rotor = false, no_friction = false, json = false;
+  int samples = 40;
+  long seed = 1;
+  double tolerance = 1e-8;
+};
+
+Json base_parameters_json(const RobotModel& model, const BaseParameters& base, const Eigen::VectorXd& values) {
+  Json doc;
+  doc["robot"] = model.name;
+  doc["columns"] = base.names;
+  doc["rank"] = base.rank();
+  doc["tolerance"] = base.tolerance;
+  doc["samples"] = base.samples;
+  doc["gap"] = std::isfinite(base.gap()) ? Json(base.gap()) : Json(nullptr);
+  doc["singular_values"] = json_vector(base.singular_values);
+  doc["base"] = Json::array();
+  for (int i = 0; i < base.rank(); ++i) {
+    doc["base"].push_back({{"name", base.label(i)}, {"definition", base.definition(i)}, {"value", values[i]}});
+  }
+  doc["no_effect"] = Json::array();
+  for (int k : base.no_effect) doc["no_effect"].push_back(base.names[static_cast<std::size_t>(k)]);
+  return doc;
+}
+
+int cmd_base_parameters(const BaseArgs& a, std::ostream& out) {
+  const RobotModel model = load_robot(a.robot);
+  JointTorqueRegressor regressor(model, {.rotor = !a.no_rotor, .friction = !a.no_friction});
+  const BaseParameters base =
+      base_parameters(regressor, model, a.samples, static_cast<std::uint64_t>(a.seed), a.tolerance);
+  const Eigen::VectorXd values = base.values(regressor.parameters_of(model));
+  if (a.json) {
+    out << base_parameters_json(model, base, values).dump(2) << "\n";
+    return kExitOk;
+  }
+  char line[256];
+  std::snprintf(line, sizeof line, "%s: %d base parameters of %d columns (%d per joint)\n", model.name.c_str(),
+                base.rank(), regressor.parameters(), regressor.per_joint());
+  out << line;
+  const Eigen::Index r = base.rank();
+  std::snprintf(line, sizeof line,
+                "rank: singular values above %.3g of the largest, of the regressor at %d random states stacked "
+                "(columns scaled to unit norm): sigma_%ld = %.3g, sigma_%ld = %.3g, gap %.3g\n",
+                base.tolerance, base.samples, static_cast<long>(r), base.singular_values[r - 1],
+                static_cast<long>(r + 1), r < base.singular_values.size() ? base.singular_values[r] : 0.0, base.gap());
+  out << line << "the robot's values (SI units; inertias about, first moments in, the joint frames):\n";
+  for (int i = 0; i < base.rank(); ++i) {
+    const std::string l = base.label(i), d = base.definition(i);
+    std::snprintf(line, sizeof line, "  %-6s = %-13.6g", l.c_str(), values[i]);
+    out << line << (l == d ? "" : " (" + d + ")") << "\n";
+  }
+  if (!base.no_effect.empty()) {
+    out << "no effect on the torques:";
+    for (int k : base.no_effect) out << " " << base.names[static_cast<std::size_t>(k)];
+    out << "\n";
+  }
+  return kExitOk;
+}
+
+void add_base_parameters(CLI::App* app, BaseArgs& a) {
+  app->add_option("robot", a.robot, "a robot name (puma560) or a robot file path (TOML, or URDF: *.urdf)")
+      ->required()
+      ->type_name("NAME|FILE");
+  app->add_flag("--no-rotor", a.no_rotor, "without the rotor inertia columns Ia");
+  app->add_flag("--no-friction", a.no_friction, "without the friction columns Fv, Fc, Fo");
+  app->add_option("--samples", a.samples, "random states stacked (default 40)")->check(CLI::Range(1, 100000));
+  app->add_option("--seed", a.seed, "their seed (default 1)")->check(CLI::Range(0L, 1L << 62));
+  app->add_option("--tolerance", a.tolerance, "rank tolerance, relative to the largest singular value (default 1e-8)")
+      ->check(CLI::Range(1e-15, 1e-2));
+  app->add_flag("--json", a.json, "one JSON object: every column, the base parameters, the singular values");
 }
 
 // ---------------------------------------------------------------- check
@@ -918,6 +995,7 @@ int cmd_keys(bool json, std::ostream& out) {
 struct Parsed {
   DynamicsArgs dynamics;
   RobotArgs robot;
+  BaseArgs base;
   SceneArgs check;
   RunArgs run;
   StiffnessArgs stiffness;
@@ -951,6 +1029,13 @@ const Command kCommands[] = {
      "file (TOML) of a random chain of N joints, for a scene on a long arm.",
      [](CLI::App* a, Parsed& p) { add_robot(a, p.robot); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_robot(p.robot, o); }},
+    {"base-parameters", "the joint-torque regressor's base parameters, their regrouping and the robot's values",
+     "Stacks the regressor tau = Y(q, qd, qdd) pi (10 inertial parameters per link, the rotor inertia and "
+     "viscous, Coulomb and offset friction per joint) at random states and finds its rank by SVD; the base "
+     "parameters are the columns kept in order by a QR of the stacked regressor, each with the columns that "
+     "regroup onto it (models/robot/base_parameters.hpp).",
+     [](CLI::App* a, Parsed& p) { add_base_parameters(a, p.base); },
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_base_parameters(p.base, o); }},
     {"backends", "lists the dynamics back-ends", "",
      [](CLI::App* a, Parsed& p) { a->add_flag("--json", p.json, "one JSON array of the entries (name, summary)"); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(p.json, o); }},

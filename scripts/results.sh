@@ -27,6 +27,8 @@
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
+#   identification  the joint-torque regressor, direct against probing, and the base parameters
+#               of the PUMA 560 and the Panda (experiments/regressor_table.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
 #               Sobol indices of the drive ensemble and of the paper's experiment over five unpublished
 #               inputs (experiments/ensemble_gsa.py)
@@ -72,7 +74,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
-     partitioned filippov panda bench ensembles literature report)
+     partitioned filippov panda bench identification ensembles literature report)
 named_only=(fuzz cost ci slurm abjacobian)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
@@ -159,6 +161,11 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 # writes: results/bench/dynamics.json results/dynamics_backends.md results/dynamics_cost_vs_n.png
 # writes: results/dynamics_cost_vs_n.pdf
 stage_bench() { experiments/bench_dynamics.sh --out results; }
+# writes: results/identification/regressor.md results/identification/regressor_bench.json
+stage_identification() {
+  /usr/bin/python3 experiments/regressor_table.py --bench "$PUMASIM_BIN/bench_identification" --bin "$PUMASIM" \
+    --out results/identification
+}
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
 # writes: results/ensembles/paper_slow_unpublished_sobol.json results/ensembles/paper_slow_unpublished_sobol.md
@@ -225,7 +232,7 @@ scripts/build.sh > /dev/null   # the dependencies, and the native build (buildsp
 scripts/configure.sh portable > /dev/null
 cmake --build --preset portable -j "$(nproc)" > /dev/null
 mkdir -p build/results-bin
-for b in pumasim testset rosenbrock_local_error bench_dynamics; do
+for b in pumasim testset rosenbrock_local_error bench_dynamics bench_identification; do
   cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
 done
 cp build/release/bin/pumasim build/results-bin/pumasim-native.tmp && mv build/results-bin/pumasim-native.tmp build/results-bin/pumasim-native
