@@ -1,4 +1,6 @@
-// SUNDIALS CVODE (6.x API) behind the Integrator interface: BDF and Adams,
+// SUNDIALS CVODE (6.x API, linked as CVODES, its superset: the same calls,
+// one library for these methods and the forward sensitivities, since the two
+// export the same symbols) behind the Integrator interface: BDF and Adams,
 // both with Newton iterations and a dense direct linear solver; the Jacobian
 // by CVODE's difference quotients or the system's exact one. Only this file
 // (and the ARKODE adapter) include SUNDIALS headers.
@@ -15,7 +17,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <cvode/cvode.h>
+#include <cvodes/cvodes.h>  // CVODES, a superset of CVODE: the same calls, and the forward sensitivities
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunmatrix/sunmatrix_dense.h>

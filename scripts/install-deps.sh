@@ -9,7 +9,7 @@ PACKAGES=(
   ccache                               # compiler cache (build/ccache): the extension check recompiles only its edit
   clang libclang-rt-14-dev llvm-14     # clang 14 with its sanitizer and libFuzzer runtimes (preset asan), llvm-symbolizer for reports
   libeigen3-dev                        # Eigen 3.4
-  libsundials-dev                      # SUNDIALS 6.4.1: CVODE, ARKODE
+  libsundials-dev                      # SUNDIALS 6.4.1: CVODES (CVODE with sensitivities), ARKODE
   libboost-dev                         # Boost 1.74 headers: Odeint
   libtomlplusplus-dev                  # toml++: robot and scene files
   liburdfdom-dev                       # urdfdom 3.0: URDF robot files
