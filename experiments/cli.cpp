@@ -599,6 +599,13 @@ void add_run(CLI::App* app, RunArgs& a) {
                 "also stop the integrator at every output time (the output grid then caps the step: for "
                 "comparison only)")
       ->excludes(late);
+  app->add_option("--sensitivity", o.sensitivity,
+                  "also integrate the forward sensitivities dx/dp to these scene keys (comma-separated, e.g. "
+                  "motor.resistance,controller.kp) by CVODES at the run's rtol and atol: DIR/sensitivity.csv at "
+                  "the output times, stats.json's \"sensitivity\" (the final state's, the cost); scenes whose "
+                  "right-hand side is continuous only")
+      ->delimiter(',')
+      ->type_name("KEY,...");
 }
 
 // ---------------------------------------------------------------- ensemble

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
 
 #include "integrators/registry.hpp"
 #include "integrators/stability.hpp"
@@ -210,12 +211,20 @@ std::vector<std::string> run_start_warnings(const Scene& sc, const RunControls& 
 namespace {
 
 // Writes the run's folder from its twin (the trajectory already streamed in).
+// stats.json with its "sensitivity" object (simulation/sensitivity.hpp).
+std::string with_sensitivity(const std::string& stats, const SceneSensitivities& s, const RunControls& rc) {
+  nlohmann::ordered_json js = nlohmann::ordered_json::parse(stats);
+  js["sensitivity"] = nlohmann::ordered_json::parse(sensitivity_json(s, rc.options.rtol, rc.options.atol));
+  return js.dump(2) + "\n";
+}
+
 void write_folder(RunFolderWriter& folder, const RunRecord& rec, const RunContext& started) {
   folder.write("stats.json", rec.stats);
   folder.write("meta.json", meta_json(started));
   folder.write("scene.resolved.toml", resolved_toml(rec.plan.scene));
   if (!rec.run.events_csv.empty()) folder.write("events.csv", rec.run.events_csv);
   if (!rec.run.events_speed_csv.empty()) folder.write("events_speed.csv", rec.run.events_speed_csv);
+  if (rec.sensitivities) folder.write("sensitivity.csv", sensitivity_csv(*rec.sensitivities));
   folder.commit();
 }
 
@@ -240,6 +249,9 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
     for (const std::string& w : run_start_warnings(sc, rc)) sinks.warning(phrased(w, sinks.words));
   }
   check_run_size(sc, rc.max_steps);
+  if (!request.options.sensitivity.empty()) {
+    check_sensitivity_request(sc, request.options.sensitivity);  // before the run: a refusal costs nothing
+  }
   // Before the run: a refusal costs nothing; the trajectory then streams into
   // the folder's temporary twin, which a failure below removes.
   std::optional<RunFolderWriter> folder;
@@ -251,7 +263,13 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
                             .keep_rows = request.keep_rows,
                             .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
   rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
-  if (request.stats || folder) rec.stats = stats_json(sc, rc, rec.run);
+  if (!request.options.sensitivity.empty() && rec.run.result.failure_kind != "interrupted") {
+    rec.sensitivities = scene_sensitivities(sc, rc, request.options.sensitivity);
+  }
+  if (request.stats || folder) {
+    rec.stats = stats_json(sc, rc, rec.run);
+    if (rec.sensitivities) rec.stats = with_sensitivity(rec.stats, *rec.sensitivities, rc);
+  }
   // An interrupted run (ProgressHook::cancel: Ctrl-C in the Python module)
   // leaves no folder: the twin goes, and a folder it would replace stays.
   if (folder && rec.run.result.failure_kind != "interrupted") write_folder(*folder, rec, *started);

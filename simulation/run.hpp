@@ -22,6 +22,7 @@
 #include "models/scene/scene.hpp"
 #include "simulation/run_documents.hpp"
 #include "simulation/scene_run.hpp"
+#include "simulation/sensitivity.hpp"
 
 namespace pumasim {
 
@@ -40,6 +41,10 @@ struct RunOptions {
   bool late_events = false;               // time events applied late, at the next output (Stops)
   bool stop_at_outputs = false;           // the integrator also stops at every output (Stops)
   bool keep_history = false;              // fixed-step multistep methods keep their history across events
+  // Scene keys whose forward sensitivities the run also integrates
+  // (simulation/sensitivity.hpp): sensitivity.csv in the folder, and
+  // stats.json's "sensitivity" object. Empty: none.
+  std::vector<std::string> sensitivity;
 };
 
 // A run as it is asked for.
@@ -82,6 +87,7 @@ struct RunRecord {
   RunPlan plan;
   SceneRun run;       // run.result.failure phrased in sinks.words
   std::string stats;  // stats.json's text ("" when neither asked for nor written)
+  std::optional<SceneSensitivities> sensitivities;  // with options.sensitivity
 };
 
 // The run as requested: the scene loaded (or taken), the plan made

@@ -13,6 +13,10 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include "integrators/sensitivity.hpp"
+#include "models/plant/plant.hpp"
+#include "simulation/run.hpp"
+#include "simulation/sensitivity.hpp"
+#include "tests/scene_paths.hpp"
 
 namespace pumasim {
 namespace {
@@ -175,6 +179,88 @@ TEST(Sensitivity, RefusesASystemWithEventsAndSaysWhy) {
   const SensitivityRun run = sensitivity_run(sys, 0.0, &x0, {1.0}, {});
   EXPECT_FALSE(run.ok);
   EXPECT_NE(run.failure.find("saltation"), std::string::npos) << run.failure;
+}
+
+// A plain run's final state (rtol 1e-10) with `key` set to `value`.
+std::vector<double> final_state(const std::string& scene, const std::string& key, double value, double t_end) {
+  RunRequest r;
+  r.file = test::scene_path(scene);
+  char set[96];
+  std::snprintf(set, sizeof set, "%s=%.17g", key.c_str(), value);
+  r.sets = {set};
+  r.options.integrator = "cvode-bdf";
+  r.options.rtol = 1e-10, r.options.atol = 1e-12, r.options.t_end = t_end;
+  r.stats = false;
+  const RunRecord rec = run(r);
+  EXPECT_TRUE(rec.run.result.ok) << rec.run.result.failure;
+  return rec.run.figures.final_state;
+}
+
+// The scene's sensitivities against central differences of whole runs,
+// (x(T; p + d) - x(T; p - d)) / 2d with d = 1e-2 |p|, compared as p s_i /
+// scale_i (the change of x_i in units of its typical magnitude, the
+// integrators' own scale, per relative change of p). The differences' error
+// in that measure: the runs' integration errors (rtol 1e-10, atol 1e-12 of
+// the scale) over 2d / |p| = 0.02, about 5e-9 (|x_i| / scale_i + 1), with
+// |x_i| / scale_i up to about 10 here; their truncation, O((d/p)^2) = 1e-4
+// of the third derivative, smaller (a tenfold smaller d moved the
+// comparison by less than it moved the noise); the sensitivities' own at
+// rtol 1e-9, about 1e-9. The bound, 1e-7, is that budget with a margin of
+// about two, and the sensitivities compared are at least ten times larger.
+TEST(SceneSensitivity, MatchesCentralDifferencesOfWholeRuns) {
+  RunRequest r;
+  r.file = test::scene_path("paper_slow_viscous");
+  r.options.integrator = "cvode-bdf";
+  r.options.rtol = 1e-9, r.options.atol = 1e-11, r.options.t_end = 1.0;
+  r.options.sensitivity = {"motor.resistance", "motor.inductance"};
+  r.stats = false;
+  const RunRecord rec = run(r);
+  ASSERT_TRUE(rec.sensitivities.has_value());
+  const SceneSensitivities& s = *rec.sensitivities;
+  ASSERT_TRUE(s.run.ok) << s.run.failure;
+  EXPECT_DOUBLE_EQ(s.run.t.back(), 1.0);
+  Plant plant(load_checked_scene(test::scene_path("paper_slow_viscous"), {}).plant);
+  for (std::size_t k = 0; k < s.keys.size(); ++k) {
+    const Eigen::VectorXd col = s.run.s.back().col(static_cast<Eigen::Index>(k));
+    const double p = s.values[k], d = 1e-2 * std::abs(p);
+    const std::vector<double> up = final_state("paper_slow_viscous", s.keys[k], p + d, 1.0);
+    const std::vector<double> down = final_state("paper_slow_viscous", s.keys[k], p - d, 1.0);
+    ASSERT_EQ(static_cast<std::size_t>(col.size()), up.size());
+    double worst = 0, largest = 0;
+    for (Eigen::Index i = 0; i < col.size(); ++i) {
+      const double scale = plant.tolerance_scale(static_cast<int>(i)) / std::abs(p);
+      worst = std::max(worst, std::abs(col[i] - (up[i] - down[i]) / (2 * d)) / scale);
+      largest = std::max(largest, std::abs(col[i]) / scale);
+    }
+    EXPECT_LE(worst, 1e-7) << s.keys[k];
+    EXPECT_GE(largest, 1e-6) << s.keys[k] << ": too small a sensitivity for the comparison to say much";
+  }
+}
+
+TEST(SceneSensitivity, RefusesASceneWithDiscreteStateBeforeItRuns) {
+  RunRequest r;
+  r.file = test::scene_path("paper_slow_6dof_hybrid");
+  r.options.sensitivity = {"motor.resistance"};
+  try {
+    run(r);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("saltation"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneSensitivity, NamesAKeyThatIsNotARealNumber) {
+  RunRequest r;
+  r.file = test::scene_path("paper_slow_viscous");
+  for (const char* key : {"motor.nonexistent", "reference.arm"}) {
+    r.options.sensitivity = {key};
+    try {
+      run(r);
+      ADD_FAILURE() << "expected a refusal of " << key;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

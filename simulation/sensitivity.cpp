@@ -1,0 +1,231 @@
+#include "simulation/sensitivity.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include <toml++/toml.h>
+#include <nlohmann/json.hpp>
+
+#include "models/plant/plant.hpp"
+#include "simulation/run.hpp"
+
+namespace pumasim {
+
+namespace {
+
+// A key's value in the resolved scene: a real number, or an array of equal
+// real numbers (a per-joint key given one value for every joint, as --set
+// and the ensembles take it), moved as one shared value. std::invalid_argument otherwise.
+struct KeyValue {
+  double p = 0;
+  bool shared = false;  // an array of equal values
+};
+
+KeyValue scene_number(const toml::table& resolved, const std::string& key) {
+  const toml::node_view<const toml::node> node = resolved.at_path(key);
+  if (!node) throw std::invalid_argument("--sensitivity: the scene has no key '" + key + "'");
+  if (node.is_floating_point()) return {node.value<double>().value(), false};
+  const toml::array* a = node.as_array();
+  if (a && !a->empty() && a->is_homogeneous(toml::node_type::floating_point)) {
+    const double first = a->front().value<double>().value();
+    for (const toml::node& e : *a) {
+      if (e.value<double>().value() != first) {
+        throw std::invalid_argument("--sensitivity: '" + key + "' has a different value per joint: name one, " + key +
+                                    "[0] for the first joint's (or give them one value with --set)");
+      }
+    }
+    return {first, true};
+  }
+  throw std::invalid_argument("--sensitivity: '" + key + "' is not a real number in the scene (" +
+                              std::string(node.is_integer() ? "an integer" : "not a number") +
+                              "): expected a key such as motor.resistance");
+}
+
+// The resolved scene with `key` at `value` (for a shared key, one value for
+// every joint), as text; `written` is the value as the text holds it (read
+// back, so that the difference quotient divides by the step actually taken).
+std::string moved_scene(const toml::table& resolved, const std::string& key, bool shared, double value,
+                        double& written) {
+  toml::table t = resolved;
+  if (shared) {
+    const std::size_t dot = key.rfind('.');
+    toml::table* parent = dot == std::string::npos ? &t : t.at_path(key.substr(0, dot)).as_table();
+    parent->insert_or_assign(key.substr(dot == std::string::npos ? 0 : dot + 1), value);
+  } else {
+    *t.at_path(key).as_floating_point() = value;
+  }
+  std::ostringstream text;
+  text << t;
+  written = toml::parse(text.str()).at_path(key).value<double>().value();
+  return text.str();
+}
+
+// The scene's plant, and a pair of plants per key with the key moved.
+class PlantSensitivity final : public SensitivitySystem {
+ public:
+  PlantSensitivity(const Scene& scene, const std::vector<std::string>& keys, double relative_step,
+                   SceneSensitivities& out)
+      : base_(scene.plant), f_plus_(base_.size()), f_minus_(base_.size()), x_copy_(base_.size()) {
+    const toml::table resolved = toml::parse(resolved_toml(scene));
+    for (const std::string& key : keys) {
+      const KeyValue v = scene_number(resolved, key);
+      const double p = v.p;
+      const double h = relative_step * (p != 0.0 ? std::abs(p) : 1.0);
+      double up = 0, down = 0;
+      const std::string text_up = moved_scene(resolved, key, v.shared, p + h, up);
+      const std::string text_down = moved_scene(resolved, key, v.shared, p - h, down);
+      plus_.push_back(std::make_unique<Plant>(load_checked_scene_text(text_up, scene.file).plant));
+      minus_.push_back(std::make_unique<Plant>(load_checked_scene_text(text_down, scene.file).plant));
+      width_.push_back(up - down), scale_.push_back(p != 0.0 ? std::abs(p) : 1.0);
+      out.keys.push_back(key), out.values.push_back(p), out.steps.push_back(0.5 * (up - down));
+    }
+  }
+
+  Plant& plant() { return base_; }
+  int size() const override { return base_.size(); }
+  void rhs(double t, const double* x, double* f) override { base_.rhs(t, x, f); }
+  void jacobian(double t, const double* x, Eigen::MatrixXd& J) override { base_.jacobian_exact(t, x, J); }
+  bool has_exact_jacobian() const override { return true; }
+  std::string state_name(int i) const override { return base_.layout().names[static_cast<std::size_t>(i)]; }
+  double tolerance_scale(int i) const override { return base_.tolerance_scale(i); }
+  int num_roots() const override { return base_.num_roots(); }
+  int parameters() const override { return static_cast<int>(plus_.size()); }
+  double parameter_scale(int k) const override { return scale_[static_cast<std::size_t>(k)]; }
+
+  void parameter_derivatives(double t, const double* x, double* dfdp) override {
+    const int m = size();
+    for (std::size_t k = 0; k < plus_.size(); ++k) {
+      plus_[k]->rhs(t, x, f_plus_.data());
+      minus_[k]->rhs(t, x, f_minus_.data());
+      for (int i = 0; i < m; ++i) dfdp[k * static_cast<std::size_t>(m) + i] = (f_plus_[i] - f_minus_[i]) / width_[k];
+    }
+  }
+  void initial_sensitivities(double* s0) const override {
+    const int m = size();
+    std::vector<double> up(static_cast<std::size_t>(m)), down(static_cast<std::size_t>(m));
+    for (std::size_t k = 0; k < plus_.size(); ++k) {
+      plus_[k]->initial_state(up.data());
+      minus_[k]->initial_state(down.data());
+      for (int i = 0; i < m; ++i) s0[k * static_cast<std::size_t>(m) + i] = (up[i] - down[i]) / width_[k];
+    }
+  }
+  double next_stop(double t) const override { return base_.next_time_event(t); }
+  void on_stop(double t, double* x) override {
+    base_.on_time_event(t, x, false);
+    for (std::size_t k = 0; k < plus_.size(); ++k) {
+      for (Plant* p : {plus_[k].get(), minus_[k].get()}) {
+        std::copy(x, x + size(), x_copy_.begin());
+        p->on_time_event(t, x_copy_.data(), false);
+      }
+    }
+  }
+
+ private:
+  Plant base_;
+  std::vector<std::unique_ptr<Plant>> plus_, minus_;  // initial_state restarts their discrete state: mutable use
+  std::vector<double> width_;                         // p+ - p- as written
+  std::vector<double> scale_;                         // |p|, or 1 where p = 0 (CVODES' pbar)
+  std::vector<double> f_plus_, f_minus_, x_copy_;
+};
+
+void append_number(std::string& s, double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 17);
+  s.append(buf, r.ptr);
+}
+
+}  // namespace
+
+std::string sensitivity_refusal(const Scene& scene) {
+  const std::string discrete = discrete_state(scene);
+  if (!discrete.empty()) {
+    return "its right-hand side has discrete state (" + discrete +
+           "): the sensitivities jump where it switches, by a saltation matrix this does not apply";
+  }
+  const std::string note = discontinuity_note(scene);
+  if (!note.empty()) return "its right-hand side is discontinuous in the state without events: " + note;
+  return {};
+}
+
+void check_sensitivity_request(const Scene& scene, const std::vector<std::string>& keys) {
+  if (keys.empty()) throw std::invalid_argument("--sensitivity: expected at least one scene key");
+  const std::string why = sensitivity_refusal(scene);
+  if (!why.empty()) throw std::invalid_argument("--sensitivity: the scene is refused: " + why);
+  const toml::table resolved = toml::parse(resolved_toml(scene));
+  for (const std::string& key : keys) scene_number(resolved, key);
+}
+
+SceneSensitivities scene_sensitivities(const Scene& scene, const RunControls& controls,
+                                       const std::vector<std::string>& keys, double relative_step) {
+  check_sensitivity_request(scene, keys);
+  SceneSensitivities out;
+  PlantSensitivity sys(scene, keys, relative_step, out);
+  for (int i = 0; i < sys.size(); ++i) out.state_names.push_back(sys.state_name(i));
+  std::vector<double> x0(static_cast<std::size_t>(sys.size()));
+  sys.plant().initial_state(x0.data());
+  std::vector<double> outputs;
+  const double dt = scene.output_interval, t_end = scene.duration;
+  for (long k = 1; k * dt < t_end * (1 - 1e-12); ++k) outputs.push_back(k * dt);
+  outputs.push_back(t_end);
+  SensitivityOptions o;
+  o.rtol = controls.options.rtol, o.atol = controls.options.atol;
+  if (controls.max_steps > 0) o.max_steps = controls.max_steps;
+  out.run = sensitivity_run(sys, 0.0, x0.data(), outputs, o);
+  return out;
+}
+
+std::string sensitivity_csv(const SceneSensitivities& s) {
+  std::string text = "t";
+  for (const std::string& n : s.state_names) text += "," + n;
+  for (const std::string& k : s.keys) {
+    for (const std::string& n : s.state_names) text += ",d" + n + "/d" + k;
+  }
+  text += "\n";
+  for (std::size_t r = 0; r < s.run.t.size(); ++r) {
+    append_number(text, s.run.t[r]);
+    for (Eigen::Index i = 0; i < s.run.x[r].size(); ++i) text += ",", append_number(text, s.run.x[r][i]);
+    const Eigen::MatrixXd& S = s.run.s[r];
+    for (Eigen::Index k = 0; k < S.cols(); ++k) {
+      for (Eigen::Index i = 0; i < S.rows(); ++i) text += ",", append_number(text, S(i, k));
+    }
+    text += "\n";
+  }
+  return text;
+}
+
+std::string sensitivity_json(const SceneSensitivities& s, double rtol, double atol) {
+  nlohmann::ordered_json js;
+  js["keys"] = s.keys;
+  js["values"] = s.values;
+  js["difference_steps"] = s.steps;
+  js["method"] =
+      "cvodes BDF, simultaneous corrector, sensitivities in the error test; the plant's exact Jacobian; "
+      "df/dp by central differences of f";
+  js["rtol"] = rtol, js["atol"] = atol;
+  js["ok"] = s.run.ok;
+  js["failure"] = s.run.failure;
+  js["t_final"] = s.run.t.empty() ? 0.0 : s.run.t.back();
+  js["final_state"] = nlohmann::ordered_json::object();
+  if (!s.run.s.empty()) {
+    for (std::size_t k = 0; k < s.keys.size(); ++k) {
+      nlohmann::ordered_json col = nlohmann::ordered_json::object();
+      for (std::size_t i = 0; i < s.state_names.size(); ++i) {
+        const double v = s.run.s.back()(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k));
+        col[s.state_names[i]] = std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+      }
+      js["final_state"][s.keys[k]] = std::move(col);
+    }
+  }
+  js["steps"] = s.run.stats.steps;
+  js["rhs_evaluations"] = s.run.stats.rhs_evaluations;
+  js["sensitivity_rhs_evaluations"] = s.run.sensitivity_rhs;
+  js["jacobian_evaluations"] = s.run.stats.jacobian_evaluations;
+  js["restarts"] = s.run.stats.restarts;
+  js["wall_time_s"] = s.run.wall_time;
+  return js.dump(2);
+}
+
+}  // namespace pumasim
