@@ -387,6 +387,7 @@ Json base_parameters_json(const RobotModel& model, const BaseParameters& base, c
   doc["tolerance"] = base.tolerance;
   doc["samples"] = base.samples;
   doc["gap"] = std::isfinite(base.gap()) ? Json(base.gap()) : Json(nullptr);
+  doc["warning"] = base.warning;
   doc["singular_values"] = json_vector(base.singular_values);
   doc["base"] = Json::array();
   for (int i = 0; i < base.rank(); ++i) {
@@ -397,7 +398,7 @@ Json base_parameters_json(const RobotModel& model, const BaseParameters& base, c
   return doc;
 }
 
-int cmd_base_parameters(const BaseArgs& a, std::ostream& out) {
+int cmd_base_parameters(const BaseArgs& a, std::ostream& out, std::ostream& err) {
   const RobotModel model = load_robot(a.robot);
   JointTorqueRegressor regressor(model, {.rotor = !a.no_rotor, .friction = !a.no_friction});
   const BaseParameters base =
@@ -412,12 +413,17 @@ int cmd_base_parameters(const BaseArgs& a, std::ostream& out) {
                 base.rank(), regressor.parameters(), regressor.per_joint());
   out << line;
   const Eigen::Index r = base.rank();
+  if (r == 0) {
+    out << "no parameter acts on the torques\n";
+    return kExitOk;
+  }
   std::snprintf(line, sizeof line,
                 "rank: singular values above %.3g of the largest, of the regressor at %d random states stacked "
                 "(columns scaled to unit norm): sigma_%ld = %.3g, sigma_%ld = %.3g, gap %.3g\n",
                 base.tolerance, base.samples, static_cast<long>(r), base.singular_values[r - 1],
                 static_cast<long>(r + 1), r < base.singular_values.size() ? base.singular_values[r] : 0.0, base.gap());
   out << line << "the robot's values (SI units; inertias about, first moments in, the joint frames):\n";
+  if (!base.warning.empty()) err << "pumasim base-parameters: warning: " << base.warning << "\n";
   for (int i = 0; i < base.rank(); ++i) {
     const std::string l = base.label(i), d = base.definition(i);
     std::snprintf(line, sizeof line, "  %-6s = %-13.6g", l.c_str(), values[i]);
@@ -437,10 +443,20 @@ void add_base_parameters(CLI::App* app, BaseArgs& a) {
       ->type_name("NAME|FILE");
   app->add_flag("--no-rotor", a.no_rotor, "without the rotor inertia columns Ia");
   app->add_flag("--no-friction", a.no_friction, "without the friction columns Fv, Fc, Fo");
-  app->add_option("--samples", a.samples, "random states stacked (default 40)")->check(CLI::Range(1, 100000));
+  app->add_option("--samples", a.samples,
+                  "random states stacked (default 40; at least columns / joints, 14 for a 6-joint arm with every "
+                  "column)")
+      ->check(CLI::Range(1, 10000));
   app->add_option("--seed", a.seed, "their seed (default 1)")->check(CLI::Range(0L, 1L << 62));
   app->add_option("--tolerance", a.tolerance, "rank tolerance, relative to the largest singular value (default 1e-8)")
-      ->check(CLI::Range(1e-15, 1e-2));
+      ->check([](const std::string& s) -> std::string {
+        double v = 0;
+        const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+        if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !(v >= 1e-15 && v <= 1e-2)) {
+          return "expected a number from 1e-15 to 1e-2, got " + s;
+        }
+        return {};
+      });
   app->add_flag("--json", a.json, "one JSON object: every column, the base parameters, the singular values");
 }
 
@@ -1042,7 +1058,7 @@ const Command kCommands[] = {
      "parameters are the columns kept in order by a QR of the stacked regressor, each with the columns that "
      "regroup onto it (models/robot/base_parameters.hpp).",
      [](CLI::App* a, Parsed& p) { add_base_parameters(a, p.base); },
-     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_base_parameters(p.base, o); }},
+     [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream& e) { return cmd_base_parameters(p.base, o, e); }},
     {"backends", "lists the dynamics back-ends", "",
      [](CLI::App* a, Parsed& p) { a->add_flag("--json", p.json, "one JSON array of the entries (name, summary)"); },
      [](const Parsed& p, CLI::App&, std::ostream& o, std::ostream&) { return cmd_backends(p.json, o); }},

@@ -28,7 +28,8 @@
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
 #   identification  the joint-torque regressor, direct against probing, and the base parameters
-#               of the PUMA 560 and the Panda (experiments/regressor_table.py)
+#               of the PUMA 560 and the Panda (experiments/regressor_table.py); what forward
+#               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
 #               Sobol indices of the drive ensemble and of the paper's experiment over five unpublished
 #               inputs (experiments/ensemble_gsa.py)
@@ -162,9 +163,11 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 # writes: results/dynamics_cost_vs_n.pdf
 stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/identification/regressor.md results/identification/regressor_bench.json
+# writes: results/identification/sensitivity_cost.md
 stage_identification() {
   /usr/bin/python3 experiments/regressor_table.py --bench "$PUMASIM_BIN/bench_identification" --bin "$PUMASIM" \
     --out results/identification
+  /usr/bin/python3 experiments/sensitivity_cost.py --bin "$PUMASIM" --out results/identification
 }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md

@@ -126,7 +126,8 @@ TEST(Regressor, FrictionColumnsAreViscousCoulombAndOffset) {
 // joint): their columns qd_j, sign(qd_j) and 1 on joint j alone are
 // independent of the rest (the rigid columns are products of accelerations,
 // velocity pairs or gravity terms that vary with q): + 3n, 58 and 69 with the
-// rotors, 54 and 64 without.
+// rotors, 54 and 64 without. (Not on every arm: on a vertical prismatic
+// joint the mass's gravity column is constant and meets the offset's.)
 TEST(BaseParameters, CountsFollowKhalilsGroupingRules) {
   struct Case {
     const char* robot;
@@ -146,6 +147,38 @@ TEST(BaseParameters, CountsFollowKhalilsGroupingRules) {
     // orders of magnitude below the kept ones (rounding against O(1)).
     EXPECT_GT(base.gap(), 1e8) << c.robot;
   }
+}
+
+// The second rotor's rule needs z2 perpendicular to z1: with the PUMA's
+// first twist alpha1 moved by 0.1 rad, ZZ2 acts on joint 1 too and Ia2
+// stands alone (one more base parameter with the rotors); the rigid links'
+// count is unchanged (link 1 still turns about the vertical, and joint
+// frame 2's origin still lies on axis 1).
+TEST(BaseParameters, TheSecondRotorsRuleNeedsPerpendicularFirstAxes) {
+  RobotModel arm = load_robot("puma560");
+  arm.joints[0].alpha += 0.1;
+  const struct {
+    bool rotor, friction;
+    int expected;
+  } cases[] = {{false, false, 36}, {true, false, 41}, {true, true, 59}};
+  for (const auto& c : cases) {
+    JointTorqueRegressor regressor(arm, {.rotor = c.rotor, .friction = c.friction});
+    const BaseParameters base = base_parameters(regressor, arm);
+    EXPECT_EQ(base.rank(), c.expected) << "rotor " << c.rotor << " friction " << c.friction << "\n"
+                                       << base.regrouping();
+    EXPECT_GT(base.gap(), 1e8);
+  }
+}
+
+TEST(BaseParameters, RefusesABadToleranceOrTooFewSamples) {
+  const RobotModel arm = load_robot("puma560");
+  JointTorqueRegressor regressor(arm);
+  for (double tol : {0.0, -1e-8, 1.0, std::nan("")}) {
+    EXPECT_THROW(base_parameters(regressor, arm, 40, 1, tol), std::invalid_argument) << tol;
+  }
+  // 84 columns need at least 14 states of 6 rows.
+  EXPECT_THROW(base_parameters(regressor, arm, 13), std::invalid_argument);
+  EXPECT_EQ(base_parameters(regressor, arm, 14).rank(), 58);
 }
 
 TEST(BaseParameters, BaseColumnsTimesBaseValuesGiveTheTorquesAtNewStates) {

@@ -173,9 +173,21 @@ void JointTorqueRegressor::drive_columns(const Eigen::Ref<const Eigen::VectorXd>
   }
 }
 
+void JointTorqueRegressor::check_sizes(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                       const Eigen::Ref<const Eigen::VectorXd>& qd,
+                                       const Eigen::Ref<const Eigen::VectorXd>& qdd,
+                                       const Eigen::Ref<Eigen::MatrixXd>& Y) const {
+  const Eigen::Index n = dof();
+  if (q.size() != n || qd.size() != n || qdd.size() != n || Y.rows() != n || Y.cols() != parameters()) {
+    throw std::invalid_argument("JointTorqueRegressor: expected q, qd, qdd of " + std::to_string(n) + " and Y of " +
+                                std::to_string(n) + " x " + std::to_string(parameters()));
+  }
+}
+
 void JointTorqueRegressor::compute(const Eigen::Ref<const Eigen::VectorXd>& q,
                                    const Eigen::Ref<const Eigen::VectorXd>& qd,
                                    const Eigen::Ref<const Eigen::VectorXd>& qdd, Eigen::Ref<Eigen::MatrixXd> Y) {
+  check_sizes(q, qd, qdd, Y);
   Y.setZero();
   rot_.compute(chain_, q);
   if (chain_.any_prismatic) {
@@ -192,14 +204,14 @@ void JointTorqueRegressor::compute_by_probing(const Eigen::Ref<const Eigen::Vect
                                               const Eigen::Ref<const Eigen::VectorXd>& qd,
                                               const Eigen::Ref<const Eigen::VectorXd>& qdd,
                                               Eigen::Ref<Eigen::MatrixXd> Y) {
+  check_sizes(q, qd, qdd, Y);
   Y.setZero();
   const int probed = kLinkParameters + (columns_.rotor ? 1 : 0);
+  rot_.compute(probe_, q);  // the joint transforms once: they do not depend on the parameters
   for (int j = 0; j < probe_.n; ++j) {
     for (int k = 0; k < probed; ++k) {
       set_parameter(probe_, j, k, 1.0);
-      // A complete inverse dynamics per column, kinematics included, as the paper probes.
-      rot_.compute(probe_, q);
-      rnea_.run(probe_, rot_, qd, qdd, true, column_);
+      rnea_.run(probe_, rot_, qd, qdd, true, column_);  // one RNEA pass per column
       set_parameter(probe_, j, k, 0.0);
       Y.col(static_cast<Eigen::Index>(j) * per_joint_ + k) = column_;
     }

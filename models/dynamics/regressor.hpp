@@ -22,10 +22,12 @@
 //   j, j-1, ..., 1, one 6 x 10 block per pair: O(n^2).
 // - `compute_by_probing`, the paper's probing applied to parameters
 //   (Sokolov & Toth 1999 probe the Newton-Euler equations with unit
-//   accelerations to build H): one full RNEA per column on a chain whose
-//   parameters are the unit vector e_k. 11 n RNEA passes, O(n^2) too but
-//   each repeats the kinematics.
-// Neither allocates after construction.
+//   accelerations to build H): the joint transforms once, then one RNEA pass
+//   per column on a chain whose parameters are the unit vector e_k (as the
+//   rnea-probing-shared back-end does for H). 11 n passes, O(n^2) too but
+//   each repeats the velocity and acceleration recursion.
+// Neither allocates after construction; both refuse (std::invalid_argument)
+// vectors or a Y of the wrong size.
 #pragma once
 
 #include <string>
@@ -75,6 +77,8 @@ class JointTorqueRegressor {
   void link_wrench(int j, Wrench& W) const;
   template <bool kMixed>
   void carry_inwards(Eigen::Ref<Eigen::MatrixXd> Y);
+  void check_sizes(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& qd,
+                   const Eigen::Ref<const Eigen::VectorXd>& qdd, const Eigen::Ref<Eigen::MatrixXd>& Y) const;
   void drive_columns(const Eigen::Ref<const Eigen::VectorXd>& qd, const Eigen::Ref<const Eigen::VectorXd>& qdd,
                      bool rotor, Eigen::Ref<Eigen::MatrixXd> Y) const;
 

@@ -10,16 +10,19 @@
 // robots", J. Robotic Systems 8(4); Khalil & Dombre 2002, sec. 9.5.3).
 //
 // Numerically: Y is evaluated at `samples` random states (q uniform in the
-// joint ranges, [-0.5, 0.5] m for an unbounded prismatic joint; qd, qdd
-// uniform in [-2, 2]), stacked into W and each nonzero column scaled to unit
-// norm. The rank is the number of singular values of the scaled W above
-// `tolerance` times the largest; the gap (last kept over first dropped) says
-// how clear that choice is. The columns are then taken in the regressor's
-// order, each kept when its distance from the span of those kept before it
-// (|R_kk| of a QR of the scaled W, without pivoting) exceeds `tolerance`:
-// a later link's parameters are regrouped onto the earlier ones they act
-// with, as in Khalil's rules. A column whose norm is below `tolerance` times
-// the largest has no effect at all.
+// joint ranges, or in [-pi, pi] rad, [-0.5, 0.5] m for a joint without two
+// finite limits; qd, qdd uniform in [-2, 2]), stacked into W. A column at
+// rounding level of the largest (100 eps sqrt(rows) of it) has no effect;
+// each other is scaled to unit norm. The rank is the number of singular
+// values of the scaled W above `tolerance` times the largest; the gap (last
+// kept over first dropped) says how clear that choice is. The columns are
+// then taken in the regressor's order, each kept when its distance from the
+// span of those kept before it (Gram-Schmidt, twice, against the kept
+// columns) exceeds the same threshold: a later link's parameters are
+// regrouped onto the earlier ones they act with, as in Khalil's rules. The
+// regrouping beta solves the scaled base columns against the grouped ones;
+// entries at rounding level (1e3 eps sqrt(columns), dimensionless) are set
+// to zero before it is unscaled into the parameters' units.
 #pragma once
 
 #include <cstdint>
@@ -42,6 +45,7 @@ struct BaseParameters {
   Eigen::VectorXd singular_values;  // of the scaled stacked regressor, largest first
   double tolerance = 0.0;
   int samples = 0;
+  std::string warning;  // a gap below 1e6: the rank is not clear ("" otherwise)
 
   int rank() const { return static_cast<int>(base.size()); }
   // sigma_r / sigma_(r+1) (1-based): the largest singular value dropped
@@ -55,14 +59,16 @@ struct BaseParameters {
   // Base parameter i's name: its own column's, with R when others regroup onto it ("ZZ1R").
   std::string label(int i) const;
   // What it stands for: "ZZ1 + Ia1 + YY2 + 0.186 M3 ..." (coefficients in SI
-  // units; those below 1e-9 of the largest left out), or the column alone.
+  // units, every nonzero one of beta), or the column alone.
   std::string definition(int i) const;
   // One line per base parameter, "ZZ1R = ZZ1 + Ia1 + ...", then those with no effect.
   std::string regrouping() const;
 };
 
-// Throws std::runtime_error if the sequential choice and the SVD disagree on
-// the rank (the tolerance sits in no gap).
+// std::invalid_argument for a tolerance outside (0, 1), fewer rows than
+// columns, or a sequential choice that disagrees with the SVD's rank (the
+// tolerance sits in no gap: the message names the widest gap and a
+// tolerance in it).
 BaseParameters base_parameters(JointTorqueRegressor& regressor, const RobotModel& model, int samples = 40,
                                std::uint64_t seed = 1, double tolerance = 1e-8);
 
