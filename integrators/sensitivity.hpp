@@ -1,6 +1,7 @@
 // Forward parameter sensitivities s_k = dx/dp_k of x' = f(t, x; p) by SUNDIALS
-// CVODES (BDF, Newton with a dense direct solver, the simultaneous corrector
-// with the sensitivities in the error test): along x,
+// CVODES (BDF, Newton with a dense direct solver, the staggered corrector --
+// the sensitivities corrected after the state, with the same Newton matrix --
+// and the sensitivities in the error test): along x,
 //     s_k' = J(t, x) s_k + df/dp_k(t, x),   s_k(t0) = dx0/dp_k
 // (Hindmarsh et al., "SUNDIALS: Suite of nonlinear and differential/algebraic
 // equation solvers", ACM TOMS 31(3), 2005; the CVODES guide, sec. 2.6), with
@@ -10,6 +11,9 @@
 // saltation matrix, Hiskens & Pai, IEEE TCAS-I 47(2), 2000) is refused. Stops
 // where f only kinks (its time events) restart the method with x and s as
 // they are: s is continuous where f is (the jump condition's f+ - f- is 0).
+// The outputs are interpolated (CV_NORMAL past them), so that they do not cap
+// the steps (the staggered corrector and the interpolated outputs were chosen
+// by measurement: see the commit that made them).
 #pragma once
 
 #include <string>

@@ -1,6 +1,7 @@
 // Forward sensitivities by CVODES (integrators/sensitivity.hpp). Like the
 // CVODE adapter, the callbacks catch every exception and hand it back after
 // CVode returns; a non-finite derivative is recoverable (CVODES shrinks the step).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -39,7 +40,12 @@ bool finite(const double* v, int n) {
 class Cvodes {
  public:
   Cvodes(SensitivitySystem& sys, double t0, const double* x0, const SensitivityOptions& o)
-      : sys_(sys), m_(sys.size()), p_(sys.parameters()), J_(m_, m_), dfdp_(m_, p_) {
+      : sys_(sys),
+        m_(sys.size()),
+        p_(sys.parameters()),
+        J_(m_, m_),
+        dfdp_(m_, p_),
+        at_x_(static_cast<std::size_t>(m_)) {
     check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
     y_ = N_VNew_Serial(m_, ctx_);
     std::copy(x0, x0 + m_, N_VGetArrayPointer(y_));
@@ -60,7 +66,7 @@ class Cvodes {
     LS_ = SUNLinSol_Dense(y_, A_, ctx_);
     check(CVodeSetLinearSolver(mem_, LS_, A_), "CVodeSetLinearSolver");
     check(CVodeSetJacFn(mem_, &Cvodes::jac), "CVodeSetJacFn");
-    check(CVodeSensInit(mem_, p_, CV_SIMULTANEOUS, &Cvodes::sens_rhs, yS_), "CVodeSensInit");
+    check(CVodeSensInit(mem_, p_, CV_STAGGERED, &Cvodes::sens_rhs, yS_), "CVodeSensInit");
     for (int k = 0; k < p_; ++k) pbar_.push_back(std::abs(sys.parameter_scale(k)) > 0 ? sys.parameter_scale(k) : 1.0);
     check(CVodeSetSensParams(mem_, nullptr, pbar_.data(), nullptr), "CVodeSetSensParams");
     check(CVodeSensEEtolerances(mem_), "CVodeSensEEtolerances");
@@ -78,9 +84,12 @@ class Cvodes {
   Cvodes(const Cvodes&) = delete;
   Cvodes& operator=(const Cvodes&) = delete;
 
-  // To `t_to` exactly; false (with `failure`) if CVODES fails.
+  // Steps no further than t (the next stop, or the run's end: SUNDIALS 6.4
+  // keeps a stop time across CVodeReInit and has no call to clear it).
+  void set_stop(double t) { check(CVodeSetStopTime(mem_, t), "CVodeSetStopTime"); }
+  // To `t_to`, an output time (interpolated: the outputs do not cap the
+  // steps) or the stop set; false (with `failure`) if CVODES fails.
   bool advance(double t_to, std::string& failure) {
-    check(CVodeSetStopTime(mem_, t_to), "CVodeSetStopTime");
     pending_ = nullptr, error_.clear();
     double t = t_;
     const int flag = CVode(mem_, t_to, y_, &t, CV_NORMAL);
@@ -100,7 +109,7 @@ class Cvodes {
   // A restart at a stop: a fresh history from x and s as they are.
   void restart() {
     check(CVodeReInit(mem_, t_, y_), "CVodeReInit");
-    check(CVodeSensReInit(mem_, CV_SIMULTANEOUS, yS_), "CVodeSensReInit");
+    check(CVodeSensReInit(mem_, CV_STAGGERED, yS_), "CVodeSensReInit");
     base_ = {}, sens_base_[0] = sens_base_[1] = 0;
     ++stats_.restarts;
   }
@@ -144,8 +153,13 @@ class Cvodes {
     auto* me = static_cast<Cvodes*>(self);
     try {
       const double* x = N_VGetArrayPointer(y);
-      me->sys_.jacobian(t, x, me->J_);
-      me->sys_.parameter_derivatives(t, x, me->dfdp_.data());
+      // The staggered corrector calls this at each of its iterations with the
+      // same (t, x): J and df/dp are made once per (t, x).
+      if (t != me->at_t_ || !std::equal(x, x + me->m_, me->at_x_.begin())) {
+        me->sys_.jacobian(t, x, me->J_);
+        me->sys_.parameter_derivatives(t, x, me->dfdp_.data());
+        me->at_t_ = t, std::copy(x, x + me->m_, me->at_x_.begin());
+      }
       for (int k = 0; k < ns; ++k) {
         Eigen::Map<Eigen::VectorXd> out(N_VGetArrayPointer(ySdot[k]), me->m_);
         out.noalias() = me->J_ * Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(yS[k]), me->m_);
@@ -191,6 +205,8 @@ class Cvodes {
   SUNLinearSolver LS_ = nullptr;
   std::vector<double> pbar_;
   Eigen::MatrixXd J_, dfdp_;
+  double at_t_ = std::numeric_limits<double>::quiet_NaN();  // where J_ and dfdp_ were made
+  std::vector<double> at_x_;
   double t_ = 0;
   std::exception_ptr pending_;
   std::string error_;
@@ -213,6 +229,8 @@ SensitivityRun sensitivity_run(SensitivitySystem& sys, double t0, const double* 
   const auto start = std::chrono::steady_clock::now();
   Cvodes cv(sys, t0, x0, options);
   double t = t0, stop = sys.next_stop(t0);
+  const double t_end = outputs.empty() ? t0 : outputs.back();
+  cv.set_stop(std::min(stop, t_end));
   std::vector<double> before(static_cast<std::size_t>(sys.size()));
   for (double tout : outputs) {
     while (t < tout) {
@@ -233,6 +251,7 @@ SensitivityRun sensitivity_run(SensitivitySystem& sys, double t0, const double* 
       }
       cv.restart();
       stop = sys.next_stop(t);
+      cv.set_stop(std::min(stop, t_end));
     }
     if (!run.ok) break;
     run.t.push_back(t);
