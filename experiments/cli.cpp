@@ -560,7 +560,9 @@ int cmd_run(const RunArgs& a, std::ostream& out, std::ostream& err) {
   out << rec.stats;  // stdout is the JSON document alone (pipe it to a JSON reader); where it went, on stderr
   if (!a.quiet) err << "results: " << rec.plan.folder->string() << "/\n";
   if (!rec.run.result.ok) err << "pumasim run: " << rec.run.result.failure << "\n";
-  return rec.run.result.ok ? kExitOk : kExitInternal;
+  const bool sensitivities_ok = !rec.sensitivities || rec.sensitivities->run.ok;
+  if (!sensitivities_ok) err << "pumasim run: --sensitivity: " << rec.sensitivities->run.failure << "\n";
+  return rec.run.result.ok && sensitivities_ok ? kExitOk : kExitInternal;
 }
 
 void add_run(CLI::App* app, RunArgs& a) {
@@ -617,7 +619,7 @@ void add_run(CLI::App* app, RunArgs& a) {
       ->excludes(late);
   app->add_option("--sensitivity", o.sensitivity,
                   "also integrate the forward sensitivities dx/dp to these scene keys (comma-separated, e.g. "
-                  "motor.resistance,controller.kp) by CVODES at the run's rtol and atol: DIR/sensitivity.csv at "
+                  "motor.resistance,controller.kp[1]) by CVODES at the run's rtol and atol: DIR/sensitivity.csv at "
                   "the output times, stats.json's \"sensitivity\" (the final state's, the cost); scenes whose "
                   "right-hand side is continuous only")
       ->delimiter(',')

@@ -8,12 +8,15 @@
 // J the system's Jacobian (its exact one where it has it) and df/dp the
 // system's own. Only continuous systems: one with root functions (events
 // that switch the right-hand side, where the sensitivities jump by the
-// saltation matrix, Hiskens & Pai, IEEE TCAS-I 47(2), 2000) is refused. Stops
-// where f only kinks (its time events) restart the method with x and s as
-// they are: s is continuous where f is (the jump condition's f+ - f- is 0).
-// The outputs are interpolated (CV_NORMAL past them), so that they do not cap
-// the steps (the staggered corrector and the interpolated outputs were chosen
-// by measurement: see the commit that made them).
+// saltation matrix, Hiskens & Pai, IEEE TCAS-I 47(2), 2000) is refused, and
+// so is a run where the system's jump_at says f jumps in x (a clamp
+// engaging). The system's stops (time events, where f may kink or jump in
+// t) restart the method with x and s as they are: s is continuous across a
+// stop at a time tau that does not depend on p (the jump condition
+// s+ = s- - (f+ - f-) dtau/dp has dtau/dp = 0). The outputs are
+// interpolated (CV_NORMAL past them), so that they do not cap the steps
+// (the staggered corrector and the interpolated outputs were chosen by
+// measurement: see the commit that made them).
 #pragma once
 
 #include <string>
@@ -40,12 +43,15 @@ class SensitivitySystem : public OdeSystem {
   // refuses a jump: it would need its jump condition).
   virtual double next_stop(double /*t*/) const;
   virtual void on_stop(double /*t*/, double* /*x*/) {}
+  // Why f jumps in x at (t, x), a converged state (a clamp engaging: the
+  // sensitivities would jump); "" when it does not. The run fails with it.
+  virtual std::string jump_at(double /*t*/, const double* /*x*/) const { return {}; }
 };
 
 struct SensitivityOptions {
   double rtol = 1e-6;
-  double atol = 1e-8;  // times tolerance_scale(i); s_k's, divided by parameter_scale(k)
-  long max_steps = 5'000'000;
+  double atol = 1e-8;          // times tolerance_scale(i); s_k's, divided by parameter_scale(k)
+  long max_steps = 5'000'000;  // in all; beyond it, a reported failure
 };
 
 struct SensitivityRun {
@@ -56,6 +62,7 @@ struct SensitivityRun {
   std::vector<Eigen::MatrixXd> s;  // dx/dp at each (size() x parameters())
   IntegratorStats stats;           // steps, f (without the sensitivities' own), Jacobians
   long sensitivity_rhs = 0;        // calls of the sensitivities' right-hand side (all p at once)
+  long sensitivity_jacobians = 0;  // the system's Jacobians those calls made (one per (t, x))
   long sensitivity_error_test_failures = 0;
   double wall_time = 0;  // [s]
 };

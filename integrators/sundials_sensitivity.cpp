@@ -44,8 +44,10 @@ class Cvodes {
         m_(sys.size()),
         p_(sys.parameters()),
         J_(m_, m_),
+        Jn_(m_, m_),
         dfdp_(m_, p_),
         at_x_(static_cast<std::size_t>(m_)) {
+    if (p_ < 1) throw std::invalid_argument("cvodes: expected at least one parameter");
     check(SUNContext_Create(nullptr, &ctx_), "SUNContext_Create");
     y_ = N_VNew_Serial(m_, ctx_);
     std::copy(x0, x0 + m_, N_VGetArrayPointer(y_));
@@ -84,8 +86,8 @@ class Cvodes {
   Cvodes(const Cvodes&) = delete;
   Cvodes& operator=(const Cvodes&) = delete;
 
-  // Steps no further than t (the next stop, or the run's end: SUNDIALS 6.4
-  // keeps a stop time across CVodeReInit and has no call to clear it).
+  // Steps no further than t: the next stop, or the run's end (SUNDIALS 6.4
+  // has no call to clear a stop time, so one is always set).
   void set_stop(double t) { check(CVodeSetStopTime(mem_, t), "CVodeSetStopTime"); }
   // To `t_to`, an output time (interpolated: the outputs do not cap the
   // steps) or the stop set; false (with `failure`) if CVODES fails.
@@ -95,6 +97,10 @@ class Cvodes {
     const int flag = CVode(mem_, t_to, y_, &t, CV_NORMAL);
     if (pending_) std::rethrow_exception(pending_);
     collect_stats();
+    if (!jump_.empty()) {
+      failure = jump_;
+      return false;
+    }
     if (flag < 0) {
       failure = "cvodes failed with flag " + std::to_string(flag) + " (" +
                 detail::flag_name(CVodeGetReturnFlagName(flag)) + ") at t = " + std::to_string(t) + " s" +
@@ -110,6 +116,7 @@ class Cvodes {
   void restart() {
     check(CVodeReInit(mem_, t_, y_), "CVodeReInit");
     check(CVodeSensReInit(mem_, CV_STAGGERED, yS_), "CVodeSensReInit");
+    at_t_ = std::numeric_limits<double>::quiet_NaN();  // the cache belongs to the piece before the stop
     base_ = {}, sens_base_[0] = sens_base_[1] = 0;
     ++stats_.restarts;
   }
@@ -122,6 +129,7 @@ class Cvodes {
   }
   const IntegratorStats& stats() const { return stats_; }
   long sens_rhs() const { return sens_total_[0]; }
+  long sens_jacobians() const { return jacobians_; }
   long sens_fails() const { return sens_total_[1]; }
 
  private:
@@ -138,9 +146,9 @@ class Cvodes {
   static int jac(double t, N_Vector y, N_Vector, SUNMatrix J, void* self, N_Vector, N_Vector, N_Vector) {
     auto* me = static_cast<Cvodes*>(self);
     try {
-      me->sys_.jacobian(t, N_VGetArrayPointer(y), me->J_);
+      me->sys_.jacobian(t, N_VGetArrayPointer(y), me->Jn_);  // its own buffer: J_ is the sensitivities' cache
       for (int c = 0; c < me->m_; ++c)
-        for (int r = 0; r < me->m_; ++r) SM_ELEMENT_D(J, r, c) = me->J_(r, c);
+        for (int r = 0; r < me->m_; ++r) SM_ELEMENT_D(J, r, c) = me->Jn_(r, c);
       return 0;
     } catch (...) {
       me->pending_ = std::current_exception();
@@ -156,7 +164,13 @@ class Cvodes {
       // The staggered corrector calls this at each of its iterations with the
       // same (t, x): J and df/dp are made once per (t, x).
       if (t != me->at_t_ || !std::equal(x, x + me->m_, me->at_x_.begin())) {
+        const std::string jump = me->sys_.jump_at(t, x);
+        if (!jump.empty()) {
+          me->jump_ = jump;
+          return -1;  // unrecoverable: CVODES stops, the run reports why
+        }
         me->sys_.jacobian(t, x, me->J_);
+        ++me->jacobians_;
         me->sys_.parameter_derivatives(t, x, me->dfdp_.data());
         me->at_t_ = t, std::copy(x, x + me->m_, me->at_x_.begin());
       }
@@ -204,12 +218,14 @@ class Cvodes {
   SUNMatrix A_ = nullptr;
   SUNLinearSolver LS_ = nullptr;
   std::vector<double> pbar_;
-  Eigen::MatrixXd J_, dfdp_;
+  Eigen::MatrixXd J_, Jn_, dfdp_;  // the sensitivities' J (cached per (t, x)), the Newton matrix's, df/dp
   double at_t_ = std::numeric_limits<double>::quiet_NaN();  // where J_ and dfdp_ were made
   std::vector<double> at_x_;
   double t_ = 0;
   std::exception_ptr pending_;
   std::string error_;
+  std::string jump_;  // the system's jump_at, when it stopped the run
+  long jacobians_ = 0;
   IntegratorStats stats_, base_;
   long sens_total_[2] = {0, 0}, sens_base_[2] = {0, 0};
 };
@@ -239,6 +255,12 @@ SensitivityRun sensitivity_run(SensitivitySystem& sys, double t0, const double* 
         run.ok = false;
         break;
       }
+      if (cv.stats().steps > options.max_steps) {
+        run.ok = false;
+        run.failure = "more than " + std::to_string(options.max_steps) +
+                      " steps (the budget) by t = " + std::to_string(to) + " s";
+        break;
+      }
       t = to;
       if (t < stop) continue;
       std::copy(cv.state(), cv.state() + sys.size(), before.begin());
@@ -261,6 +283,7 @@ SensitivityRun sensitivity_run(SensitivitySystem& sys, double t0, const double* 
   run.stats = cv.stats();
   run.sensitivity_rhs = cv.sens_rhs();
   run.sensitivity_error_test_failures = cv.sens_fails();
+  run.sensitivity_jacobians = cv.sens_jacobians();
   run.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.stats.wall_time = run.wall_time;
   return run;

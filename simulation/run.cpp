@@ -263,7 +263,7 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
                             .keep_rows = request.keep_rows,
                             .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
   rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
-  if (!request.options.sensitivity.empty() && rec.run.result.failure_kind != "interrupted") {
+  if (!request.options.sensitivity.empty() && rec.run.result.ok) {  // a failed run has no sensitivities to give
     rec.sensitivities = scene_sensitivities(sc, rc, request.options.sensitivity);
   }
   if (request.stats || folder) {

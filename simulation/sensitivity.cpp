@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -9,7 +10,9 @@
 #include <toml++/toml.h>
 #include <nlohmann/json.hpp>
 
+#include "models/plant/controller/piv.hpp"
 #include "models/plant/plant.hpp"
+#include "models/robot/toml_writer.hpp"
 #include "simulation/run.hpp"
 
 namespace pumasim {
@@ -25,6 +28,12 @@ struct KeyValue {
 };
 
 KeyValue scene_number(const toml::table& resolved, const std::string& key) {
+  const std::string section = key.substr(0, key.find_first_of(".["));
+  if (section == "integrator" || section == "scene" || section == "output") {
+    throw std::invalid_argument("--sensitivity: '" + key +
+                                "' sets how the scene is run, not the plant: its "
+                                "sensitivities are zero; expected a key of the plant, such as motor.resistance");
+  }
   const toml::node_view<const toml::node> node = resolved.at_path(key);
   if (!node) throw std::invalid_argument("--sensitivity: the scene has no key '" + key + "'");
   if (node.is_floating_point()) return {node.value<double>().value(), false};
@@ -33,8 +42,8 @@ KeyValue scene_number(const toml::table& resolved, const std::string& key) {
     const double first = a->front().value<double>().value();
     for (const toml::node& e : *a) {
       if (e.value<double>().value() != first) {
-        throw std::invalid_argument("--sensitivity: '" + key + "' has a different value per joint: name one, " + key +
-                                    "[0] for the first joint's (or give them one value with --set)");
+        throw std::invalid_argument("--sensitivity: '" + key + "' has different values: name one element, " + key +
+                                    "[0] for the first (or give them one value with --set)");
       }
     }
     return {first, true};
@@ -50,17 +59,56 @@ KeyValue scene_number(const toml::table& resolved, const std::string& key) {
 std::string moved_scene(const toml::table& resolved, const std::string& key, bool shared, double value,
                         double& written) {
   toml::table t = resolved;
-  if (shared) {
-    const std::size_t dot = key.rfind('.');
-    toml::table* parent = dot == std::string::npos ? &t : t.at_path(key.substr(0, dot)).as_table();
-    parent->insert_or_assign(key.substr(dot == std::string::npos ? 0 : dot + 1), value);
+  if (shared) {  // every element moved: an array of the same length
+    for (toml::node& e : *t.at_path(key).as_array()) *e.as_floating_point() = value;
   } else {
     *t.at_path(key).as_floating_point() = value;
   }
-  std::ostringstream text;
-  text << t;
-  written = toml::parse(text.str()).at_path(key).value<double>().value();
-  return text.str();
+  const std::string text = write_toml(t);  // not toml++'s formatter (models/robot/toml_writer.hpp: UB on arrays)
+  const toml::table back = toml::parse(text);
+  const toml::node_view<const toml::node> node = back.at_path(key);
+  written = shared ? node.as_array()->front().value<double>().value() : node.value<double>().value();
+  return text;
+}
+
+// The plant of the scene with `key` at `value`; std::invalid_argument naming
+// the key and the value when the scene reader refuses it (a value at the
+// key's range bound moved past it) or its states differ from the scene's.
+std::unique_ptr<Plant> moved_plant(const Scene& scene, const toml::table& resolved, const std::string& key, bool shared,
+                                   double value, double& written) {
+  const std::string text = moved_scene(resolved, key, shared, value, written);
+  std::unique_ptr<Plant> plant;
+  try {
+    plant = std::make_unique<Plant>(load_checked_scene_text(text, scene.file).plant);
+  } catch (const std::exception& e) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%.17g", written);
+    throw std::invalid_argument("--sensitivity: '" + key + "' moved to " + v +
+                                " for its difference is refused by the scene reader (" + e.what() +
+                                "): a value at its range's bound has no two-sided difference");
+  }
+  return plant;
+}
+
+// The moved plant's time events (the reference's breakpoints, where f may
+// jump in t) must be the scene's: sensitivities continue across a
+// breakpoint that does not move with p, and jump by (f+ - f-) dtau/dp
+// across one that does, which this does not apply.
+void check_same_events(const Scene& scene, const Plant& moved, const std::string& key) {
+  const Plant base(scene.plant);
+  if (moved.size() != base.size() || moved.layout().names != base.layout().names) {
+    throw std::invalid_argument("--sensitivity: '" + key + "' changes the plant's states");
+  }
+  for (double t = 0.0, u = 0.0; t < scene.duration || u < scene.duration;) {
+    t = base.next_time_event(t), u = moved.next_time_event(u);
+    if (t != u && (t < scene.duration || u < scene.duration)) {
+      char at[48];
+      std::snprintf(at, sizeof at, "%.9g s against %.9g s", t, u);
+      throw std::invalid_argument("--sensitivity: '" + key + "' moves the reference's breakpoints (" + at +
+                                  "), where the right-hand side may jump in time: the sensitivities jump there "
+                                  "too, by a condition this does not apply");
+    }
+  }
 }
 
 // The scene's plant, and a pair of plants per key with the key moved.
@@ -75,10 +123,9 @@ class PlantSensitivity final : public SensitivitySystem {
       const double p = v.p;
       const double h = relative_step * (p != 0.0 ? std::abs(p) : 1.0);
       double up = 0, down = 0;
-      const std::string text_up = moved_scene(resolved, key, v.shared, p + h, up);
-      const std::string text_down = moved_scene(resolved, key, v.shared, p - h, down);
-      plus_.push_back(std::make_unique<Plant>(load_checked_scene_text(text_up, scene.file).plant));
-      minus_.push_back(std::make_unique<Plant>(load_checked_scene_text(text_down, scene.file).plant));
+      plus_.push_back(moved_plant(scene, resolved, key, v.shared, p + h, up));
+      minus_.push_back(moved_plant(scene, resolved, key, v.shared, p - h, down));
+      for (const Plant* moved : {plus_.back().get(), minus_.back().get()}) check_same_events(scene, *moved, key);
       width_.push_back(up - down), scale_.push_back(p != 0.0 ? std::abs(p) : 1.0);
       out.keys.push_back(key), out.values.push_back(p), out.steps.push_back(0.5 * (up - down));
     }
@@ -113,6 +160,29 @@ class PlantSensitivity final : public SensitivitySystem {
     }
   }
   double next_stop(double t) const override { return base_.next_time_event(t); }
+  // A continuous PIV integral at its bound (|Ki z| = integral_limit): its
+  // rate switches from e to 0 there, a jump in f that the sensitivities
+  // would jump with (windup).
+  std::string jump_at(double t, const double* x) const override {
+    const auto* piv = std::get_if<LawParams<PivController>>(&base_.config().controller_params);
+    const int z = base_.layout().z;
+    if (!piv || z < 0) return {};
+    for (std::size_t j = 0; j < piv->joints.size(); ++j) {
+      const PivParams& P = piv->joints[j];
+      if (P.ki == 0) continue;
+      const double bound = piv_integral_bound(P), v = x[z + static_cast<int>(j)];
+      if (std::abs(v) >= bound * (1 - 1e-9)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "the PIV integral %s reached its bound %.6g (integral_limit / |Ki|) at t = %.9g s",
+                      state_name(z + static_cast<int>(j)).c_str(), bound, t);
+        return std::string(buf) +
+               ": its rate switches to 0 there (windup), and the sensitivities jump with it, "
+               "which this does not apply";
+      }
+    }
+    return {};
+  }
   void on_stop(double t, double* x) override {
     base_.on_time_event(t, x, false);
     for (std::size_t k = 0; k < plus_.size(); ++k) {
@@ -172,7 +242,7 @@ SceneSensitivities scene_sensitivities(const Scene& scene, const RunControls& co
   outputs.push_back(t_end);
   SensitivityOptions o;
   o.rtol = controls.options.rtol, o.atol = controls.options.atol;
-  if (controls.max_steps > 0) o.max_steps = controls.max_steps;
+  if (controls.max_steps > 0) o.max_steps = controls.max_steps;  // in all, as the run's budget
   out.run = sensitivity_run(sys, 0.0, x0.data(), outputs, o);
   return out;
 }
@@ -202,7 +272,7 @@ std::string sensitivity_json(const SceneSensitivities& s, double rtol, double at
   js["values"] = s.values;
   js["difference_steps"] = s.steps;
   js["method"] =
-      "cvodes BDF, simultaneous corrector, sensitivities in the error test; the plant's exact Jacobian; "
+      "cvodes BDF, staggered corrector, sensitivities in the error test; the plant's exact Jacobian; "
       "df/dp by central differences of f";
   js["rtol"] = rtol, js["atol"] = atol;
   js["ok"] = s.run.ok;
@@ -222,7 +292,9 @@ std::string sensitivity_json(const SceneSensitivities& s, double rtol, double at
   js["steps"] = s.run.stats.steps;
   js["rhs_evaluations"] = s.run.stats.rhs_evaluations;
   js["sensitivity_rhs_evaluations"] = s.run.sensitivity_rhs;
-  js["jacobian_evaluations"] = s.run.stats.jacobian_evaluations;
+  js["jacobian_evaluations"] = s.run.stats.jacobian_evaluations;  // CVODES' Newton matrices
+  js["sensitivity_rhs_jacobians"] = s.run.sensitivity_jacobians;  // the exact J in the sensitivities' rhs
+  js["sensitivity_error_test_failures"] = s.run.sensitivity_error_test_failures;
   js["restarts"] = s.run.stats.restarts;
   js["wall_time_s"] = s.run.wall_time;
   return js.dump(2);
