@@ -9,6 +9,7 @@
 #include <exception>
 #include <mutex>
 #include <sstream>
+#include <system_error>
 #include <thread>
 
 #include <Eigen/Geometry>
@@ -73,7 +74,9 @@ struct RunRecorder::Writer {
   std::deque<Chunk> full;        // handed over, in the run's order
   std::vector<Chunk> spare;      // free (all but the run's at the start), their capacity kept
   bool done = false;             // no chunk will follow
-  std::exception_ptr error;      // the first the formatting threw (then the rest is only recycled)
+  std::exception_ptr error;      // the first the formatting threw (the run rethrows it at its next hand-over)
+  bool stream_failed = false;    // the stream went bad (a full disk): the rest is only recycled, the folder's
+                                 // commit reports it
   std::thread thread;
 };
 
@@ -90,8 +93,8 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
       csv_(std::make_unique<Csv>()),
       sums_(std::make_unique<Sums>()) {
   const bool threaded = text != nullptr && !keep_rows;
-  reserve_chunk(saved_, signals_, threaded ? kWriterChunkValues : kChunkValues);
   if (keep_rows) saved_.reserve((expected_rows + 1) * static_cast<std::size_t>(m_ + 1));
+  reserve_chunk(saved_, signals_, threaded ? kWriterChunkValues : kChunkValues);
   if (keep_rows && cfg_.reference) path_error_.reserve(expected_rows + 1), path_deviation_.reserve(expected_rows + 1);
   csv_->on = text_ != nullptr;
   if (text_) *text_ << header(plant_);
@@ -100,9 +103,15 @@ RunRecorder::RunRecorder(Plant& plant, std::ostream* text, bool keep_rows, std::
   sums_->saturated.assign(n_, 0);
   if (threaded) {
     writer_ = std::make_unique<Writer>();
+    writer_->spare.reserve(kWriterChunks);  // all come back at the end: no allocation on the writer's thread
     writer_->spare.resize(kWriterChunks - 1);
     for (Writer::Chunk& c : writer_->spare) reserve_chunk(c.saved, c.signals, kWriterChunkValues);
-    writer_->thread = std::thread([this] { writer_loop(); });
+    try {
+      writer_->thread = std::thread([this] { writer_loop(); });
+    } catch (const std::system_error&) {  // no thread to be had (a process limit): the run's thread formats
+      writer_.reset();
+      reserve_chunk(saved_, signals_, kChunkValues);
+    }
   }
 }
 
@@ -150,13 +159,14 @@ void RunRecorder::hand_over(bool last) {
   Writer::Chunk next;
   {
     std::unique_lock<std::mutex> g(w.lock);
+    if (w.error) std::rethrow_exception(w.error);  // the formatting failed: the run stops here (the destructor joins)
     if (!last) {
       w.wake.wait(g, [&w] { return !w.spare.empty(); });
       next = std::move(w.spare.back());
       w.spare.pop_back();
     }
     w.full.push_back({std::move(saved_), std::move(signals_)});
-    w.done = last;
+    if (last) w.done = true;
   }
   w.wake.notify_all();
   saved_ = std::move(next.saved), signals_ = std::move(next.signals);
@@ -169,23 +179,30 @@ void RunRecorder::writer_loop() {
   const std::size_t width = static_cast<std::size_t>(m_ + 1);
   for (;;) {
     Writer::Chunk c;
+    bool skip = false;
     {
       std::unique_lock<std::mutex> g(w.lock);
       w.wake.wait(g, [&w] { return !w.full.empty() || w.done; });
       if (w.full.empty()) return;
       c = std::move(w.full.front());
       w.full.pop_front();
+      skip = w.error || w.stream_failed;
     }
-    if (!w.error) {  // only this thread sets it
+    std::exception_ptr failed;
+    bool bad = false;
+    if (!skip) {
       try {
         format_rows(c.saved.data(), c.saved.size() / width, c.signals.data());
+        bad = text_ && !*text_;
       } catch (...) {
-        w.error = std::current_exception();
+        failed = std::current_exception();
       }
     }
     c.saved.clear(), c.signals.clear();
     {
       const std::lock_guard<std::mutex> g(w.lock);
+      if (failed && !w.error) w.error = failed;
+      w.stream_failed = w.stream_failed || bad;
       w.spare.push_back(std::move(c));
     }
     w.wake.notify_all();
@@ -251,7 +268,7 @@ void RunRecorder::finish() {
   if (writer_) {
     hand_over(true);
     writer_->thread.join();
-    if (writer_->error) std::rethrow_exception(writer_->error);
+    if (writer_->error) std::rethrow_exception(writer_->error);  // joined: no other thread reads it
   } else {
     format_pending();
   }

@@ -6,14 +6,21 @@
 // their figures (path error and deviation, drive peaks and saturation, the
 // energy ledger's residual) and lets them go. So its memory is bounded by the
 // chunk, whatever the run's length (unless the rows are kept for the
-// caller), and the formatting time, spent inside the run, is counted apart
-// (output_seconds) so that the run's wall time stays the simulation's.
+// caller), and the time the run's thread spends on the output is counted
+// apart (output_seconds) so that the run's wall time stays the simulation's.
 // With text and without keep_rows (the command line's trajectory.csv), the
 // formatting runs on a thread of its own while the run goes on: the run
 // hands over chunks of kWriterChunkValues numbers, at most kWriterChunks at
 // a time (it waits for a free one beyond that: the memory stays bounded),
 // and that one thread formats them in order, so the text and the figures
-// are the same as formatted on the run's thread.
+// are the same as formatted on the run's thread. output_seconds then counts
+// the run's thread's share alone (the drive signals, the hand-overs and
+// their waits): the formatting itself runs beside the run, on a free core
+// where there is one (where there is none, it slows the run's thread and
+// lands in its wall time). A formatting error is rethrown at the run's next
+// hand-over; a stream that goes bad stops the formatting, and the run
+// folder's commit reports it. Without a thread to be had, the run's thread
+// formats. The figures are read after finish().
 #pragma once
 
 #include <cstddef>

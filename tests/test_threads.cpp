@@ -10,10 +10,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -278,6 +280,73 @@ TEST(RunRecorder, TheWriterThreadWritesWhatTheRunsThreadWrites) {
               same(a.figures.peak_i, b.figures.peak_i) &&
               same(a.figures.saturated_fraction, b.figures.saturated_fraction));
   EXPECT_TRUE(same(a.figures.final_state, b.figures.final_state));
+}
+
+// A stream that takes its time (2 ms a write, a chunk's text each, so that the run waits
+// for spare chunks), or that fails after `fail_after` bytes: by throwing,
+// or by returning short (the stream's badbit, as a full disk does).
+class SlowBuffer final : public std::stringbuf {
+ public:
+  enum class Fail { kNever, kThrow, kShort };
+  SlowBuffer(Fail fail = Fail::kNever, std::size_t fail_after = 0) : fail_(fail), fail_after_(fail_after) {}
+
+ protected:
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    written_ += static_cast<std::size_t>(n);
+    if (fail_ != Fail::kNever && written_ > fail_after_) {
+      if (fail_ == Fail::kThrow) throw std::runtime_error("the test's stream failed");
+      return 0;
+    }
+    return std::stringbuf::xsputn(s, n);
+  }
+
+ private:
+  Fail fail_;
+  std::size_t fail_after_, written_ = 0;
+};
+
+// Around the chunk's size: one row short of a chunk, exactly one, one more,
+// and an exact multiple (the last hand-over empty); on a plant with an energy
+// ledger and no drive (the writer thread then computes the ledger's
+// residuals), through a slow stream.
+TEST(RunRecorder, TheWriterThreadAgreesAtTheChunksEdgesThroughASlowStream) {
+  const std::string scene = kScenes + "/planar2_passive.toml";
+  const int m = Plant(load_scene(scene).plant).size();
+  const long chunk_rows = static_cast<long>((RunRecorder::kWriterChunkValues + static_cast<std::size_t>(m)) / (m + 1));
+  for (const long rows : {chunk_rows - 1, chunk_rows, chunk_rows + 1, 5 * chunk_rows}) {
+    const double interval = 1e-4;
+    const RunPlan plan = plan_run(load_scene(scene), {.t_end = (rows - 1) * interval, .output_interval = interval});
+    SlowBuffer slow;
+    std::ostream on_writer(&slow);
+    std::ostringstream on_run;
+    const SceneRun a = simulate_scene(plan.scene, plan.controls, {.trajectory = &on_writer});
+    const SceneRun b = simulate_scene(plan.scene, plan.controls, {.keep_rows = true, .trajectory = &on_run});
+    ASSERT_TRUE(a.result.ok && b.result.ok) << a.result.failure << b.result.failure;
+    EXPECT_EQ(a.figures.rows, rows);
+    EXPECT_TRUE(slow.str() == on_run.str()) << rows << " rows: the texts differ";
+    EXPECT_TRUE(bitwise_equal({a.figures.max_ledger_residual, a.figures.ledger_energy_scale},
+                              {b.figures.max_ledger_residual, b.figures.ledger_energy_scale}))
+        << rows << " rows";
+  }
+}
+
+// A formatting error on the writer thread ends the run with it (rethrown at
+// the run's next hand-over, not only at the end); a stream that goes bad
+// stops the formatting and the run still ends, the stream's state telling.
+TEST(RunRecorder, TheWriterThreadsFailuresEndTheRunOrReachTheStream) {
+  const double t_end = 0.01, interval = 2e-6;
+  const RunPlan plan =
+      plan_run(load_scene(kScenes + "/paper_slow_6dof_hybrid.toml"), {.t_end = t_end, .output_interval = interval});
+  SlowBuffer throwing(SlowBuffer::Fail::kThrow, 100000);
+  std::ostream thrown(&throwing);
+  thrown.exceptions(std::ios::badbit);
+  EXPECT_THROW(simulate_scene(plan.scene, plan.controls, {.trajectory = &thrown}), std::runtime_error);
+  SlowBuffer shorted(SlowBuffer::Fail::kShort, 100000);
+  std::ostream bad(&shorted);
+  const SceneRun r = simulate_scene(plan.scene, plan.controls, {.trajectory = &bad});
+  EXPECT_TRUE(r.result.ok) << r.result.failure;
+  EXPECT_TRUE(bad.bad());
 }
 
 }  // namespace
