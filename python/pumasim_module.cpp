@@ -603,6 +603,7 @@ class RunInterrupts {
 
 struct PyRun {
   py::object t, x, state_names, stats, path_error_mm, path_deviation_mm, out;
+  py::object sensitivity = py::none();  // with sensitivity=[keys]: a dict (keys, values, t, x, s, ok, failure)
   bool ok = true;
   std::string failure;
 };
@@ -616,6 +617,32 @@ std::string python_words(std::string_view name) {
     if (name == flag) return std::string(name) + "=True";
   }
   return std::string(name);
+}
+
+// A run's sensitivities as NumPy arrays: t (rows), x (rows x m) and s (rows
+// x m x p, s[r, i, k] = dx_i/dp_k at t[r]), beside the keys and their values.
+py::dict sensitivity_dict(const SceneSensitivities& sens) {
+  const SensitivityRun& sr = sens.run;
+  const auto rows = static_cast<py::ssize_t>(sr.t.size()), m = static_cast<py::ssize_t>(sens.state_names.size()),
+             p = static_cast<py::ssize_t>(sens.keys.size());
+  py::array_t<double> t(rows), x({rows, m}), s({rows, m, p});
+  auto tt = t.mutable_unchecked<1>();
+  auto xx = x.mutable_unchecked<2>();
+  auto ss = s.mutable_unchecked<3>();
+  for (py::ssize_t r = 0; r < rows; ++r) {
+    tt(r) = sr.t[static_cast<std::size_t>(r)];
+    for (py::ssize_t i = 0; i < m; ++i) {
+      xx(r, i) = sr.x[static_cast<std::size_t>(r)][i];
+      for (py::ssize_t k = 0; k < p; ++k) ss(r, i, k) = sr.s[static_cast<std::size_t>(r)](i, k);
+    }
+  }
+  py::dict d;
+  d["keys"] = py::cast(sens.keys);
+  d["values"] = py::cast(sens.values);
+  d["t"] = t, d["x"] = x, d["s"] = s;
+  d["ok"] = sr.ok;
+  d["failure"] = sr.failure;
+  return d;
 }
 
 PyRun run(const py::object& scene_in, const RunOptions& options, const py::object& out, bool force) {
@@ -680,6 +707,7 @@ PyRun run(const py::object& scene_in, const RunOptions& options, const py::objec
   res.out = dir ? py::object(py::str(dir->string())) : py::none();
   res.ok = r.result.ok;
   res.failure = r.result.failure;
+  if (done.sensitivities) res.sensitivity = sensitivity_dict(*done.sensitivities);
   return res;
 }
 
@@ -882,21 +910,26 @@ void bind_run(py::module_& m) {
       .def_readonly("ok", &PyRun::ok, "False when the run failed (stats['failure'] says why).")
       .def_readonly("failure", &PyRun::failure)
       .def_readonly("out", &PyRun::out, "The run folder written, or None.")
+      .def_readonly("sensitivity", &PyRun::sensitivity,
+                    "With sensitivity=[keys]: a dict with keys, values, t, x and s (s[r, i, k] = dx_i/dp_k at t[r]),\n"
+                    "ok and failure (`pumasim run --sensitivity`); else None.")
       .def(py::pickle(
           [](const PyRun& r) {  // its values (the arrays pickle as numpy's)
-            return py::make_tuple("pumasim.Run", 1, r.t, r.x, r.state_names, r.stats, r.path_error_mm,
-                                  r.path_deviation_mm, r.out, r.ok, r.failure);
+            return py::make_tuple("pumasim.Run", 2, r.t, r.x, r.state_names, r.stats, r.path_error_mm,
+                                  r.path_deviation_mm, r.out, r.ok, r.failure, r.sensitivity);
           },
-          [](const py::tuple& st) {
-            if (st.size() != 11 || !py::isinstance<py::str>(st[0]) || st[0].cast<std::string>() != "pumasim.Run" ||
-                st[1].cast<int>() != 1) {
-              throw py::value_error("pumasim.Run: expected the state a pumasim.Run pickles (version 1)");
+          [](const py::tuple& st) {  // version 1 (before the sensitivities) still reads
+            const int version = st.size() > 1 && py::isinstance<py::int_>(st[1]) ? st[1].cast<int>() : 0;
+            if (!py::isinstance<py::str>(st[0]) || st[0].cast<std::string>() != "pumasim.Run" ||
+                !((version == 1 && st.size() == 11) || (version == 2 && st.size() == 12))) {
+              throw py::value_error("pumasim.Run: expected the state a pumasim.Run pickles (version 1 or 2)");
             }
             PyRun r;
             r.t = st[2], r.x = st[3], r.state_names = st[4], r.stats = st[5];
             r.path_error_mm = st[6], r.path_deviation_mm = st[7], r.out = st[8];
             r.ok = st[9].cast<bool>();
             r.failure = st[10].cast<std::string>();
+            if (version == 2) r.sensitivity = st[11];
             return r;
           }))
       .def("__repr__", [](const PyRun& r) {
@@ -909,7 +942,7 @@ void bind_run(py::module_& m) {
       [](const py::object& scene, const py::object& integrator, const py::object& rtol, const py::object& atol,
          const py::object& dt, const py::object& t_end, const py::object& out, const py::object& force,
          const py::object& backend, const py::object& jacobian, const py::object& max_steps, const py::object& max_wall,
-         const py::object& late_events, const py::object& stop_at_outputs) {
+         const py::object& late_events, const py::object& stop_at_outputs, const py::object& sensitivity) {
         RunOptions r;  // each option's range is checked with the command line's (plan_run)
         r.integrator = optional_text(integrator, "integrator");
         r.backend = optional_text(backend, "backend");
@@ -922,13 +955,22 @@ void bind_run(py::module_& m) {
         r.jacobian = optional_text(jacobian, "jacobian");
         r.late_events = flag_arg(late_events, "late_events");
         r.stop_at_outputs = flag_arg(stop_at_outputs, "stop_at_outputs");
+        if (!sensitivity.is_none()) {
+          if (!py::isinstance<py::list>(sensitivity) && !py::isinstance<py::tuple>(sensitivity)) {
+            wrong_type("sensitivity", "a list of scene keys (str)", sensitivity);
+          }
+          for (const py::handle& k : sensitivity) {
+            if (!py::isinstance<py::str>(k)) wrong_type("sensitivity", "a list of scene keys (str)", sensitivity);
+            r.sensitivity.push_back(k.cast<std::string>());
+          }
+        }
         return run(scene, r, out, flag_arg(force, "force"));
       },
       py::arg("scene"), py::kw_only(), py::arg("integrator") = py::none(), py::arg("rtol") = py::none(),
       py::arg("atol") = py::none(), py::arg("dt") = py::none(), py::arg("t_end") = py::none(),
       py::arg("out") = py::none(), py::arg("force") = false, py::arg("backend") = py::none(),
       py::arg("jacobian") = py::none(), py::arg("max_steps") = py::none(), py::arg("max_wall") = py::none(),
-      py::arg("late_events") = false, py::arg("stop_at_outputs") = false,
+      py::arg("late_events") = false, py::arg("stop_at_outputs") = false, py::arg("sensitivity") = py::none(),
       "`pumasim run` on a Scene (or a scene file's path): the same options (None: the scene's value or\n"
       "the command line's default), the same checks and messages, the same stats. Writes the run folder\n"
       "only when out is given (a new folder, or with force a pumasim run folder). A run that fails is a\n"

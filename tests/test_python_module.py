@@ -479,3 +479,25 @@ def test_a_run_pickles_with_its_values(tmp_path):
     _same_runs(run, back)
     np.testing.assert_array_equal(run.path_deviation_mm, back.path_deviation_mm)
     assert (back.state_names, back.ok, back.failure, back.out) == (run.state_names, run.ok, run.failure, run.out)
+
+
+def test_run_gives_the_sensitivities_as_arrays():
+    """pumasim.run(sensitivity=[...]) is `pumasim run --sensitivity`: the same keys and final values as its
+    stats, arrays shaped (rows, m, p), and a Run that pickles with them."""
+    import pickle
+    run = pumasim.run(DRIVEN, integrator="cvode-bdf", rtol=1e-6, t_end=0.5,
+                      sensitivity=["motor.resistance", "motor.inductance"])
+    assert run.ok
+    s = run.sensitivity
+    assert s["ok"], s["failure"]
+    assert s["keys"] == ["motor.resistance", "motor.inductance"]
+    rows, m = s["x"].shape
+    assert s["s"].shape == (rows, m, 2) and s["t"][-1] == 0.5
+    final = run.stats["sensitivity"]["final_state"]
+    for k, key in enumerate(s["keys"]):
+        for i, name in enumerate(run.state_names):
+            assert s["s"][-1, i, k] == final[key][name]
+    back = pickle.loads(pickle.dumps(run))
+    assert np.array_equal(back.sensitivity["s"], s["s"])
+    with pytest.raises(TypeError):
+        pumasim.run(DRIVEN, sensitivity="motor.resistance")
