@@ -619,6 +619,18 @@ std::string python_words(std::string_view name) {
   return std::string(name);
 }
 
+// None (none), or a list or tuple of scene keys.
+std::vector<std::string> key_list(const py::object& v, const char* what) {
+  std::vector<std::string> keys;
+  if (v.is_none()) return keys;
+  if (!py::isinstance<py::list>(v) && !py::isinstance<py::tuple>(v)) wrong_type(what, "a list of scene keys (str)", v);
+  for (const py::handle& k : v) {
+    if (!py::isinstance<py::str>(k)) wrong_type(what, "a list of scene keys (str)", v);
+    keys.push_back(k.cast<std::string>());
+  }
+  return keys;
+}
+
 // A run's sensitivities as NumPy arrays: t (rows), x (rows x m) and s (rows
 // x m x p, s[r, i, k] = dx_i/dp_k at t[r]), beside the keys and their values.
 py::dict sensitivity_dict(const SceneSensitivities& sens) {
@@ -955,15 +967,7 @@ void bind_run(py::module_& m) {
         r.jacobian = optional_text(jacobian, "jacobian");
         r.late_events = flag_arg(late_events, "late_events");
         r.stop_at_outputs = flag_arg(stop_at_outputs, "stop_at_outputs");
-        if (!sensitivity.is_none()) {
-          if (!py::isinstance<py::list>(sensitivity) && !py::isinstance<py::tuple>(sensitivity)) {
-            wrong_type("sensitivity", "a list of scene keys (str)", sensitivity);
-          }
-          for (const py::handle& k : sensitivity) {
-            if (!py::isinstance<py::str>(k)) wrong_type("sensitivity", "a list of scene keys (str)", sensitivity);
-            r.sensitivity.push_back(k.cast<std::string>());
-          }
-        }
+        r.sensitivity = key_list(sensitivity, "sensitivity");
         return run(scene, r, out, flag_arg(force, "force"));
       },
       py::arg("scene"), py::kw_only(), py::arg("integrator") = py::none(), py::arg("rtol") = py::none(),

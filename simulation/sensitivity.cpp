@@ -159,6 +159,44 @@ class PlantSensitivity final : public SensitivitySystem {
       for (int i = 0; i < m; ++i) s0[k * static_cast<std::size_t>(m) + i] = (up[i] - down[i]) / width_[k];
     }
   }
+  // The path error e = |p(q) - p_ref(t)| at (t, x) [m] and de/dp_k, from s
+  // (dx/dp at t): the flange's motion along s_k by central differences of
+  // the forward kinematics (step 1e-6 rad of the largest joint change), the
+  // reference point's dp_ref/dp_k by the moved plants' references.
+  double path_error(double t, const double* x, const Eigen::MatrixXd& s, Eigen::VectorXd& de) const {
+    const std::shared_ptr<const Reference>& ref = base_.config().reference;
+    const int m = size();
+    ReferenceSample sample;
+    const auto ref_point = [&](const Plant& p) {
+      return p.config().reference->point(std::min(t, p.config().reference->timing().duration()), sample);
+    };
+    Eigen::Matrix3d R;
+    Eigen::Vector3d flange, up, down;
+    base_.tool_pose(x, R, flange);
+    const Eigen::Vector3d diff = flange - ref_point(base_);
+    const double e = diff.norm();
+    de.setZero(parameters());
+    if (!ref || e == 0.0) return e;
+    std::vector<double> moved(x, x + m);
+    for (int k = 0; k < parameters(); ++k) {
+      const double largest = s.col(k).cwiseAbs().maxCoeff();
+      Eigen::Vector3d dflange = Eigen::Vector3d::Zero();
+      if (largest > 0) {
+        const double eps = 1e-6 / largest;
+        for (int i = 0; i < m; ++i) moved[static_cast<std::size_t>(i)] = x[i] + eps * s(i, k);
+        base_.tool_pose(moved.data(), R, up);
+        for (int i = 0; i < m; ++i) moved[static_cast<std::size_t>(i)] = x[i] - eps * s(i, k);
+        base_.tool_pose(moved.data(), R, down);
+        dflange = (up - down) / (2 * eps);
+      }
+      const std::size_t kk = static_cast<std::size_t>(k);
+      const Eigen::Vector3d dref = (ref_point(*plus_[kk]) - ref_point(*minus_[kk])) / width_[kk];
+      de[k] = diff.dot(dflange - dref) / e;
+    }
+    return e;
+  }
+  bool has_reference() const { return base_.config().reference != nullptr; }
+
   double next_stop(double t) const override { return base_.next_time_event(t); }
   // A continuous PIV integral at its bound (|Ki z| = integral_limit): its
   // rate switches from e to 0 there, a jump in f that the sensitivities
@@ -220,6 +258,34 @@ std::string sensitivity_refusal(const Scene& scene) {
   return {};
 }
 
+namespace {
+
+// The run's path-error figures and their sensitivities, over the rows the
+// run's own figures take (t = 0 and every output): the RMS's, d rms/dp =
+// sum e de/dp / (rows rms), and the maximum's, de/dp at its row (a
+// one-sided derivative where two rows tie).
+void path_error_sensitivities(const PlantSensitivity& sys, const std::vector<double>& x0, SceneSensitivities& out) {
+  const int p = sys.parameters();
+  Eigen::MatrixXd s0(sys.size(), p);
+  sys.initial_sensitivities(s0.data());
+  Eigen::VectorXd de(p), sum = Eigen::VectorXd::Zero(p), at_max = Eigen::VectorXd::Zero(p);
+  double sum_sq = 0, max = -1;
+  const auto add = [&](double t, const double* x, const Eigen::MatrixXd& s) {
+    const double e = sys.path_error(t, x, s, de);
+    sum_sq += e * e, sum += e * de;
+    if (e > max) max = e, at_max = de;
+  };
+  add(0.0, x0.data(), s0);
+  for (std::size_t r = 0; r < out.run.t.size(); ++r) add(out.run.t[r], out.run.x[r].data(), out.run.s[r]);
+  const double rows = static_cast<double>(out.run.t.size() + 1), rms = std::sqrt(sum_sq / rows);
+  out.max_path_error = max, out.rms_path_error = rms;
+  out.d_max_path_error = std::vector<double>(at_max.data(), at_max.data() + p);
+  const Eigen::VectorXd d_rms = rms > 0 ? Eigen::VectorXd(sum / (rows * rms)) : Eigen::VectorXd::Zero(p);
+  out.d_rms_path_error = std::vector<double>(d_rms.data(), d_rms.data() + p);
+}
+
+}  // namespace
+
 void check_sensitivity_request(const Scene& scene, const std::vector<std::string>& keys) {
   if (keys.empty()) throw std::invalid_argument("--sensitivity: expected at least one scene key");
   const std::string why = sensitivity_refusal(scene);
@@ -244,6 +310,7 @@ SceneSensitivities scene_sensitivities(const Scene& scene, const RunControls& co
   o.rtol = controls.options.rtol, o.atol = controls.options.atol;
   if (controls.max_steps > 0) o.max_steps = controls.max_steps;  // in all, as the run's budget
   out.run = sensitivity_run(sys, 0.0, x0.data(), outputs, o);
+  if (sys.has_reference() && out.run.ok) path_error_sensitivities(sys, x0, out);
   return out;
 }
 
@@ -278,6 +345,14 @@ std::string sensitivity_json(const SceneSensitivities& s, double rtol, double at
   js["ok"] = s.run.ok;
   js["failure"] = s.run.failure;
   js["t_final"] = s.run.t.empty() ? 0.0 : s.run.t.back();
+  if (!s.d_rms_path_error.empty()) {  // [mm] and [mm per unit of each key]
+    js["max_path_error_mm"] = 1e3 * s.max_path_error, js["rms_path_error_mm"] = 1e3 * s.rms_path_error;
+    nlohmann::ordered_json dmax = nlohmann::ordered_json::object(), drms = nlohmann::ordered_json::object();
+    for (std::size_t k = 0; k < s.keys.size(); ++k) {
+      dmax[s.keys[k]] = 1e3 * s.d_max_path_error[k], drms[s.keys[k]] = 1e3 * s.d_rms_path_error[k];
+    }
+    js["d_max_path_error_mm"] = std::move(dmax), js["d_rms_path_error_mm"] = std::move(drms);
+  }
   js["final_state"] = nlohmann::ordered_json::object();
   if (!s.run.s.empty()) {
     for (std::size_t k = 0; k < s.keys.size(); ++k) {

@@ -31,6 +31,11 @@ struct SceneSensitivities {
   std::vector<double> steps;   // h_k of df/dp_k's differences
   std::vector<std::string> state_names;
   SensitivityRun run;
+  // With a reference, over the rows the run's figures take (t = 0 and every
+  // output): the path error's maximum and RMS [m] and their derivatives in
+  // each key [m per unit of the key]; empty without one.
+  double max_path_error = 0, rms_path_error = 0;
+  std::vector<double> d_max_path_error, d_rms_path_error;
 };
 
 // Why the scene's sensitivities cannot be integrated ("" when they can).
