@@ -249,9 +249,8 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
     for (const std::string& w : run_start_warnings(sc, rc)) sinks.warning(phrased(w, sinks.words));
   }
   check_run_size(sc, rc.max_steps);
-  if (!request.options.sensitivity.empty()) {
-    check_sensitivity_request(sc, request.options.sensitivity);  // before the run: a refusal costs nothing
-  }
+  std::shared_ptr<SensitivityPlan> sensitivities;  // before the run: a refusal costs nothing
+  if (!request.options.sensitivity.empty()) sensitivities = plan_sensitivities(sc, request.options.sensitivity);
   // Before the run: a refusal costs nothing; the trajectory then streams into
   // the folder's temporary twin, which a failure below removes.
   std::optional<RunFolderWriter> folder;
@@ -263,8 +262,8 @@ RunRecord run(const RunRequest& request, const RunSinks& sinks) {
                             .keep_rows = request.keep_rows,
                             .trajectory = folder ? &folder->stream("trajectory.csv") : nullptr});
   rec.run.result.failure = phrased(rec.run.result.failure, sinks.words);
-  if (!request.options.sensitivity.empty() && rec.run.result.ok) {  // a failed run has no sensitivities to give
-    rec.sensitivities = scene_sensitivities(sc, rc, request.options.sensitivity);
+  if (sensitivities && rec.run.result.ok) {  // a failed run has no sensitivities to give
+    rec.sensitivities = scene_sensitivities(*sensitivities, sc, rc);
   }
   if (request.stats || folder) {
     rec.stats = stats_json(sc, rc, rec.run);

@@ -94,14 +94,13 @@ std::unique_ptr<Plant> moved_plant(const Scene& scene, const toml::table& resolv
 // jump in t) must be the scene's: sensitivities continue across a
 // breakpoint that does not move with p, and jump by (f+ - f-) dtau/dp
 // across one that does, which this does not apply.
-void check_same_events(const Scene& scene, const Plant& moved, const std::string& key) {
-  const Plant base(scene.plant);
+void check_same_events(double duration, const Plant& base, const Plant& moved, const std::string& key) {
   if (moved.size() != base.size() || moved.layout().names != base.layout().names) {
     throw std::invalid_argument("--sensitivity: '" + key + "' changes the plant's states");
   }
-  for (double t = 0.0, u = 0.0; t < scene.duration || u < scene.duration;) {
+  for (double t = 0.0, u = 0.0; t < duration || u < duration;) {
     t = base.next_time_event(t), u = moved.next_time_event(u);
-    if (t != u && (t < scene.duration || u < scene.duration)) {
+    if (t != u && (t < duration || u < duration)) {
       char at[48];
       std::snprintf(at, sizeof at, "%.9g s against %.9g s", t, u);
       throw std::invalid_argument("--sensitivity: '" + key + "' moves the reference's breakpoints (" + at +
@@ -125,7 +124,8 @@ class PlantSensitivity final : public SensitivitySystem {
       double up = 0, down = 0;
       plus_.push_back(moved_plant(scene, resolved, key, v.shared, p + h, up));
       minus_.push_back(moved_plant(scene, resolved, key, v.shared, p - h, down));
-      for (const Plant* moved : {plus_.back().get(), minus_.back().get()}) check_same_events(scene, *moved, key);
+      for (const Plant* moved : {plus_.back().get(), minus_.back().get()})
+        check_same_events(scene.duration, base_, *moved, key);
       width_.push_back(up - down), scale_.push_back(p != 0.0 ? std::abs(p) : 1.0);
       out.keys.push_back(key), out.values.push_back(p), out.steps.push_back(0.5 * (up - down));
     }
@@ -286,20 +286,25 @@ void path_error_sensitivities(const PlantSensitivity& sys, const std::vector<dou
 
 }  // namespace
 
-void check_sensitivity_request(const Scene& scene, const std::vector<std::string>& keys) {
+struct SensitivityPlan {
+  SceneSensitivities out;  // the keys, their values and steps, the state names
+  std::unique_ptr<PlantSensitivity> sys;
+};
+
+std::shared_ptr<SensitivityPlan> plan_sensitivities(const Scene& scene, const std::vector<std::string>& keys,
+                                                    double relative_step) {
   if (keys.empty()) throw std::invalid_argument("--sensitivity: expected at least one scene key");
   const std::string why = sensitivity_refusal(scene);
   if (!why.empty()) throw std::invalid_argument("--sensitivity: the scene is refused: " + why);
-  const toml::table resolved = toml::parse(resolved_toml(scene));
-  for (const std::string& key : keys) scene_number(resolved, key);
+  auto plan = std::make_shared<SensitivityPlan>();
+  plan->sys = std::make_unique<PlantSensitivity>(scene, keys, relative_step, plan->out);
+  for (int i = 0; i < plan->sys->size(); ++i) plan->out.state_names.push_back(plan->sys->state_name(i));
+  return plan;
 }
 
-SceneSensitivities scene_sensitivities(const Scene& scene, const RunControls& controls,
-                                       const std::vector<std::string>& keys, double relative_step) {
-  check_sensitivity_request(scene, keys);
-  SceneSensitivities out;
-  PlantSensitivity sys(scene, keys, relative_step, out);
-  for (int i = 0; i < sys.size(); ++i) out.state_names.push_back(sys.state_name(i));
+SceneSensitivities scene_sensitivities(SensitivityPlan& plan, const Scene& scene, const RunControls& controls) {
+  PlantSensitivity& sys = *plan.sys;
+  SceneSensitivities out = plan.out;
   std::vector<double> x0(static_cast<std::size_t>(sys.size()));
   sys.plant().initial_state(x0.data());
   std::vector<double> outputs;

@@ -16,6 +16,7 @@
 // not apply). The reference's breakpoints, where f only kinks, are stops.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,17 +42,21 @@ struct SceneSensitivities {
 // Why the scene's sensitivities cannot be integrated ("" when they can).
 std::string sensitivity_refusal(const Scene& scene);
 
-// std::invalid_argument if the scene is refused, `keys` is empty, or a key
-// is not a real number of the resolved scene (what scene_sensitivities
-// would refuse, checked before a run).
-void check_sensitivity_request(const Scene& scene, const std::vector<std::string>& keys);
+// The sensitivities' set-up, made before the run so that every refusal
+// costs nothing: the scene's plant and the moved plants (two per key).
+struct SensitivityPlan;
+
+// std::invalid_argument for a refused scene, no keys, a key that is not a
+// real number of the resolved scene, one of [integrator], [scene] or
+// [output], one whose moved value the scene reader refuses, or one that
+// moves the reference's breakpoints.
+std::shared_ptr<SensitivityPlan> plan_sensitivities(const Scene& scene, const std::vector<std::string>& keys,
+                                                    double relative_step = 1e-6);
 
 // The scene's run (its duration, output interval and the controls' rtol and
-// atol) with the sensitivities to `keys`. std::invalid_argument for a
-// refused scene or a key that is not a number of the resolved scene;
-// ConfigError when a moved value is out of the key's range.
-SceneSensitivities scene_sensitivities(const Scene& scene, const RunControls& controls,
-                                       const std::vector<std::string>& keys, double relative_step = 1e-6);
+// atol, --max-steps in all) with the plan's sensitivities; a failure is a
+// result (run.ok false).
+SceneSensitivities scene_sensitivities(SensitivityPlan& plan, const Scene& scene, const RunControls& controls);
 
 // "t,<state>,...,d<state>/d<key>,..." then a row per output time, numbers
 // with 17 significant digits: the state, then each key's sensitivities.
