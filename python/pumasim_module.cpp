@@ -27,8 +27,13 @@
 
 #include "integrators/registry.hpp"
 #include "models/dynamics/backend.hpp"
+#include "models/dynamics/regressor.hpp"
 #include "models/plant/plant.hpp"
+#include "models/robot/base_parameters.hpp"
 #include "models/robot/dynamics_query.hpp"
+#include "models/robot/link_inertia.hpp"
+#include "models/robot/robot_file.hpp"
+#include "models/robot/robot_writer.hpp"
 #include "models/robot/strict_toml.hpp"
 #include "models/scene/scene.hpp"
 #include "simulation/driver.hpp"
@@ -800,6 +805,162 @@ py::dict ensemble(const py::object& file, const py::object& threads, const py::o
   return out;
 }
 
+// ---------------------------------------------------------------- identification
+
+// Rows of n numbers: a 2-D array (rows x n) or one row (a 1-D array of n).
+Eigen::MatrixXd rows_arg(const py::handle& v, const std::string& what, int n) {
+  py::object a;
+  try {
+    a = py::module_::import("numpy").attr("asarray")(v, py::arg("dtype") = "float64");
+  } catch (py::error_already_set& e) {
+    throw std::invalid_argument(what + ": expected an array of numbers (" + std::string(py::str(e.value())) + ")");
+  }
+  if (a.attr("ndim").cast<int>() == 1) a = a.attr("reshape")(1, -1);
+  const py::tuple shape = a.attr("shape");
+  if (shape.size() != 2 || shape[1].cast<int>() != n) {
+    throw std::invalid_argument(what + ": expected rows of " + std::to_string(n) +
+                                " numbers (an array rows x n, or one row), got an array of shape " +
+                                py::repr(shape).cast<std::string>());
+  }
+  return a.cast<Eigen::MatrixXd>();
+}
+
+RegressorColumns columns_arg(const py::object& rotor, const py::object& friction) {
+  return {.rotor = flag_arg(rotor, "rotor"), .friction = flag_arg(friction, "friction")};
+}
+
+// pumasim.regressor: Y at each row of (q, qd, qdd), stacked sample by sample.
+py::dict regressor(const py::object& robot, const py::object& q_in, const py::object& qd_in, const py::object& qdd_in,
+                   const py::object& rotor, const py::object& friction) {
+  const RobotModel model = load_robot(path_arg(robot, "robot"));
+  JointTorqueRegressor Y(model, columns_arg(rotor, friction));
+  const int n = model.dof();
+  const Eigen::MatrixXd q = rows_arg(q_in, "q", n), qd = rows_arg(qd_in, "qd", n), qdd = rows_arg(qdd_in, "qdd", n);
+  if (qd.rows() != q.rows() || qdd.rows() != q.rows()) {
+    throw std::invalid_argument("qd, qdd: expected as many rows as q (" + std::to_string(q.rows()) + "), got " +
+                                std::to_string(qd.rows()) + " and " + std::to_string(qdd.rows()));
+  }
+  Eigen::MatrixXd out(q.rows() * n, Y.parameters());
+  {
+    py::gil_scoped_release release;
+    Eigen::MatrixXd block(n, Y.parameters());
+    for (Eigen::Index s = 0; s < q.rows(); ++s) {
+      Y.compute(q.row(s).transpose(), qd.row(s).transpose(), qdd.row(s).transpose(), block);
+      out.middleRows(s * n, n) = block;
+    }
+  }
+  Eigen::VectorXd gear(n);
+  for (int j = 0; j < n; ++j) gear[j] = model.joints[static_cast<std::size_t>(j)].gear_ratio;
+  py::dict d;
+  d["robot"] = model.name;
+  d["n"] = n;
+  d["names"] = Y.parameter_names();
+  d["Y"] = py::cast(out);
+  d["pi"] = to_numpy(Y.parameters_of(model));
+  d["gear_ratio"] = to_numpy(gear);
+  return d;
+}
+
+// pumasim.base_parameters: `pumasim base-parameters` as a dict, with the
+// projection K (rank x columns): pi_b = K pi.
+py::dict base_parameters_dict(const py::object& robot, const py::object& rotor, const py::object& friction,
+                              const py::object& samples, const py::object& seed, const py::object& tolerance) {
+  const RobotModel model = load_robot(path_arg(robot, "robot"));
+  JointTorqueRegressor Y(model, columns_arg(rotor, friction));
+  const double ns = number_arg(samples, "samples"), sd = number_arg(seed, "seed");
+  if (ns < 1 || ns > 1e6 || ns != std::floor(ns))
+    throw std::invalid_argument("samples: expected a whole number in [1, 1e6]");
+  if (sd < 0 || sd > 9e15 || sd != std::floor(sd)) throw std::invalid_argument("seed: expected a whole number >= 0");
+  const BaseParameters b = base_parameters(Y, model, static_cast<int>(ns), static_cast<std::uint64_t>(sd),
+                                           number_arg(tolerance, "tolerance"));
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(b.rank(), Y.parameters());
+  std::vector<std::string> labels, definitions;
+  for (int i = 0; i < b.rank(); ++i) {
+    K(i, b.base[static_cast<std::size_t>(i)]) = 1.0;
+    for (std::size_t g = 0; g < b.grouped.size(); ++g) K(i, b.grouped[g]) = b.beta(i, static_cast<Eigen::Index>(g));
+    labels.push_back(b.label(i));
+    definitions.push_back(b.definition(i));
+  }
+  py::dict d;
+  d["robot"] = model.name;
+  d["names"] = b.names;
+  d["base"] = b.base;
+  d["grouped"] = b.grouped;
+  d["no_effect"] = b.no_effect;
+  d["labels"] = labels;
+  d["definitions"] = definitions;
+  d["K"] = py::cast(K);
+  d["values"] = to_numpy(b.values(Y.parameters_of(model)));
+  d["singular_values"] = to_numpy(b.singular_values);
+  d["gap"] = b.gap();
+  d["tolerance"] = b.tolerance;
+  d["warning"] = b.warning;
+  return d;
+}
+
+// pumasim.robot_with_parameters: the robot with pi's values, as a robot
+// file's text, and what keeps each link from being a rigid body.
+py::dict robot_with_parameters(const py::object& robot, const py::object& pi_in, const py::object& rotor,
+                               const py::object& friction, const py::object& comment) {
+  const RobotModel model = load_robot(path_arg(robot, "robot"));
+  JointTorqueRegressor Y(model, columns_arg(rotor, friction));
+  const Eigen::VectorXd pi = vector_arg(pi_in, "pi");
+  if (pi.size() != Y.parameters()) {
+    throw std::invalid_argument("pi: expected " + std::to_string(Y.parameters()) +
+                                " numbers (the regressor's columns), got " + std::to_string(pi.size()));
+  }
+  py::dict d;
+  py::list problems;
+  d["problems"] = problems;
+  d["text"] = py::none();
+  for (int j = 0; j < model.dof(); ++j) {
+    const Eigen::Index at = static_cast<Eigen::Index>(j) * Y.per_joint();
+    const double m = pi[at + 9];
+    if (!(m > 0.0) && !(m == 0.0 && pi.segment(at + 6, 3).isZero(0.0))) {
+      py::dict p;
+      p["link"] = j + 1, p["key"] = "mass", p["expected"] = "> 0 (or 0 with a zero first moment)",
+      p["got"] = std::to_string(m), p["excusable"] = false;
+      problems.append(p);
+    }
+  }
+  if (!problems.empty()) return d;
+  RobotModel out = Y.with_parameters(model, pi);
+  bool readable = true;
+  for (int j = 0; j < out.dof(); ++j) {
+    const InertiaProblem why = inertia_problem(out.joints[static_cast<std::size_t>(j)]);
+    if (why.key.empty()) continue;
+    readable = readable && why.excusable;
+    py::dict p;
+    p["link"] = j + 1, p["key"] = why.key, p["expected"] = why.expected, p["got"] = why.got,
+    p["excusable"] = why.excusable;
+    problems.append(p);
+  }
+  if (!readable) return d;  // no robot file reads an inertia that is not positive semi-definite
+  out.source = "pumasim.robot_with_parameters";
+  d["text"] = robot_file_text(out, text_arg(comment, "comment"));
+  return d;
+}
+
+void bind_identification(py::module_& m) {
+  m.def("regressor", &regressor, py::kw_only(), py::arg("robot") = "puma560", py::arg("q"), py::arg("qd"),
+        py::arg("qdd"), py::arg("rotor") = true, py::arg("friction") = true,
+        "The joint-torque regressor tau = Y(q, qd, qdd) pi (docs/user-guide/identification.md) at each row of\n"
+        "q, qd, qdd (arrays rows x n, or one row): a dict with names (the columns), Y ((rows n) x columns,\n"
+        "row s n + j is sample s's joint j), pi (the robot's own parameters) and gear_ratio.");
+  m.def("base_parameters", &base_parameters_dict, py::kw_only(), py::arg("robot") = "puma560", py::arg("rotor") = true,
+        py::arg("friction") = true, py::arg("samples") = 40, py::arg("seed") = 1, py::arg("tolerance") = 1e-8,
+        "`pumasim base-parameters` as a dict: names, base and grouped (column indices), labels and definitions\n"
+        "(the regrouping), K (rank x columns: pi_b = K pi), values (the robot's pi_b), singular_values, gap,\n"
+        "tolerance, warning, no_effect.");
+  m.def("robot_with_parameters", &robot_with_parameters, py::kw_only(), py::arg("robot") = "puma560", py::arg("pi"),
+        py::arg("rotor") = true, py::arg("friction") = true, py::arg("comment") = "",
+        "The robot with the regressor parameters pi (its kinematics kept): a dict with problems (per link, what\n"
+        "keeps it from being a rigid body: link, key, expected, got, excusable; the triangle inequalities of\n"
+        "Wensing et al. 2017) and text (a robot file, a published set's excuse written where it is excusable;\n"
+        "None for such a mass or an inertia is not positive semi-definite). Fo has no place in a robot file and is "
+        "dropped.");
+}
+
 // The registries and the robot's dynamics.
 void bind_dynamics(py::module_& m) {
   m.def("backends", &backend_list, "The dynamics back-ends' names (pumasim backends), sorted.");
@@ -1014,6 +1175,7 @@ PYBIND11_MODULE(pumasim, m) {
   });
 
   bind_dynamics(m);
+  bind_identification(m);
   bind_scene(m);
   bind_run(m);
 }

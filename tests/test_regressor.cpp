@@ -69,6 +69,54 @@ TEST(Regressor, ProbingTheRneaWithUnitParametersGivesTheDirectRegressor) {
   }
 }
 
+// with_parameters inverts parameters_of: the links' values back in their DH
+// frames (an identity on each arm), and a moved pi put into a model is that
+// model's pi and its back-ends' inverse dynamics is Y pi (the frames'
+// transforms undone correctly, in both DH conventions and for a URDF's).
+TEST(Regressor, WithParametersPutsAParameterVectorIntoTheModel) {
+  for (const RobotModel& arm : regressor_arms()) {
+    JointTorqueRegressor regressor(arm);
+    const Eigen::VectorXd pi = regressor.parameters_of(arm);
+    const RobotModel same = regressor.with_parameters(arm, pi);
+    for (int j = 0; j < arm.dof(); ++j) {
+      const JointParams &a = arm.joints[static_cast<std::size_t>(j)], &b = same.joints[static_cast<std::size_t>(j)];
+      EXPECT_NEAR(b.mass, a.mass, 1e-12 * a.mass) << arm.name << " link " << j + 1;
+      EXPECT_LE((b.com - a.com).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + a.com.norm())) << arm.name << " link " << j + 1;
+      EXPECT_LE((b.inertia - a.inertia).cwiseAbs().maxCoeff(), 1e-10 * (1e-3 + a.inertia.norm()))
+          << arm.name << " link " << j + 1;
+      EXPECT_NEAR(b.rotor_inertia, a.rotor_inertia, 1e-12 * (1e-6 + a.rotor_inertia)) << arm.name;
+    }
+    // Moved: 1.3 times each mass and first moment, inertias grown so that the
+    // link stays a body (2x about the origin), rotors and friction moved.
+    Eigen::VectorXd moved = pi;
+    for (int j = 0; j < arm.dof(); ++j) {
+      double* p = moved.data() + static_cast<std::ptrdiff_t>(j) * regressor.per_joint();
+      for (int k = 0; k < 6; ++k) p[k] *= 2.0;
+      for (int k = 6; k < 10; ++k) p[k] *= 1.3;
+      p[10] = 0.5 * p[10] + 0.01;        // Ia
+      p[11] = 0.2 + j, p[12] = 0.1 * j;  // Fv, Fc
+      p[13] = 0.0;                       // Fo: not in a model
+    }
+    const RobotModel other = regressor.with_parameters(arm, moved);
+    const Eigen::VectorXd back = regressor.parameters_of(other);
+    EXPECT_LE((back - moved).cwiseAbs().maxCoeff(), 1e-10 * moved.cwiseAbs().maxCoeff()) << arm.name;
+    JointTorqueRegressor no_friction(arm, {.rotor = true, .friction = false});
+    const Eigen::VectorXd pi_links = no_friction.parameters_of(other);
+    Eigen::MatrixXd Y(arm.dof(), no_friction.parameters());
+    Rng rng(9);
+    const State x = random_state(rng, arm.dof());
+    no_friction.compute(x.q, x.qd, x.qdd, Y);
+    auto backend = testing::supported(other).front().make(other);
+    Eigen::VectorXd tau(arm.dof());
+    backend->inverse_dynamics(x.q, x.qd, x.qdd, tau);
+    EXPECT_LE((Y * pi_links - tau).cwiseAbs().maxCoeff(), 1e-12 * tau.cwiseAbs().maxCoeff()) << arm.name;
+  }
+  JointTorqueRegressor regressor(load_robot("puma560"));
+  Eigen::VectorXd pi = regressor.parameters_of(load_robot("puma560"));
+  pi[9 + regressor.per_joint()] = -1.0;  // M2
+  EXPECT_THROW(regressor.with_parameters(load_robot("puma560"), pi), std::invalid_argument);
+}
+
 TEST(Regressor, FrictionColumnsAreViscousCoulombAndOffset) {
   const RobotModel arm = load_robot("puma560");
   JointTorqueRegressor with(arm), without(arm, {.rotor = true, .friction = false});

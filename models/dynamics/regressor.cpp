@@ -1,6 +1,9 @@
 #include "models/dynamics/regressor.hpp"
 
+#include <cmath>
 #include <stdexcept>
+
+#include <Eigen/Geometry>
 
 namespace pumasim {
 
@@ -97,6 +100,56 @@ Eigen::VectorXd JointTorqueRegressor::parameters_of(const RobotModel& model) con
     }
   }
   return pi;
+}
+
+RobotModel JointTorqueRegressor::with_parameters(const RobotModel& model, const Eigen::VectorXd& pi) const {
+  if (model.dof() != dof() || pi.size() != parameters()) {
+    throw std::invalid_argument("JointTorqueRegressor::with_parameters: expected a model of " + std::to_string(dof()) +
+                                " joints and " + std::to_string(parameters()) + " parameters, got " +
+                                std::to_string(model.dof()) + " and " + std::to_string(pi.size()));
+  }
+  RobotModel out = model;
+  const Chain<double, Eigen::Dynamic> given(model);
+  for (int j = 0; j < dof(); ++j) {
+    const double* p = pi.data() + static_cast<std::ptrdiff_t>(j) * per_joint_;
+    JointParams& J = out.joints[static_cast<std::size_t>(j)];
+    const std::string link = "link " + std::to_string(j + 1);
+    const Eigen::Vector3d h(p[6], p[7], p[8]);
+    if (!(p[9] > 0.0) && !(p[9] == 0.0 && h.isZero(0.0))) {
+      throw std::invalid_argument("JointTorqueRegressor::with_parameters: " + link + ": mass M" +
+                                  std::to_string(j + 1) + " = " + std::to_string(p[9]) +
+                                  ", expected > 0 (or 0 with a zero first moment)");
+    }
+    Eigen::Matrix3d Io;
+    for (int k = 0; k < 6; ++k) Io(kInertiaRow[k], kInertiaCol[k]) = Io(kInertiaCol[k], kInertiaRow[k]) = p[k];
+    // A massless link (the PUMA's first, in Corke's set) keeps its centre of mass, which nothing reads.
+    const Eigen::Vector3d c = p[9] > 0.0 ? Eigen::Vector3d(h / p[9]) : given.com[j];
+    // Io = I_c + m (c.c 1 - c c^T) (parallel axes), in joint frame j.
+    const Eigen::Matrix3d Ic = Io - p[9] * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+    J.mass = p[9];
+    if (model.convention == DhConvention::kStandard) {
+      // joint_frames: com_joint = Rx(alpha) com + (a, 0, distal d), I_joint = Rx(alpha) I Rx(alpha)^T.
+      const Eigen::Matrix3d RF = Eigen::AngleAxisd(J.alpha, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      const double distal_d = J.prismatic() ? 0.0 : J.d;
+      J.com = RF.transpose() * (c - Eigen::Vector3d(J.a, 0.0, distal_d));
+      J.inertia = RF.transpose() * Ic * RF;
+    } else {
+      J.com = c;
+      J.inertia = Ic;
+    }
+    J.inertia = 0.5 * (J.inertia + J.inertia.transpose());
+    int at = kLinkParameters;
+    if (columns_.rotor) {
+      const double Ia = p[at++];
+      if (J.gear_ratio == 0.0 && Ia != 0.0) {
+        throw std::invalid_argument("JointTorqueRegressor::with_parameters: joint " + std::to_string(j + 1) +
+                                    ": Ia = " + std::to_string(Ia) + " with gear ratio 0 (no rotor to carry it)");
+      }
+      J.rotor_inertia = J.gear_ratio == 0.0 ? 0.0 : Ia / (J.gear_ratio * J.gear_ratio);
+    }
+    if (columns_.friction) J.damping = p[at], J.coulomb = p[at + 1];
+  }
+  return out;
 }
 
 // Each link's angular velocity and acceleration and its origin's

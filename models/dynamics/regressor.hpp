@@ -63,6 +63,16 @@ class JointTorqueRegressor {
   // inertial values in joint frames, its rotors' Z^2 Im and its joints'
   // damping and coulomb (RobotModel's joint-side friction; offset 0).
   Eigen::VectorXd parameters_of(const RobotModel& model) const;
+  // The inverse: `model` (this regressor's kinematics) with its links'
+  // mass, centre of mass and inertia about it (in its DH frames, as a robot
+  // file gives them), its rotors' Im = Ia / Z^2 and its joints' damping = Fv
+  // and coulomb = Fc taken from pi; with_parameters(m, parameters_of(m))
+  // is m to rounding. An offset Fo has no place in a robot model and is
+  // dropped. std::invalid_argument for a pi of the wrong size, a mass < 0, a
+  // mass 0 with a first moment (no centre of mass), or a nonzero Ia on a joint with Z = 0.
+  // Whether the result is a rigid body is not checked here
+  // (models/robot/link_inertia.hpp).
+  RobotModel with_parameters(const RobotModel& model, const Eigen::VectorXd& pi) const;
 
   // Y (n x parameters()), including gravity.
   void compute(const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& qd,
