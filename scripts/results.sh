@@ -27,7 +27,8 @@
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
-#   identification  the joint-torque regressor, direct against probing, and the base parameters
+#   identification  the joint-torque regressor, direct against probing, the base parameters, and
+#                   identification on the simulated PUMA (experiments/identify.py, Monte Carlo)
 #               of the PUMA 560 and the Panda (experiments/regressor_table.py); what forward
 #               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
@@ -164,10 +165,16 @@ stage_panda() { /usr/bin/python3 experiments/panda_vs_authors.py "$PUMASIM" --ou
 stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/identification/regressor.md results/identification/regressor_bench.json
 # writes: results/identification/sensitivity_cost.md
+# writes: results/identification/puma560/table.md results/identification/puma560/identify.json
+# writes: results/identification/puma560/estimates.csv results/identification/puma560/excitation.csv
+# writes: results/identification/puma560/experiment.toml
 stage_identification() {
   /usr/bin/python3 experiments/regressor_table.py --bench "$PUMASIM_BIN/bench_identification" --bin "$PUMASIM" \
     --out results/identification
   /usr/bin/python3 experiments/sensitivity_cost.py --bin "$PUMASIM" --out results/identification
+  # The Python module: the native release build (scripts/build.sh above; the portable preset has none).
+  /usr/bin/python3 experiments/identify.py experiments/identification/puma560.toml \
+    --module "$PWD/build/release/python" --out results/identification/puma560 --force --quiet
 }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
