@@ -41,7 +41,8 @@ law is not the regressor's Fv qd + Fc sign(qd) + Fo and the truth would not be e
 
 Writes DIR (a new folder, or with --force one this program wrote; nothing half-written: the results
 are made in a sibling temporary folder and renamed): identify.json (the summary: excitation, costs,
-truth and estimates, feasibility), estimates.csv (every seed's estimates), excitation.csv (the knots),
+truth and estimates, feasibility), estimates.csv (every seed's estimates), excitation.csv (the knots;
+not with --no-knots),
 table.md (the Monte Carlo table), experiment.toml (the input). Exit 2 for a bad experiment file (its
 file, line, key and what was expected), 1 for a failed run.
 """
@@ -841,16 +842,20 @@ def write_outputs(tmp, plant, exp, design, summary, rows, seeds, exact_err, t_kn
 OUR_FILES = ("experiment.toml", "table.md", "estimates.csv", "excitation.csv", MARKER)
 
 
-def publish(tmp, out):
+def publish(tmp, out, knots=True):
     """tmp's files into out: a new folder renamed whole, or ours replaced in a folder we wrote."""
     for name in os.listdir(tmp):
-        if name not in OUR_FILES:
+        if name not in OUR_FILES or (name == "excitation.csv" and not knots):
             os.remove(os.path.join(tmp, name))
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp's 0700 would be the folder's
     if not os.path.exists(out):
         os.rename(tmp, out)
         return
     for name in OUR_FILES:
-        os.replace(os.path.join(tmp, name), os.path.join(out, name))
+        if os.path.exists(os.path.join(tmp, name)):
+            os.replace(os.path.join(tmp, name), os.path.join(out, name))
     os.rmdir(tmp)
 
 
@@ -879,6 +884,8 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, help="the Monte Carlo's seed count (default: the file's)")
     ap.add_argument("--methods", help="a comma-separated subset of " + ",".join(METHODS))
     ap.add_argument("--module", help="the folder holding the pumasim module (default build/release/python)")
+    ap.add_argument("--no-knots", action="store_true",
+                    help="leave excitation.csv (the spline's knots) out; identify.json's coefficients remake it")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
     log = (lambda s: None) if a.quiet else (lambda s: print("identify: " + s, file=sys.stderr, flush=True))
@@ -908,7 +915,7 @@ def main(argv=None):
             summary = summarise(plant, exp, rows)
             write_outputs(tmp, plant, exp, design, summary, rows, seeds, exact_err, t_knots, q_knots,
                           time.perf_counter() - started)
-            publish(tmp, out)
+            publish(tmp, out, knots=not a.no_knots)
         finally:
             if os.path.isdir(tmp):
                 shutil.rmtree(tmp)

@@ -166,7 +166,7 @@ stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/identification/regressor.md results/identification/regressor_bench.json
 # writes: results/identification/sensitivity_cost.md
 # writes: results/identification/puma560/table.md results/identification/puma560/identify.json
-# writes: results/identification/puma560/estimates.csv results/identification/puma560/excitation.csv
+# writes: results/identification/puma560/estimates.csv
 # writes: results/identification/puma560/experiment.toml
 stage_identification() {
   /usr/bin/python3 experiments/regressor_table.py --bench "$PUMASIM_BIN/bench_identification" --bin "$PUMASIM" \
@@ -174,7 +174,7 @@ stage_identification() {
   /usr/bin/python3 experiments/sensitivity_cost.py --bin "$PUMASIM" --out results/identification
   # The Python module: the native release build (scripts/build.sh above; the portable preset has none).
   /usr/bin/python3 experiments/identify.py experiments/identification/puma560.toml \
-    --module "$PWD/build/release/python" --out results/identification/puma560 --force --quiet
+    --module "$PWD/build/release/python" --out results/identification/puma560 --force --quiet --no-knots
 }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
