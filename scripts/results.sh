@@ -31,6 +31,8 @@
 #                   identification on the simulated PUMA (experiments/identify.py, Monte Carlo)
 #               of the PUMA 560 and the Panda (experiments/regressor_table.py); what forward
 #               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py)
+#   tuning      PIV gains tuned on the full model against design_piv.py's pole placement, on the
+#               paper's slow and fast paths with smooth friction (experiments/tune_piv.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
 #               Sobol indices of the drive ensemble and of the paper's experiment over five unpublished
 #               inputs (experiments/ensemble_gsa.py)
@@ -62,7 +64,8 @@
 # must be written by a stage (the CTest Python.ResultsHaveProducers checks it,
 # without running anything).
 #
-# Every figure but the fuzz, cost and ci stages' comes from the portable build (preset portable: the x86-64
+# Every figure but the fuzz, cost and ci stages' and those of the Python module (experiments/identify.py,
+# experiments/tune_piv.py: the native release build's) comes from the portable build (preset portable: the x86-64
 # baseline, no -march=native), so that results/ does not depend on this
 # machine's instruction set; each run's meta.json and the benchmark's table
 # record the flags and the CPU. (The native release build is built too: the
@@ -76,7 +79,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
-     partitioned filippov panda bench identification ensembles literature report)
+     partitioned filippov panda bench identification tuning ensembles literature report)
 named_only=(fuzz cost ci slurm abjacobian)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
 stages=()
@@ -175,6 +178,20 @@ stage_identification() {
   # The Python module: the native release build (scripts/build.sh above; the portable preset has none).
   /usr/bin/python3 experiments/identify.py experiments/identification/puma560.toml \
     --module "$PWD/build/release/python" --out results/identification/puma560 --force --quiet --no-knots
+}
+# writes: results/tuning/paper_slow_viscous/tune.json results/tuning/paper_slow_viscous/summary.md
+# writes: results/tuning/paper_slow_viscous/tuned.toml
+# writes: results/tuning/paper_fast_viscous/tune.json results/tuning/paper_fast_viscous/summary.md
+# writes: results/tuning/paper_fast_viscous/tuned.toml
+stage_tuning() {
+  # The Python module: the native release build (scripts/build.sh; the portable preset has none).
+  local m="$PWD/build/release/python"
+  /usr/bin/python3 experiments/tune_piv.py experiments/scenes/paper_slow_viscous.toml --module "$m" \
+    --out results/tuning/paper_slow_viscous --force --quiet
+  # The paper's fast path with the slow scene's smooth friction (the sensitivities refuse the paper's rule).
+  /usr/bin/python3 experiments/tune_piv.py experiments/scenes/paper_fast.toml --module "$m" \
+    --set 'friction.model="viscous"' --unset friction.static_torque --unset friction.kinetic_torque \
+    --unset friction.zero_speed --iterations 60 --out results/tuning/paper_fast_viscous --force --quiet
 }
 # writes: results/ensembles/scaling.json results/ensembles/scaling.md
 # writes: results/ensembles/paper_slow_viscous_drive_sobol.json results/ensembles/paper_slow_viscous_drive_sobol.md
