@@ -27,10 +27,10 @@
 #   filippov    the paper's friction rule in Filippov terms (experiments/filippov.py)
 #   panda       the Panda's dynamics against its authors' code (experiments/panda_vs_authors.py)
 #   bench       the dynamics back-end benchmark (experiments/bench_dynamics.sh)
-#   identification  the joint-torque regressor, direct against probing, the base parameters, and
-#                   identification on the simulated PUMA (experiments/identify.py, Monte Carlo)
+#   identification  the joint-torque regressor, direct against probing, and the base parameters
 #               of the PUMA 560 and the Panda (experiments/regressor_table.py); what forward
-#               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py)
+#               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py);
+#               identification on the simulated PUMA (experiments/identify.py, Monte Carlo)
 #   tuning      PIV gains tuned on the full model against design_piv.py's pole placement, on the
 #               paper's slow and fast paths with smooth friction (experiments/tune_piv.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
