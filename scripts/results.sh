@@ -30,7 +30,7 @@
 #   identification  the joint-torque regressor, direct against probing, and the base parameters
 #               of the PUMA 560 and the Panda (experiments/regressor_table.py); what forward
 #               sensitivities cost against one run and 2p difference runs (experiments/sensitivity_cost.py);
-#               identification on the simulated PUMA (experiments/identify.py, Monte Carlo)
+#               identification on the simulated PUMA and Panda (experiments/identify.py, Monte Carlo)
 #   tuning      PIV gains tuned on the full model against design_piv.py's pole placement, on the
 #               paper's slow and fast paths with smooth friction (experiments/tune_piv.py)
 #   ensembles   ensemble scaling (1 thread against every core) and set-up overhead (experiments/ensemble_scaling.py),
@@ -171,6 +171,8 @@ stage_bench() { experiments/bench_dynamics.sh --out results; }
 # writes: results/identification/puma560/table.md results/identification/puma560/identify.json
 # writes: results/identification/puma560/estimates.csv
 # writes: results/identification/puma560/experiment.toml
+# writes: results/identification/panda/table.md results/identification/panda/identify.json
+# writes: results/identification/panda/estimates.csv results/identification/panda/experiment.toml
 stage_identification() {
   /usr/bin/python3 experiments/regressor_table.py --bench "$PUMASIM_BIN/bench_identification" --bin "$PUMASIM" \
     --out results/identification
@@ -178,6 +180,8 @@ stage_identification() {
   # The Python module: the native release build (scripts/build.sh above; the portable preset has none).
   /usr/bin/python3 experiments/identify.py experiments/identification/puma560.toml \
     --module "$PWD/build/release/python" --out results/identification/puma560 --force --quiet --no-knots
+  /usr/bin/python3 experiments/identify.py experiments/identification/panda.toml \
+    --module "$PWD/build/release/python" --out results/identification/panda --force --quiet --no-knots
 }
 # writes: results/tuning/paper_slow_viscous/tune.json results/tuning/paper_slow_viscous/summary.md
 # writes: results/tuning/paper_slow_viscous/tuned.toml
