@@ -222,6 +222,7 @@ def summary_md(doc):
     row = lambda label, f: lines.append(f"| {label} | {f(pp)} | {f(tu)} |")
     row("RMS path error [mm]", lambda v: f"{v['rms_path_error_mm']:.4g}")
     row("max path error [mm]", lambda v: f"{v['max_path_error_mm']:.4g}")
+    lines.append(f"| RMS path error / pole placement's | 1 | {tu['rms_path_error_mm'] / pp['rms_path_error_mm']:.3g} |")
     row("peak voltage [V]", lambda v: f"{max(v['peak_voltage_V']):.4g}")
     row("spectral abscissa [1/s]", lambda v: f"{v['spectral_abscissa']:.4g}")
     row("least damping", lambda v: f"{v['least_damping']:.3g}")
