@@ -64,6 +64,10 @@ class Tuner:
             raise BadInput(f"{scene_file}: the plant has discrete state ({base.discrete_state}); the sensitivities "
                            "refuse it (a smooth friction law: --set friction.model=\"viscous\")")
         self.n = int(doc["scene"]["joints"])
+        missing = [g for g in GAINS if g not in ctl]
+        if missing or "voltage_limit" not in doc.get("amplifier", {}):
+            raise BadInput(f"{scene_file}: tune_piv needs [controller] kp, ki, kv and a drive with [amplifier] "
+                           f"voltage_limit; missing: {', '.join(missing + (['voltage_limit'] if 'voltage_limit' not in doc.get('amplifier', {}) else []))}")
         self.g0 = np.array([float(np.broadcast_to(ctl[g], (self.n,))[j]) for g in GAINS for j in range(self.n)])
         if np.any(self.g0 <= 0):
             raise BadInput(f"{scene_file}: tune_piv searches log-gains: every kp, ki, kv must be > 0")
@@ -123,7 +127,8 @@ class Tuner:
         return J
 
     def poles(self, x):
-        """The eigenvalues of the closed loop linearised at the start state and the chosen run states."""
+        """The eigenvalues of the closed loop with gains x linearised at six states of the starting gains' run
+        (its first row and five more, evenly spaced): the same states for every x."""
         sc = self.scene(x)
         if self.states is None:
             r = self.run(np.zeros_like(x), sensitivity=False)

@@ -5,10 +5,15 @@
 - On noise-free, unquantised data (the run's own states, qdd from f(t, x), torques Z K i) IDIM-OLS
   recovers the truth's base parameters to 1e-8 relative (the issue's bound): the plant's torque balance
   Z K i = H qdd + h + Z^2 B qd and the regressor are one identity, whatever the excitation.
-- Under noise, over a reduced Monte Carlo, the means of IDIM-IV and DIDIM are within 3 standard errors
-  of the truth for all but a few parameters: with M estimates the z of an unbiased mean is t(M - 1)
-  distributed, P(|t_5| > 3) = 0.030, and over 30 parameters P(5 or more outside) < 0.01 (binomial,
-  independence assumed): the test allows 4.
+- Under noise, over a reduced Monte Carlo (M = 6 seeds), the means of IDIM-IV and DIDIM are within 3
+  standard errors of the truth for all but a few of the parameters kept by every estimate (those kept by
+  some seeds only are selected by the noise): for an unbiased method z is t(M - 1) distributed, and the
+  count outside 3 is at most the binomial's 99th percentile over those parameters (independence
+  assumed). With the noise outside the loop OLS would pass this too: it checks IV and DIDIM are not
+  biased, not that they remove a bias (docs/user-guide/identification.md).
+- The standard errors the methods report agree with the Monte Carlo spread: the median over the
+  parameters kept by every estimate of (mean reported se) / (spread) lies in the 99 % interval of s / sigma
+  for M - 1 degrees of freedom, sqrt(chi2(q; M - 1) / (M - 1)) for q = 0.005, 0.995.
 - A bad experiment file stops with exit 2 naming file, line and key, and writes nothing; a folder the
   program did not write is refused even with --force.
 Run by ctest (python/CMakeLists.txt); by hand:
@@ -81,15 +86,25 @@ def test_noise_free_ols_recovers_the_base_parameters(reduced_study):
 
 
 def test_iv_and_didim_means_are_within_three_standard_errors(reduced_study):
+    from scipy import stats
+
     (plant, design, _, _, _, _, rows), exp = reduced_study
     assert design["drive"]["ok"]
     summary = identify.summarise(plant, exp, rows)
+    M = exp["monte_carlo"]["seeds"]
+    p = 2 * stats.t.sf(3.0, M - 1)
+    lo, hi = (math.sqrt(stats.chi2.ppf(q, M - 1) / (M - 1)) for q in (0.005, 0.995))
     for m in ("iv", "didim"):
         s = summary[m]
         assert s["failed"] == 0, s["failures"]
-        z = np.array(s["z"], dtype=float)
-        assert s["tested"] >= 20
-        assert int(np.sum(np.abs(z[np.isfinite(z)]) > 3)) <= 4, (m, s["z"])
+        N = s["kept_by_all"]
+        assert N >= 20, N
+        assert s["outside_3_se_kept_by_all"] <= stats.binom.ppf(0.99, N, p), (m, s["z"])
+        mine = [r for r in rows if r["method"] == m]
+        kept = np.all([r["essential"] for r in mine], axis=0)
+        se = np.mean([r["se"] for r in mine], axis=0)[kept]
+        spread = np.array([r["beta"] for r in mine]).std(axis=0, ddof=1)[kept]
+        assert lo <= float(np.median(se / spread)) <= hi, (m, float(np.median(se / spread)))
 
 
 def test_bad_input_names_file_line_and_key(tmp_path):
