@@ -52,13 +52,13 @@ import io
 import json
 import math
 import os
-import shutil
 import sys
-import tempfile
 import time
 import tomllib
 
 import numpy as np
+
+from pumasim_exp import files
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 METHODS = ("ols", "wls", "iv", "didim")
@@ -241,6 +241,18 @@ def check_against_plant(exp, plant):
                        f"frequency ({nyquist:g} Hz: sample_rate / 2 / decimate), got {exp['filter']['cutoff']!r}")
 
 
+def pseudo_inertia(p):
+    """A link's 4 x 4 pseudo-inertia [[tr(I_o)/2 1 - I_o, h], [h^T, m]] from its regressor parameters
+    p (XX XY XZ YY YZ ZZ about the frame's origin, MX MY MZ, M): positive semi-definite exactly for a
+    rigid body's (Wensing, Kim & Slotine 2017)."""
+    Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
+    J = np.zeros((4, 4))
+    J[:3, :3] = 0.5 * np.trace(Io) * np.eye(3) - Io
+    J[:3, 3] = J[3, :3] = p[6:9]
+    J[3, 3] = p[9]
+    return J
+
+
 class Plant:
     """The experiment's scene: its robot, drive constants, friction and the truth pi, beta."""
 
@@ -347,12 +359,7 @@ class Plant:
         pi = pi.copy()
         for j in range(self.n):
             p = pi[j * self.per: j * self.per + 11]
-            Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
-            J = np.zeros((4, 4))
-            J[:3, :3] = 0.5 * np.trace(Io) * np.eye(3) - Io
-            J[:3, 3] = J[3, :3] = p[6:9]
-            J[3, 3] = p[9]
-            c = 2e-9 * self.scale[j] - float(np.linalg.eigvalsh(J)[0])
+            c = 2e-9 * self.scale[j] - float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
             if c > 0:
                 p[[0, 3, 5]] += 2.0 * c  # Sigma = tr(I_o)/2 1 - I_o grows by a/2 when I_o grows by a 1
                 p[9] += c
@@ -365,13 +372,8 @@ class Plant:
         total = 0.0
         for j in range(self.n):
             p = pi[j * self.per: j * self.per + 11]
-            Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
-            J = np.zeros((4, 4))
-            J[:3, :3] = 0.5 * np.trace(Io) * np.eye(3) - Io
-            J[:3, 3] = J[3, :3] = p[6:9]
-            J[3, 3] = p[9]
             # A margin of 1e-9 of the scale: a robot file's check sees no rounding-level negative eigenvalue.
-            e = np.linalg.eigvalsh(J) / self.scale[j] - 1e-9
+            e = np.linalg.eigvalsh(pseudo_inertia(p)) / self.scale[j] - 1e-9
             total += float(np.sum(np.minimum(e, 0.0) ** 2)) + min(0.0, p[10] / self.scale[j]) ** 2
         return total
 
@@ -886,42 +888,6 @@ def write_outputs(tmp, plant, exp, design, summary, rows, seeds, exact_err, t_kn
 OUR_FILES = ("experiment.toml", "table.md", "estimates.csv", "excitation.csv", MARKER)
 
 
-def publish(tmp, out, knots=True):
-    """tmp's files into out: a new folder renamed whole, or ours replaced in a folder we wrote."""
-    for name in os.listdir(tmp):
-        if name not in OUR_FILES or (name == "excitation.csv" and not knots):
-            os.remove(os.path.join(tmp, name))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp's 0700 would be the folder's
-    if not os.path.exists(out):
-        os.rename(tmp, out)
-        return
-    for name in OUR_FILES:
-        if os.path.exists(os.path.join(tmp, name)):
-            os.replace(os.path.join(tmp, name), os.path.join(out, name))
-        elif os.path.exists(os.path.join(out, name)):
-            os.remove(os.path.join(out, name))  # ours, from an earlier run: stale against this one
-    os.rmdir(tmp)
-
-
-def check_out(out, force):
-    if os.path.exists(out):
-        if not force:
-            raise BadInput(f"{out}: exists; give a new folder, or --force to replace a folder identify wrote")
-        if not os.path.isfile(os.path.join(out, MARKER)):
-            raise BadInput(f"{out}: not a folder identify wrote (no {MARKER}): refused, even with --force")
-
-
-def import_pumasim(path):
-    if path:
-        sys.path.insert(0, path)
-    else:
-        sys.path.insert(0, os.path.join(HERE, os.pardir, "build", "release", "python"))
-    import pumasim  # noqa: E402
-    return pumasim
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("experiment")
@@ -947,13 +913,13 @@ def main(argv=None):
             if bad or not ms:
                 raise BadInput(f"--methods: expected a comma-separated subset of {','.join(METHODS)}, got {a.methods}")
             exp["identification"]["methods"] = ms
-        out = os.path.abspath(a.out)
-        check_out(out, a.force)
-        pumasim = import_pumasim(a.module)
-        parent = os.path.dirname(out)
-        os.makedirs(parent, exist_ok=True)
-        tmp = tempfile.mkdtemp(prefix=".identify-", dir=parent)
-        try:
+        folder = files.ProgramFolder(a.out, OUR_FILES, MARKER, "identify")
+        why = folder.refusal(a.force)
+        if why:
+            raise BadInput(why)
+        out = folder.out
+        pumasim = files.import_pumasim(a.module, os.path.join(HERE, os.pardir, "build", "release", "python"))
+        with folder as tmp:
             started = time.perf_counter()
             mc = exp["monte_carlo"]
             seeds = list(range(mc["first_seed"], mc["first_seed"] + mc["seeds"]))
@@ -961,10 +927,8 @@ def main(argv=None):
             summary = summarise(plant, exp, rows)
             write_outputs(tmp, plant, exp, design, summary, rows, seeds, exact_err, t_knots, q_knots,
                           time.perf_counter() - started)
-            publish(tmp, out, knots=not a.no_knots)
-        finally:
-            if os.path.isdir(tmp):
-                shutil.rmtree(tmp)
+            if a.no_knots:
+                os.remove(os.path.join(tmp, "excitation.csv"))  # an earlier run's, if any, goes too
     except BadInput as e:
         print(f"identify: {e}", file=sys.stderr)
         return 2

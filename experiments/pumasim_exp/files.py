@@ -193,3 +193,74 @@ def private_copy(pumasim, work):
             time.sleep(2)
     os.replace(dest + ".tmp", dest)
     return dest
+
+
+# ---------------------------------------------------------------- a program's output folder
+
+class ProgramFolder:
+    """The output folder of a program that writes a fixed set of files (experiments/identify.py,
+    experiments/tune_piv.py): `out` is a new folder, or with force one the program wrote (its marker
+    file there). refusal() says why not, before any work. Within `with ProgramFolder(...) as tmp`, the
+    files are written into a temporary sibling folder; on leaving without an error it becomes `out`
+    (renamed whole, with the umask's mode rather than mkdtemp's 0700) or, into a folder the program
+    wrote, its files replace the earlier ones and those of `files` it did not write this time are
+    removed (stale against the new ones); another file there is left alone. On an error the
+    temporary folder is removed and `out` is untouched."""
+
+    def __init__(self, out, files, marker, program):
+        self.out, self.files, self.marker, self.program = os.path.abspath(out), tuple(files), marker, program
+        self.tmp = None
+
+    def refusal(self, force):
+        if not os.path.exists(self.out):
+            return None
+        if not force:
+            return f"{self.out}: exists; give a new folder, or --force to replace a folder {self.program} wrote"
+        if not os.path.isfile(os.path.join(self.out, self.marker)):
+            return f"{self.out}: not a folder {self.program} wrote (no {self.marker}): refused, even with --force"
+        return None
+
+    def __enter__(self):
+        import tempfile
+
+        parent = os.path.dirname(self.out)
+        os.makedirs(parent, exist_ok=True)
+        self.tmp = tempfile.mkdtemp(prefix=f".{self.program}-", dir=parent)
+        return self.tmp
+
+    def __exit__(self, kind, value, traceback):
+        try:
+            if kind is None:
+                self._publish()
+        finally:
+            if os.path.isdir(self.tmp):
+                shutil.rmtree(self.tmp)
+        return False
+
+    def _publish(self):
+        for name in os.listdir(self.tmp):
+            if name not in self.files:
+                os.remove(os.path.join(self.tmp, name))
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(self.tmp, 0o777 & ~umask)
+        if not os.path.exists(self.out):
+            os.rename(self.tmp, self.out)
+            return
+        for name in self.files:
+            new, old = os.path.join(self.tmp, name), os.path.join(self.out, name)
+            if os.path.exists(new):
+                os.replace(new, old)
+            elif os.path.exists(old):
+                os.remove(old)
+        os.rmdir(self.tmp)
+
+
+def import_pumasim(folder, default):
+    """The pumasim module from `folder` (default: `default`, the release build's python/)."""
+    import sys
+
+    sys.path.insert(0, folder or default)
+    import pumasim
+
+    return pumasim
