@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
+#include "models/dynamics/link_frame.hpp"
 
 namespace pumasim {
 
@@ -127,16 +127,9 @@ RobotModel JointTorqueRegressor::with_parameters(const RobotModel& model, const 
     // Io = I_c + m (c.c 1 - c c^T) (parallel axes), in joint frame j.
     const Eigen::Matrix3d Ic = Io - p[9] * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
     J.mass = p[9];
-    if (model.convention == DhConvention::kStandard) {
-      // joint_frames: com_joint = Rx(alpha) com + (a, 0, distal d), I_joint = Rx(alpha) I Rx(alpha)^T.
-      const Eigen::Matrix3d RF = Eigen::AngleAxisd(J.alpha, Eigen::Vector3d::UnitX()).toRotationMatrix();
-      const double distal_d = J.prismatic() ? 0.0 : J.d;
-      J.com = RF.transpose() * (c - Eigen::Vector3d(J.a, 0.0, distal_d));
-      J.inertia = RF.transpose() * Ic * RF;
-    } else {
-      J.com = c;
-      J.inertia = Ic;
-    }
+    const LinkInJointFrame L = link_in_joint_frame(model, j);  // joint_frames' move, undone
+    J.com = L.R.transpose() * (c - L.t);
+    J.inertia = L.R.transpose() * Ic * L.R;
     J.inertia = 0.5 * (J.inertia + J.inertia.transpose());
     int at = kLinkParameters;
     if (columns_.rotor) {

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "models/dynamics/link_frame.hpp"
+
 namespace pumasim {
 namespace {
 
@@ -146,6 +148,15 @@ void check_unused_parameter(const RobotModel& model, int j) {
 
 }  // namespace
 
+LinkInJointFrame link_in_joint_frame(const RobotModel& model, int j) {
+  LinkInJointFrame f;
+  if (model.convention != DhConvention::kStandard) return f;
+  const JointParams& J = model.joints[static_cast<std::size_t>(j)];
+  f.R = rot_x(J.alpha);
+  f.t = Eigen::Vector3d(J.a, 0, J.prismatic() ? 0.0 : J.d);
+  return f;
+}
+
 JointFrameData joint_frames(const RobotModel& model) {
   const int n = model.dof();
   JointFrameData f;
@@ -179,9 +190,9 @@ JointFrameData joint_frames(const RobotModel& model) {
         p = Eigen::Vector3d(P.a, 0, distal_d(P));
       }
       if (J.prismatic()) p += E.col(2) * J.offset;
-      const Eigen::Matrix3d RF = rot_x(J.alpha);
-      com = RF * J.com + Eigen::Vector3d(J.a, 0, distal_d(J));
-      I = RF * J.inertia * RF.transpose();
+      const LinkInJointFrame L = link_in_joint_frame(model, j);
+      com = L.R * J.com + L.t;
+      I = L.R * J.inertia * L.R.transpose();
     } else {
       // Joint frame j = DH frame j = DH frame j-1 * Rx(alpha) Tx(a) Tz(fixed slide)
       // Rz(fixed angle), then Rz(q) or Tz(q) (Rz and Tz commute).
