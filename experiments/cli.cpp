@@ -968,6 +968,7 @@ Json integrator_json(const IntegratorInfo& i) {
   j["jacobian_choice"] = i.jacobian_choice;
   j["finds_roots"] = i.finds_roots;
   j["set_valued_friction"] = i.set_valued_friction;
+  j["conservative_only"] = i.conservative_only;
   return j;
 }
 

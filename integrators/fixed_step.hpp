@@ -85,6 +85,9 @@ class FixedStep : public Integrator {
   }
 
   OdeSystem* sys_ = nullptr;
+  // Set by advance_step when the step failed (what, when): the step then
+  // reports it, with the state at the step's start.
+  std::string step_failure_;
   double t_ = 0, t0_ = 0, h_ = 0;  // now; the last step's start and size
   std::vector<double> x_, x0_, k1_, k2_, k3_, k4_, tmp_, g_, g_new_;
 
@@ -99,6 +102,12 @@ class FixedStep : public Integrator {
     t0_ = t_, h_ = h;
     x0_ = x_;
     advance_step(h, full);
+    if (!step_failure_.empty()) {  // the method's own (an implicit solve that did not converge)
+      std::string m;
+      m.swap(step_failure_);
+      x_ = x0_;
+      return {Outcome::kFailed, -1, m};
+    }
     t_ = (h == t_stop - t_) ? t_stop : t_ + h;
     ++stats_.steps;
     if (!full) restart_history();

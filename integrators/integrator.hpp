@@ -36,6 +36,27 @@ struct SetValuedSolve {
   bool converged = true;   // the iteration met its stopping rule
 };
 
+// A lossless, unforced mechanical system inside an OdeSystem (the symplectic
+// methods' view of it, symplectic_midpoint.hpp): the state holds generalized
+// coordinates q_j and velocities qd_j at components position(j) and
+// velocity(j), j < dof(); every other component is constant; and the motion
+// is Lagrange's equations for
+//   L(q, qd) = 1/2 qd' M(q) qd - V(q)
+// with no generalized force, so that, in the canonical coordinates
+// (q, p = M(q) qd), it is Hamilton's equations for
+//   Ham(q, p) = 1/2 p' M(q)^-1 p + V(q):  q' = M^-1 p,  p' = dL/dq(q, M^-1 p).
+class ConservativeMechanics {
+ public:
+  virtual ~ConservativeMechanics() = default;
+  virtual int dof() const = 0;
+  virtual int position(int j) const = 0;
+  virtual int velocity(int j) const = 0;
+  // M(q) (symmetric positive definite) into M, sized dof() x dof().
+  virtual void mass_matrix(const double* q, Eigen::MatrixXd& M) = 0;
+  // dL/dq at (q, qd), dof() values.
+  virtual void lagrangian_gradient(const double* q, const double* qd, double* dLdq) = 0;
+};
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;
@@ -98,6 +119,14 @@ class OdeSystem {
   // solve went.
   virtual SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s,
                                           const double* kin, double* r);
+
+  // The system as a conservative mechanical one (ConservativeMechanics), for
+  // the symplectic methods; nullptr, with the reason in why_not, when it is
+  // not one (the default).
+  virtual ConservativeMechanics* conservative_mechanics(std::string& why_not) {
+    why_not = "the system declares no conservative mechanical structure (q, qd, M(q), dL/dq)";
+    return nullptr;
+  }
 };
 
 struct IntegratorSettings;  // models/scene/scene.hpp: name, dt, rtol, atol

@@ -115,6 +115,7 @@ std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rosenbrock4(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_rodas4p(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_radau5(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_symplectic_midpoint(const IntegratorOptions&);
 }  // namespace detail
 
 namespace {
@@ -512,6 +513,30 @@ constexpr auto kIntegrators = std::to_array<IntegratorInfo>({
         .jacobian_choice = false,
         .finds_roots = false,
         .set_valued_friction = false,
+    },
+    // The implicit midpoint rule in (q, p): A-stable (|R(z)| = 1 on the
+    // imaginary axis), its nonlinear equations solved by fixed-point
+    // iteration (no Jacobian), a varying number of force evaluations per step.
+    {
+        .name = "symplectic-midpoint",
+        .summary =
+            "implicit midpoint rule in canonical coordinates (q, p = M(q) qd), iterated to round-off: symplectic and "
+            "symmetric, order 2, fixed step; lossless, unforced arms only (no controller, no friction)",
+        .make = &detail::make_symplectic_midpoint,
+        .kind = IntegratorKind::kFixedStep,
+        .order = 2,
+        .variable_order = false,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = std::numeric_limits<double>::infinity(),
+        .dense_order = 2,
+        .starter_steps = 0,
+        .uses_jacobian = false,
+        .exact_jacobian = false,
+        .jacobian_choice = false,
+        .finds_roots = false,
+        .set_valued_friction = false,
+        .conservative_only = true,
     },
 });
 

@@ -46,6 +46,11 @@ struct IntegratorInfo {
   bool finds_roots;          // locates the system's roots; the fixed-step methods check signs per step
   bool set_valued_friction;  // Coulomb friction as impulses of a coupled solve in each step, no events
                              // (moreau-jean; OdeSystem::solve_set_valued); the others locate stick/slip events
+  // Integrates only a lossless, unforced mechanical system
+  // (OdeSystem::conservative_mechanics: symplectic-midpoint) and refuses any
+  // other; the registry-wide tests on general ODEs and driven scenes leave it
+  // out (tests/integrator_helpers.hpp), its own tests cover it.
+  bool conservative_only = false;
 };
 
 // The capabilities of the entry's instances.

@@ -49,13 +49,15 @@ INTEGRATOR_TABLES = [
         ("dense_order", "dense order", "order of the dense output (continuous extension) over a step"),
         ("starter_steps", "starter steps", "multistep methods: steps of the starter after every (re)start"),
     ]),
-    ("Jacobian, roots and friction", [
+    ("Jacobian, roots, friction and scope", [
         ("uses_jacobian", "uses a Jacobian", "a Newton or Rosenbrock method"),
         ("exact_jacobian", "exact Jacobian", "takes the system's Jacobian (else its own difference quotients)"),
         ("jacobian_choice", "Jacobian choice", "either, as `--jacobian exact|differences` says"),
         ("finds_roots", "finds roots", "locates the system's roots (the fixed-step methods check signs per step)"),
         ("set_valued_friction", "set-valued friction", "Coulomb friction as impulses of a coupled solve in each "
                                                         "step, no events (the others locate stick/slip events)"),
+        ("conservative_only", "conservative only", "integrates only a lossless, unforced arm (no controller, no "
+                                                   "friction) and refuses any other scene"),
     ]),
 ]
 BACKEND_FIELDS = [("summary", "summary", "what the back-end computes and how")]

@@ -8,6 +8,8 @@
 #   sweeps      every sweep in experiments/sweeps/ (work-precision on the paper's
 #               scenes and the Stanford arm's tracking scene, the dynamics back-ends
 #               inside the ODE, the stiff scenes, stick-slip)
+#   energygrowth  the lossless arm's energy error over 10^4 s, symplectic-midpoint against RK4 and
+#               the adaptive methods: drift or bounded (experiments/energy_growth.py)
 #   stiffness   the stiffness tables (experiments/stiffness_table.py)
 #   planning    the planning methods (experiments/planning.py)
 #   order       the observed orders (experiments/observed_order.py) and their
@@ -78,7 +80,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
-all=(sweeps stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
+all=(sweeps energygrowth stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
      partitioned filippov panda bench identification tuning ensembles literature report)
 named_only=(fuzz cost ci slurm abjacobian)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
@@ -111,6 +113,9 @@ stage_sweeps() {
   done
   /usr/bin/python3 experiments/friction_decision.py   # the friction axis: which method for which law
 }
+# writes: results/energy_long_time/energy_growth.csv results/energy_long_time/energy_growth.md
+# writes: results/energy_long_time/energy_growth.png
+stage_energygrowth() { /usr/bin/python3 experiments/energy_growth.py; }
 # writes: results/stiffness/
 stage_stiffness() { /usr/bin/python3 experiments/stiffness_table.py; }
 # writes: results/planning/

@@ -42,10 +42,30 @@ class PlantSystem final : public OdeSystem {
   void set_valued_directions(double, const double* x, double* B) override { p_.set_valued_directions(x, B); }
   SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s, const double* kin,
                                   double* r) override;
+  // A lossless, unforced arm's mechanics (why_not_conservative, Plant::lagrangian_gradient).
+  ConservativeMechanics* conservative_mechanics(std::string& why_not) override {
+    why_not = why_not_conservative(p_.config());
+    return why_not.empty() ? &mechanics_ : nullptr;
+  }
 
  private:
+  class Mechanics final : public ConservativeMechanics {
+   public:
+    explicit Mechanics(Plant& p) : p_(p) {}
+    int dof() const override { return p_.layout().n; }
+    int position(int j) const override { return p_.layout().q + j; }
+    int velocity(int j) const override { return p_.layout().qd + j; }
+    void mass_matrix(const double* q, Eigen::MatrixXd& M) override { p_.mass_matrix(q, M); }
+    void lagrangian_gradient(const double* q, const double* qd, double* g) override {
+      p_.lagrangian_gradient(q, qd, g);
+    }
+
+   private:
+    Plant& p_;
+  };
   Plant& p_;
   std::vector<int> mode_;  // the solve's modes (not used by the caller)
+  Mechanics mechanics_{p_};
 };
 
 struct RunResult {

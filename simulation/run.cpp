@@ -99,6 +99,12 @@ IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adapt
     if (a.rtol && !a.atol) io.atol = sc.integrator.atol = kAtolPerRtol * *a.rtol;
   }
   if (a.jacobian) io.exact_jacobian = jacobian_choice(sc.integrator.name, info, *a.jacobian);
+  if (info.conservative_only) {
+    if (const std::string why = why_not_conservative(sc.plant); !why.empty()) {
+      throw std::invalid_argument(sc.integrator.name +
+                                  " integrates lossless, unforced arms only, and this scene is not one: " + why);
+    }
+  }
   if (info.set_valued_friction && sc.plant.energy_ledger) {
     for (const FrictionParams& f : sc.plant.friction) {
       if (is_set_valued(f.model) && (f.static_torque > 0 || f.kinetic_torque > 0)) {

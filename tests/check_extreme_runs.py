@@ -80,9 +80,11 @@ def scenes(t_end):
 
 
 def integrators(pumasim):
-    """(name, fixed step?) of every registry entry."""
+    """(name, fixed step?) of every registry entry for general scenes (not those that integrate only a
+    lossless, unforced arm: conservative_only; they refuse these driven scenes before running)."""
     p = subprocess.run([pumasim, "integrators", "--json"], capture_output=True, text=True, check=True)
-    return [(entry["name"], entry["kind"] == "fixed-step") for entry in json.loads(p.stdout)]
+    return [(entry["name"], entry["kind"] == "fixed-step") for entry in json.loads(p.stdout)
+            if not entry["conservative_only"]]
 
 
 def run_one(pumasim, work, scene, method, t_end):

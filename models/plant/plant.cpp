@@ -81,6 +81,34 @@ void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
   }
 }
 
+void Plant::mass_matrix(const double* q, Eigen::MatrixXd& M) {
+  PlantWorkspace<double>& w = *evaluator_;
+  w.last_valid = false;  // its scratch no longer holds the last f's
+  for (int j = 0; j < layout().n; ++j) w.q[j] = q[j];
+  w.backend->mass_matrix(w.q, M);
+}
+
+void Plant::lagrangian_gradient(const double* q, const double* qd, double* dLdq) {
+  const int n = layout().n;
+  if (!dual_evaluator_) {
+    dual_evaluator_ = model_->make_workspace<Dual>();
+    jx_.resize(static_cast<std::size_t>(size()));
+    jf_.resize(static_cast<std::size_t>(size()));
+  }
+  PlantWorkspace<Dual>& wd = *dual_evaluator_;
+  for (int j = 0; j < n; ++j) wd.q[j] = Dual(q[j], qd[j]);
+  wd.backend->mass_matrix(wd.q, wd.H);  // H and, in the tangents, Mdot
+  PlantWorkspace<double>& w = *evaluator_;
+  w.last_valid = false;
+  for (int j = 0; j < n; ++j) w.q[j] = q[j], w.qd[j] = qd[j];
+  w.backend->bias(w.q, w.qd, w.h);
+  for (int i = 0; i < n; ++i) {
+    double mdot_qd = 0;
+    for (int k = 0; k < n; ++k) mdot_qd += wd.H(i, k).deriv() * qd[k];
+    dLdq[i] = mdot_qd - w.h[i];
+  }
+}
+
 int Plant::time_derivative(double t, const double* x, double* dfdt) {
   const int m = size();
   if (!model_->depends_on_time()) {

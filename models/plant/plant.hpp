@@ -154,6 +154,17 @@ class Plant {
   }
   double magnetic_energy(const double* x) const { return model_->magnetic_energy(x); }
 
+  // The lossless, unforced arm's mechanics (why_not_conservative(config())
+  // empty; ConservativeMechanics, integrators/integrator.hpp): M(q), the
+  // back-end's mass matrix (rotor inertia included), and
+  //   dL/dq = Mdot qd - h(q, qd),
+  // from Lagrange's equations with no force, d/dt (M qd) - dL/dq = 0, and the
+  // back-end's M qdd + h = 0; Mdot = sum_k dM/dq_k qd_k is one pass of the
+  // back-end's mass matrix on dual numbers (q + eps qd). Allocation-free
+  // after the first call.
+  void mass_matrix(const double* q, Eigen::MatrixXd& M);
+  void lagrangian_gradient(const double* q, const double* qd, double* dLdq);
+
   // Flange position for the state x (held joints included) [m].
   Eigen::Vector3d tool_position(const double* x) const;
   // Flange frame for the state x: orientation R (base frame) and position p [m].

@@ -101,6 +101,19 @@ PlantConfig PlantModel::checked(PlantConfig c) {
   return c;
 }
 
+std::string why_not_conservative(const PlantConfig& c) {
+  if (c.controller != ControllerMode::kNone) {
+    return "the arm is driven (a [controller] and its drive); expected a passive arm: no [controller], no [drive]";
+  }
+  for (std::size_t j = 0; j < c.friction.size(); ++j) {
+    if (!c.friction[j].model.none()) {
+      return "joint " + std::to_string(j + 1) + " has friction (friction.model = \"" + to_string(c.friction[j].model) +
+             "\"); expected friction.model = \"none\": a lossless arm";
+    }
+  }
+  return {};
+}
+
 void PlantModel::validate(const PlantConfig& config) {
   const PlantConfig c = checked(config);
   const std::string why = find_backend(c.backend).why_unsupported(simulated_robot(c.robot, c.n, c.q_held));

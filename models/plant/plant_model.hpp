@@ -120,6 +120,13 @@ RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::VectorXd
 // The simulated joints' angles at t = 0: the reference's start, or q0.
 Eigen::VectorXd start_pose(const PlantConfig& c);
 
+// Empty when the configuration is a lossless, unforced arm -- passive (no
+// controller, hence no drive) and no joint with friction: Lagrange's
+// equations with no force, whose motion conserves the mechanical energy (the
+// symplectic methods' systems, Plant::lagrangian_gradient); else why not,
+// naming the scene key.
+std::string why_not_conservative(const PlantConfig& c);
+
 struct DriveSignals {
   double u = 0;   // controller output (DAC) [V]
   double ea = 0;  // amplifier output voltage [V]
