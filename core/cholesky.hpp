@@ -23,6 +23,14 @@ namespace pumasim {
 // column by column (the gaxpy form of Golub & Van Loan, Matrix Computations,
 // sec. 4.2; section quoted from memory),
 // so that every inner loop reads contiguous memory and vectorises.
+// How many factorisations this thread has made (every scalar and size): for
+// the tests that show a computation factors no mass matrix (the plant's
+// residual form, tests/test_ida.cpp). One increment per factorisation.
+inline long& cholesky_factorisations() {
+  thread_local long count = 0;
+  return count;
+}
+
 template <class S, int N>
 class Cholesky {
  public:
@@ -33,6 +41,7 @@ class Cholesky {
 
   template <class M>
   void factor(const M& H) {
+    ++cholesky_factorisations();
     if constexpr (N == Eigen::Dynamic) {
       factor_columns(H);
     } else {

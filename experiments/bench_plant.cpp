@@ -13,7 +13,11 @@
 // joints, redundant: the reference's inverse kinematics follows the
 // redundancy rule), and random12, a random 12-joint chain
 // (random_chain(12, 12)) as planar2_passive's passive arm with viscous
-// friction (no reference: no rhs-exact-reference row).
+// friction (no reference: no rhs-exact-reference row). residual/<scene>:
+// the plant's implicit form F(t, x, x') (Plant::residual: inverse dynamics
+// on the speeds' rows, no factorisation of H) at the same points with x' =
+// f(t0, x), each call at a new time as rhs's; its counter ratio_to_rhs is its
+// time over rhs/<scene>'s, which runs first.
 //
 //   bench_plant --benchmark_out=results/bench/plant.json --benchmark_out_format=json
 #include <benchmark/benchmark.h>
@@ -61,7 +65,8 @@ pumasim::Scene load(int k) {
                               "friction.viscous=0.01", "initial.q=[0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3, 0.1, -0.2, 0.3]"});
 }
 
-double fd_ns[kSceneCount] = {};  // per scene, from the fd benchmark
+double fd_ns[kSceneCount] = {};   // per scene, from the fd benchmark
+double rhs_ns[kSceneCount] = {};  // and from the rhs benchmark (the table's)
 
 double per_call_ns(benchmark::State& state, std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double, std::nano>(d).count() / static_cast<double>(state.iterations());
@@ -102,8 +107,28 @@ void rhs(benchmark::State& state, int k, bool table) {
     benchmark::ClobberMemory();
   }
   const double ns = per_call_ns(state, std::chrono::steady_clock::now() - start);
+  if (table) rhs_ns[k] = ns;
   state.counters["n"] = plant.layout().n;
   if (fd_ns[k] > 0) state.counters["ratio_to_fd"] = ns / fd_ns[k];
+}
+
+void residual(benchmark::State& state, int k) {
+  const pumasim::Scene sc = load(k);
+  pumasim::Plant plant(sc.plant);
+  std::vector<double> x(plant.size()), xp(plant.size()), r(plant.size());
+  plant.initial_state(x.data());
+  plant.rhs(0.5, x.data(), xp.data());
+  double t = 0.5;
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    t = t < 1.5 ? t + 1e-5 : 0.5;
+    plant.residual(t, x.data(), xp.data(), r.data());
+    benchmark::DoNotOptimize(r.data());
+    benchmark::ClobberMemory();
+  }
+  const double ns = per_call_ns(state, std::chrono::steady_clock::now() - start);
+  state.counters["n"] = plant.layout().n;
+  if (rhs_ns[k] > 0) state.counters["ratio_to_rhs"] = ns / rhs_ns[k];
 }
 
 }  // namespace
@@ -113,6 +138,9 @@ int main(int argc, char** argv) {
     const std::string name = kScenes[k].name;
     benchmark::RegisterBenchmark(("fd/" + name).c_str(), fd, k)->Unit(benchmark::kNanosecond);
     benchmark::RegisterBenchmark(("rhs/" + name).c_str(), rhs, k, true)->Unit(benchmark::kNanosecond);
+    if (pumasim::why_no_implicit_form(load(k).plant).empty()) {  // the paper's rule has none
+      benchmark::RegisterBenchmark(("residual/" + name).c_str(), residual, k)->Unit(benchmark::kNanosecond);
+    }
     if (kScenes[k].reference) {
       benchmark::RegisterBenchmark(("rhs-exact-reference/" + name).c_str(), rhs, k, false)
           ->Unit(benchmark::kNanosecond);

@@ -969,6 +969,7 @@ Json integrator_json(const IntegratorInfo& i) {
   j["finds_roots"] = i.finds_roots;
   j["set_valued_friction"] = i.set_valued_friction;
   j["conservative_only"] = i.conservative_only;
+  j["residual_form"] = i.residual_form;
   return j;
 }
 

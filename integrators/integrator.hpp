@@ -57,6 +57,19 @@ class ConservativeMechanics {
   virtual void lagrangian_gradient(const double* q, const double* qd, double* dLdq) = 0;
 };
 
+// The system in implicit form F(t, x, x') = 0, with the solutions of
+// x' = f(t, x) (the residual methods' view of it: ida). Its rows need not be
+// x' - f: a mechanical system's may be M(q) qdd + h(q, qd) - tau, one
+// inverse-dynamics call with no factorisation of M.
+class ImplicitForm {
+ public:
+  virtual ~ImplicitForm() = default;
+  // F(t, x, xp) into r (size() values).
+  virtual void residual(double t, const double* x, const double* xp, double* r) = 0;
+  // The Newton matrix dF/dx + c dF/dxp at (t, x, xp) into J (size() x size()).
+  virtual void newton_matrix(double t, const double* x, const double* xp, double c, Eigen::MatrixXd& J) = 0;
+};
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;
@@ -119,6 +132,15 @@ class OdeSystem {
   // solve went.
   virtual SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s,
                                           const double* kin, double* r);
+
+  // The system's own implicit form (ImplicitForm), for the residual methods;
+  // nullptr with an empty refusal: it has none, and they integrate
+  // F = x' - f(t, x); nullptr with a refusal: no residual form of it can be
+  // integrated, and why (they refuse the system).
+  virtual ImplicitForm* implicit_form(std::string& refusal) {
+    refusal.clear();
+    return nullptr;
+  }
 
   // The system as a conservative mechanical one (ConservativeMechanics), for
   // the symplectic methods; nullptr, with the reason in why_not, when it is

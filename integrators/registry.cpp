@@ -109,6 +109,7 @@ std::unique_ptr<Integrator> make_arkode_dirk(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_arkode_imex(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_bdf(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_cvode_adams(const IntegratorOptions&);
+std::unique_ptr<Integrator> make_ida(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_moreau_jean(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_moreau_jean_075(const IntegratorOptions&);
 std::unique_ptr<Integrator> make_odeint_dopri5(const IntegratorOptions&);
@@ -374,6 +375,28 @@ constexpr auto kIntegrators = std::to_array<IntegratorInfo>({
         .jacobian_choice = false,
         .finds_roots = false,
         .set_valued_friction = false,
+    },
+    // IDA: the same BDF family as cvode-bdf, on the system's implicit form.
+    {
+        .name = "ida",
+        .summary = "SUNDIALS IDA, variable-order BDF 1-5 on the implicit form F(t, x, x') = 0 (the plant's: inverse "
+                   "dynamics M qdd + h - tau on the speeds' rows, no factorisation of M in the residual), Newton with "
+                   "a dense LU, roots; adaptive",
+        .make = &detail::make_ida,
+        .kind = IntegratorKind::kAdaptive,
+        .order = 5,
+        .variable_order = true,
+        .implicit = true,
+        .rhs_per_step = 0,
+        .real_stability = 0.0,
+        .dense_order = 5,
+        .starter_steps = 0,
+        .uses_jacobian = true,
+        .exact_jacobian = true,
+        .jacobian_choice = true,
+        .finds_roots = true,
+        .set_valued_friction = false,
+        .residual_form = true,
     },
     // Moreau-Jean: linearly implicit theta = 1, stable on the whole negative
     // real axis (real_stability: infinity); one f_smooth per step (a

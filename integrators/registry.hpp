@@ -51,6 +51,9 @@ struct IntegratorInfo {
   // other; the registry-wide tests on general ODEs and driven scenes leave it
   // out (tests/integrator_helpers.hpp), its own tests cover it.
   bool conservative_only = false;
+  // Integrates the system's implicit form (OdeSystem::implicit_form: ida),
+  // F = x' - f where it has none, and refuses a system that refuses one.
+  bool residual_form = false;
 };
 
 // The capabilities of the entry's instances.

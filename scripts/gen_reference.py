@@ -58,6 +58,8 @@ INTEGRATOR_TABLES = [
                                                         "step, no events (the others locate stick/slip events)"),
         ("conservative_only", "conservative only", "integrates only a lossless, unforced arm (no controller, no "
                                                    "friction) and refuses any other scene"),
+        ("residual_form", "residual form", "integrates the plant's implicit form (inverse dynamics on the speeds' "
+                                           "rows) and refuses a scene without one (the paper's rule, Karnopp)"),
     ]),
 ]
 BACKEND_FIELDS = [("summary", "summary", "what the back-end computes and how")]

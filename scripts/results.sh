@@ -10,6 +10,8 @@
 #               inside the ODE, the stiff scenes, stick-slip)
 #   energygrowth  the lossless arm's energy error over 10^4 s, symplectic-midpoint against RK4 and
 #               the adaptive methods: drift or bounded (experiments/energy_growth.py)
+#   implicit    IDA on the plant's implicit form (inverse dynamics on the speeds' rows) against CVODE's
+#               BDF on the ODE, per evaluation and per run (experiments/implicit_form.py)
 #   stiffness   the stiffness tables (experiments/stiffness_table.py)
 #   planning    the planning methods (experiments/planning.py)
 #   order       the observed orders (experiments/observed_order.py) and their
@@ -80,7 +82,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
-all=(sweeps energygrowth stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
+all=(sweeps energygrowth implicit stiffness planning order testset outputgrid extreme rosenbrock buildspread paper sensitivity
      partitioned filippov panda bench identification tuning ensembles literature report)
 named_only=(fuzz cost ci slurm abjacobian)
 own_builds=(fuzz ci)  # stages that need neither release build: they build (or clone) what they run
@@ -116,6 +118,8 @@ stage_sweeps() {
 # writes: results/energy_long_time/energy_growth.csv results/energy_long_time/energy_growth.md
 # writes: results/energy_long_time/energy_growth.png
 stage_energygrowth() { /usr/bin/python3 experiments/energy_growth.py; }
+# writes: results/implicit_form/
+stage_implicit() { /usr/bin/python3 experiments/implicit_form.py; }
 # writes: results/stiffness/
 stage_stiffness() { /usr/bin/python3 experiments/stiffness_table.py; }
 # writes: results/planning/
@@ -268,7 +272,7 @@ scripts/build.sh > /dev/null   # the dependencies, and the native build (buildsp
 scripts/configure.sh portable > /dev/null
 cmake --build --preset portable -j "$(nproc)" > /dev/null
 mkdir -p build/results-bin
-for b in pumasim testset rosenbrock_local_error bench_dynamics bench_identification; do
+for b in pumasim testset rosenbrock_local_error bench_dynamics bench_identification bench_plant; do
   cp "build/portable/bin/$b" "build/results-bin/$b.tmp" && mv "build/results-bin/$b.tmp" "build/results-bin/$b"
 done
 cp build/release/bin/pumasim build/results-bin/pumasim-native.tmp && mv build/results-bin/pumasim-native.tmp build/results-bin/pumasim-native

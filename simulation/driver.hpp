@@ -42,6 +42,11 @@ class PlantSystem final : public OdeSystem {
   void set_valued_directions(double, const double* x, double* B) override { p_.set_valued_directions(x, B); }
   SetValuedSolve solve_set_valued(int k, const double* W, const double* b, const double* s, const double* kin,
                                   double* r) override;
+  // The plant's residual form (PlantModel::residual), or the reason it has none.
+  ImplicitForm* implicit_form(std::string& refusal) override {
+    refusal = why_no_implicit_form(p_.config());
+    return refusal.empty() ? &implicit_ : nullptr;
+  }
   // A lossless, unforced arm's mechanics (why_not_conservative, Plant::lagrangian_gradient).
   ConservativeMechanics* conservative_mechanics(std::string& why_not) override {
     why_not = why_not_conservative(p_.config());
@@ -63,9 +68,21 @@ class PlantSystem final : public OdeSystem {
    private:
     Plant& p_;
   };
+  class Implicit final : public ImplicitForm {
+   public:
+    explicit Implicit(Plant& p) : p_(p) {}
+    void residual(double t, const double* x, const double* xp, double* r) override { p_.residual(t, x, xp, r); }
+    void newton_matrix(double t, const double* x, const double*, double c, Eigen::MatrixXd& J) override {
+      p_.residual_newton_matrix(t, x, c, J);
+    }
+
+   private:
+    Plant& p_;
+  };
   Plant& p_;
   std::vector<int> mode_;  // the solve's modes (not used by the caller)
   Mechanics mechanics_{p_};
+  Implicit implicit_{p_};
 };
 
 struct RunResult {

@@ -15,7 +15,10 @@ Each run must end within --max-wall plus a start-up allowance, with
 - exit status 0, stats.json ok, t_reached = t_end and every state of the
   last trajectory row finite; or
 - exit status 1, stats.json not ok, and a failure that names a time
-  ("t = <number>") and a state component (a name of the scene's state).
+  ("t = <number>") and a state component (a name of the scene's state); or
+- exit status 2 before the run, from a method that integrates the plant's
+  residual form (ida), on a scene whose friction law has none (the paper's
+  rule): the refusal names the joint and the law ("refused").
 
 Anything else (a crash, a hang, exit status 2 on a valid scene, a non-finite
 state reported ok, a failure naming no time or state) fails the test. A
@@ -105,7 +108,9 @@ def run_one(pumasim, work, scene, method, t_end):
 
 
 def judge(p, out, t_end):
-    """(kind, detail) of a finished run: 'ok', a failure kind, or 'bad: ...'."""
+    """(kind, detail) of a finished run: 'ok', a failure kind, 'refused' or 'bad: ...'."""
+    if p.returncode == 2 and "integrates the plant's residual form, which this scene has not: joint" in p.stderr:
+        return "refused", p.stderr.strip()[-200:]
     if p.returncode not in (0, 1):
         return "bad", f"exit status {p.returncode}: {p.stderr.strip()[-400:]}"
     try:

@@ -79,6 +79,7 @@ TEST(CliRegistries, IntegratorsJsonIsTheRegistry) {
     EXPECT_EQ(j["implicit"], i.implicit) << i.name;
     EXPECT_EQ(j["set_valued_friction"], i.set_valued_friction) << i.name;
     EXPECT_EQ(j["conservative_only"], i.conservative_only) << i.name;
+    EXPECT_EQ(j["residual_form"], i.residual_form) << i.name;
     EXPECT_EQ(j["stability_region"], i.stable_at != nullptr) << i.name;
     if (std::isfinite(i.real_stability)) {
       EXPECT_EQ(j["real_stability"], i.real_stability) << i.name;

@@ -352,7 +352,8 @@ TEST(JacobianChoice, ExactByDefaultDifferencesWhenAsked) {
   const std::map<std::string, std::string> documented = {
       {"cvode-bdf", "ED"},   {"cvode-adams", "ED"},        {"arkode-dirk", "ED"},
       {"arkode-imex", "DD"}, {"odeint-rosenbrock4", "EE"}, {"odeint-rodas4p", "EE"},
-      {"moreau-jean", "EE"}, {"moreau-jean-075", "EE"},    {"radau5", "EE"}};
+      {"moreau-jean", "EE"}, {"moreau-jean-075", "EE"},    {"radau5", "EE"},
+      {"ida", "ED"}};
   int seen = 0;
   for (const std::string& name : integrator_names()) {
     IntegratorOptions o = fixed_step(1e-3);

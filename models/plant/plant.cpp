@@ -81,6 +81,20 @@ void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
   }
 }
 
+void Plant::residual_newton_matrix(double t, const double* x, double c, Eigen::MatrixXd& J) {
+  const int m = size(), n = layout().n, qd = layout().qd;
+  jacobian_exact(t, x, J);
+  J *= -1.0;
+  J.diagonal().array() += c;
+  if (newton_H_.rows() != n) newton_H_.resize(n, n), newton_rows_.resize(n, m);
+  mass_matrix(x + layout().q, newton_H_);
+  newton_rows_.noalias() = newton_H_ * J.middleRows(qd, n);
+  for (int j = 0; j < n; ++j) {
+    if (model_->friction().stuck(j, context_.modes)) continue;  // its row stays c e
+    J.row(qd + j) = newton_rows_.row(j);
+  }
+}
+
 void Plant::mass_matrix(const double* q, Eigen::MatrixXd& M) {
   PlantWorkspace<double>& w = *evaluator_;
   w.last_valid = false;  // its scratch no longer holds the last f's

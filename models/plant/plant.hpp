@@ -154,6 +154,20 @@ class Plant {
   }
   double magnetic_energy(const double* x) const { return model_->magnetic_energy(x); }
 
+  // The implicit form (why_no_implicit_form(config()) empty;
+  // PlantModel::residual): F(t, x, xp), no factorisation of H.
+  // Allocation-free.
+  void residual(double t, const double* x, const double* xp, double* r) {
+    model_->residual(context_, *evaluator_, t, x, xp, r);
+  }
+  // Its Newton matrix dF/dx + c dF/dxp: D (c I - df/dx), df/dx the exact
+  // Jacobian and D the identity but on the speeds' rows, where it is H(q)
+  // (F_qd = H (xp_qd - f_qd): exact at xp = f, the consistent point, and
+  // off it by (dH/dx)(xp_qd - f_qd), which Newton's iteration tolerates);
+  // the rows of joints the hybrid model holds stay c e. Allocation-free
+  // after the first call.
+  void residual_newton_matrix(double t, const double* x, double c, Eigen::MatrixXd& J);
+
   // The lossless, unforced arm's mechanics (why_not_conservative(config())
   // empty; ConservativeMechanics, integrators/integrator.hpp): M(q), the
   // back-end's mass matrix (rotor inertia included), and
@@ -196,6 +210,7 @@ class Plant {
   std::vector<double> ft_[2];         // time_derivative scratch
   std::vector<Dual> jx_, jf_;         // jacobian_per_column's x and f
   std::vector<Tangent> tx_, tf_;      // jacobian's x and f
+  Eigen::MatrixXd newton_H_, newton_rows_;  // residual_newton_matrix's scratch
 };
 
 }  // namespace pumasim

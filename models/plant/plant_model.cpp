@@ -101,6 +101,20 @@ PlantConfig PlantModel::checked(PlantConfig c) {
   return c;
 }
 
+std::string why_no_implicit_form(const PlantConfig& c) {
+  for (std::size_t j = 0; j < c.friction.size(); ++j) {
+    const FrictionModel m = c.friction[j].model;
+    if (needs_applied_torque(m) && !has_stick_slip_events(m)) {
+      return "joint " + std::to_string(j + 1) + "'s friction law (friction.model = \"" + to_string(m) +
+             "\") switches at rest inside a speed band on the torque applied there, with no event: its friction "
+             "depends on the accelerations' own solve (h, then H^-1), and it jumps at the band's edges where no root "
+             "function tells the integrator; the residual form has neither. Expected a law with events (\"hybrid\") "
+             "or a smooth one";
+    }
+  }
+  return {};
+}
+
 std::string why_not_conservative(const PlantConfig& c) {
   if (c.controller != ControllerMode::kNone) {
     return "the arm is driven (a [controller] and its drive); expected a passive arm: no [controller], no [drive]";
@@ -286,6 +300,21 @@ template <class S>
 void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
                                             S* xdot) const {
   const bool all = part == FrictionPart::kAll;
+  const bool need_bias = friction_torques(c, w, part, x, xdot);
+  PUMASIM_PROFILE_PART(kDynamics);
+  if (all && friction_.has_events()) {
+    body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, c.modes); });
+  } else {
+    body_.accelerations(w, need_bias);
+  }
+}
+
+// Friction and the joint torques w.tau (the friction states' rates into
+// xdot); true when it formed w.h = bias(q, qd) (a law that reads the applied torque).
+template <class S>
+bool PlantModel::friction_torques(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
+                                  S* xdot) const {
+  const bool all = part == FrictionPart::kAll;
   const bool need_bias = all && friction_.needs_applied_torque();
   if (need_bias) {
     PUMASIM_PROFILE_PART(kDynamics);
@@ -317,11 +346,37 @@ void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspac
     w.tau[j] = S(Z) * (w.tm[j] - tf);
     if (ledger_.on()) w.p_f += tf * wm;  // a stuck hybrid joint has wm = 0: no loss
   }
-  PUMASIM_PROFILE_PART(kDynamics);
-  if (all && friction_.has_events()) {
-    body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, c.modes); });
-  } else {
-    body_.accelerations(w, need_bias);
+  return need_bias;
+}
+
+// F(t, x, xp) = xp - f(t, x) on every row but the speeds', where it is the
+// inverse dynamics ID(q, qd, qdd = xp_qd) - tau (one back-end call, no
+// factorisation of H), or qdd_j for a joint the hybrid model holds (its
+// friction is whatever holds it, which the other rows do not need).
+void PlantModel::residual(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, const double* xp,
+                          double* r) const {
+  w.last_valid = false;
+  body_.load(layout_, x, w);
+  controller_output(c, w, t, x);
+  ledger_.reset(w);
+  drive(x, r, w);
+  friction_torques(c, w, FrictionPart::kAll, x, r);
+  const int n = layout_.n;
+  for (int j = 0; j < n; ++j) w.qdd[j] = xp[layout_.qd + j];
+  {
+    PUMASIM_PROFILE_PART(kDynamics);
+    w.backend->inverse_dynamics(w.q, w.qd, w.qdd, w.id);
+  }
+  body_.store(layout_, w, r);  // q' = qd (the speeds' rows are replaced below)
+  ledger_.store(layout_, w, r);
+  if (cfg_.controller == ControllerMode::kContinuous) {
+    PUMASIM_PROFILE_PART(kController);
+    std::visit([&](const auto& law) { law.rates(reference(c, w, t), x, layout_, w, r); }, controller_);
+  }
+  for (int i = 0; i < layout_.size; ++i) r[i] = xp[i] - r[i];
+  const bool events = friction_.has_events();
+  for (int j = 0; j < n; ++j) {
+    r[layout_.qd + j] = events && friction_.stuck(j, c.modes) ? xp[layout_.qd + j] : w.id[j] - w.tau[j];
   }
 }
 

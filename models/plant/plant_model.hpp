@@ -120,6 +120,12 @@ RobotModel simulated_robot(const RobotModel& robot, int n, const Eigen::VectorXd
 // The simulated joints' angles at t = 0: the reference's start, or q0.
 Eigen::VectorXd start_pose(const PlantConfig& c);
 
+// Empty when the plant has a residual form (PlantModel::residual): every
+// friction law either smooth or with stick/slip events; else why not,
+// naming the joint and the law (the paper's rule and Karnopp's switch inside
+// a speed band on the applied torque, without events).
+std::string why_no_implicit_form(const PlantConfig& c);
+
 // Empty when the configuration is a lossless, unforced arm -- passive (no
 // controller, hence no drive) and no joint with friction: Lagrange's
 // equations with no force, whose motion conserves the mechanical energy (the
@@ -195,6 +201,12 @@ class PlantModel {
            FrictionPart part = FrictionPart::kAll) const {
     eval(c, w, part, t, x, xdot);
   }
+  // The implicit form F(t, x, xp) = 0 of f under c (why_no_implicit_form
+  // empty): xp - f on every row but the speeds', there inverse dynamics
+  // minus the joint torques, ID(q, qd, xp_qd) - tau (xp_qd for a joint the
+  // hybrid model holds). No factorisation of H. Allocation-free.
+  void residual(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, const double* xp,
+                double* r) const;
   // The reference the controller uses at t under c (held set-point or at t).
   template <class S>
   const ReferenceSample& reference(const PlantContext& c, PlantWorkspace<S>& w, double t) const;
@@ -255,6 +267,8 @@ class PlantModel {
   template <class S>
   void friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
                                   S* xdot) const;
+  template <class S>
+  bool friction_torques(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x, S* xdot) const;
   void hold_gravity(PlantContext& c, PlantWorkspace<double>& w, const Eigen::VectorXd& q, double* x) const;
 
   const PlantConfig cfg_;

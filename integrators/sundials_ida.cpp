@@ -1,0 +1,266 @@
+// SUNDIALS IDA (6.x API) behind the Integrator interface: variable-order BDF
+// (1-5) on the system's implicit form F(t, x, x') = 0 (OdeSystem::implicit_form;
+// a system without one: F = x' - f(t, x)), Newton iterations with a dense
+// direct linear solver on IDA's matrix dF/dx + c dF/dx' -- the system's own
+// (ImplicitForm::newton_matrix; without a form, c I - df/dx from the
+// system's Jacobian) or, with exact_jacobian false, IDA's difference
+// quotients of F. Roots are IDA's (IDARootInit). A system that refuses a
+// residual form (implicit_form's reason) is refused here.
+//
+// The C callbacks catch every exception: a non-finite residual is reported as
+// recoverable (IDA shrinks the step), anything else as fatal and rethrown
+// after IDASolve returns. A failure names IDA's flag, the time, and the
+// state components with the largest weighted local error estimate.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+#include <string>
+
+#include <ida/ida.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "integrators/integrator.hpp"
+#include "integrators/sundials_common.hpp"
+#include "integrators/sundials_dense_lu.hpp"
+
+#if SUNDIALS_VERSION_MAJOR != 6
+#error "pumasim's IDA adapter is written for the SUNDIALS 6.x API"
+#endif
+
+namespace pumasim {
+namespace {
+
+class Ida final : public Integrator {
+ public:
+  explicit Ida(const IntegratorOptions& o) : Integrator(o.max_steps), opt_(o) {
+    if (!(o.rtol > 0) || !(o.atol > 0)) throw std::invalid_argument("ida: expected rtol > 0 and atol > 0");
+    if (SUNContext_Create(nullptr, &ctx_) != 0) throw std::runtime_error("ida: SUNContext_Create failed");
+  }
+  ~Ida() override {
+    release();
+    SUNContext_Free(&ctx_);
+  }
+
+  const char* name() const override { return "ida"; }
+  IntegratorCapabilities capabilities() const override {
+    IntegratorCapabilities c;
+    c.adaptive = true;
+    c.order = 5;
+    c.implicit = true;
+    c.uses_jacobian = true;
+    c.exact_jacobian = true;
+    c.jacobian_choice = true;
+    c.finds_roots = true;
+    return c;
+  }
+
+  void reset(OdeSystem& sys, double t0, const double* x0) override {
+    const int n = sys.size();
+    if (sys_ != &sys || !mem_ || n != n_) {
+      std::string refusal;
+      ImplicitForm* form = sys.implicit_form(refusal);
+      if (!form && !refusal.empty()) throw std::invalid_argument("ida: " + refusal);
+      create(sys, form, t0, x0);
+    } else {
+      std::copy(x0, x0 + n, N_VGetArrayPointer(y_));
+      consistent_derivative(t0);
+      check(IDAReInit(mem_, t0, y_, yp_), "IDAReInit");
+      base_ = {};  // the re-initialisation restarts SUNDIALS' counters
+      ++stats_.restarts;
+    }
+    t_ = t0;
+  }
+
+  // One internal step (IDA_ONE_STEP) that does not pass t_stop.
+  Outcome step(double t_stop) override {
+    Outcome out;
+    if (t_stop > t_) {
+      check(IDASetStopTime(mem_, t_stop), "IDASetStopTime");
+      error_.clear();
+      pending_ = nullptr;
+      double t = t_;
+      const int flag = IDASolve(mem_, t_stop, &t, y_, yp_, IDA_ONE_STEP);
+      if (pending_) std::rethrow_exception(pending_);
+      t_ = t;
+      if (flag == IDA_ROOT_RETURN) {
+        check(IDAGetRootInfo(mem_, rootsfound_.data()), "IDAGetRootInfo");
+        out.status = Outcome::kRoot;
+        out.root = detail::first_root_found(rootsfound_);
+      } else if (flag < 0) {
+        out.status = Outcome::kFailed;
+        out.message = failure(flag);
+      }
+    }
+    collect_stats();
+    return out;
+  }
+  double step_start() const override { return detail::last_step_start(mem_, t_, IDAGetCurrentTime, IDAGetLastStep); }
+  void dense_state(double t, double* x) override {
+    detail::interpolated_state(mem_, IDAGetDky, t, t_, y_, dky_, x, "ida", "IDAGetDky");
+  }
+  double time() const override { return t_; }
+  const double* state() const override { return N_VGetArrayPointer(y_); }
+
+ private:
+  void create(OdeSystem& sys, ImplicitForm* form, double t0, const double* x0) {
+    release();
+    sys_ = &sys;
+    form_ = form;
+    n_ = sys.size();
+    y_ = detail::make_state_vector(ctx_, n_);
+    yp_ = detail::make_state_vector(ctx_, n_);
+    dky_ = detail::make_view_vector(ctx_, n_);
+    std::copy(x0, x0 + n_, N_VGetArrayPointer(y_));
+    consistent_derivative(t0);
+    mem_ = IDACreate(ctx_);
+    if (!mem_) throw std::runtime_error("ida: IDACreate failed");
+    check(IDAInit(mem_, &Ida::residual, t0, y_, yp_), "IDAInit");
+    check(IDASetUserData(mem_, this), "IDASetUserData");
+    check(IDASetErrHandlerFn(mem_, &Ida::on_error, this), "IDASetErrHandlerFn");
+    check(detail::set_absolute_tolerances(sys, opt_.atol, ctx_,
+                                          [&](N_Vector a) { return IDASVtolerances(mem_, opt_.rtol, a); }),
+          "IDASVtolerances");
+    check(IDASetMaxNumSteps(mem_, opt_.max_steps), "IDASetMaxNumSteps");
+    A_ = detail::make_dense_matrix(ctx_, n_);
+    LS_ = detail::make_dense_lu(ctx_, n_);
+    check(IDASetLinearSolver(mem_, LS_, A_), "IDASetLinearSolver");
+    if (opt_.exact_jacobian && (form_ || sys.has_exact_jacobian())) {
+      check(IDASetJacFn(mem_, &Ida::jac), "IDASetJacFn");
+      J_.resize(n_, n_);
+    }
+    nroots_ = sys.num_roots();
+    if (nroots_ > 0) check(IDARootInit(mem_, nroots_, &Ida::rootfn), "IDARootInit");
+    rootsfound_.assign(static_cast<std::size_t>(std::max(nroots_, 1)), 0);
+    base_ = {};
+  }
+
+  // x'(t0) = f(t0, x0): consistent with F for a form equivalent to the ODE.
+  void consistent_derivative(double t0) { sys_->rhs(t0, N_VGetArrayPointer(y_), N_VGetArrayPointer(yp_)); }
+
+  static int residual(double t, N_Vector y, N_Vector yp, N_Vector rr, void* self) {
+    auto* me = static_cast<Ida*>(self);
+    try {
+      const double* x = N_VGetArrayPointer(y);
+      const double* xp = N_VGetArrayPointer(yp);
+      double* r = N_VGetArrayPointer(rr);
+      if (me->form_) {
+        me->form_->residual(t, x, xp, r);
+      } else {
+        me->sys_->rhs(t, x, r);
+        for (int i = 0; i < me->n_; ++i) r[i] = xp[i] - r[i];
+      }
+      for (int i = 0; i < me->n_; ++i) {
+        if (!std::isfinite(r[i])) return 1;  // recoverable: IDA retries with a smaller step
+      }
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static int jac(double t, double cj, N_Vector y, N_Vector yp, N_Vector, SUNMatrix J, void* self, N_Vector, N_Vector,
+                 N_Vector) {
+    auto* me = static_cast<Ida*>(self);
+    try {
+      const double* x = N_VGetArrayPointer(y);
+      if (me->form_) {
+        me->form_->newton_matrix(t, x, N_VGetArrayPointer(yp), cj, me->J_);
+      } else {
+        me->sys_->jacobian(t, x, me->J_);
+        me->J_ *= -1.0;
+        me->J_.diagonal().array() += cj;
+      }
+      for (int c = 0; c < me->n_; ++c)
+        for (int r = 0; r < me->n_; ++r) SM_ELEMENT_D(J, r, c) = me->J_(r, c);
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static int rootfn(double t, N_Vector y, N_Vector, double* g, void* self) {
+    auto* me = static_cast<Ida*>(self);
+    try {
+      me->sys_->roots(t, N_VGetArrayPointer(y), g);
+      return 0;
+    } catch (...) {
+      me->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+  static void on_error(int, const char* module, const char* function, char* msg, void* self) {
+    static_cast<Ida*>(self)->error_ = std::string(module) + "." + function + ": " + msg;
+  }
+
+  std::string failure(int flag) {
+    std::string msg = std::string(name()) + " failed with flag " + std::to_string(flag) + " (" +
+                      detail::flag_name(IDAGetReturnFlagName(flag)) + ") at t = " + std::to_string(t_) + " s";
+    if (!error_.empty()) msg += ": " + error_;
+    N_Vector ele = N_VClone(y_), w = N_VClone(y_);
+    if (IDAGetEstLocalErrors(mem_, ele) == IDA_SUCCESS && IDAGetErrWeights(mem_, w) == IDA_SUCCESS) {
+      msg += detail::largest_weighted_errors(*sys_, ele, w);
+    }
+    N_VDestroy(ele);
+    N_VDestroy(w);
+    const std::string bad = non_finite_components(*sys_, t_, N_VGetArrayPointer(y_));
+    if (!bad.empty()) msg.append("; ").append(bad);
+    return msg;
+  }
+
+  void collect_stats() {
+    long v = 0;
+    auto get = [&](int (*fn)(void*, long*)) {
+      v = 0;
+      fn(mem_, &v);
+      return v;
+    };
+    IntegratorStats now;
+    now.steps = get(IDAGetNumSteps);
+    // Residual evaluations (each one f-sized evaluation), with the difference quotients'.
+    now.rhs_evaluations = get(IDAGetNumResEvals) + get(IDAGetNumLinResEvals);
+    now.jacobian_evaluations = get(IDAGetNumJacEvals);
+    now.linear_solves = get(IDAGetNumLinSolvSetups);
+    now.rejected_steps = get(IDAGetNumErrTestFails);
+    now.nonlinear_iterations = get(IDAGetNumNonlinSolvIters);
+    detail::accumulate_since_reinit(stats_, base_, now);
+  }
+
+  void check(int flag, const char* what) const { detail::check_flag(flag, "ida", what); }
+  void release() {
+    if (mem_) IDAFree(&mem_);
+    if (LS_) SUNLinSolFree(LS_), LS_ = nullptr;
+    if (A_) SUNMatDestroy(A_), A_ = nullptr;
+    for (N_Vector* v : {&y_, &yp_, &dky_}) {
+      if (*v) N_VDestroy(*v), *v = nullptr;
+    }
+  }
+
+  IntegratorOptions opt_;
+  SUNContext ctx_ = nullptr;
+  void* mem_ = nullptr;
+  N_Vector y_ = nullptr, yp_ = nullptr;
+  N_Vector dky_ = nullptr;  // the dense output's target (make_view_vector)
+  SUNMatrix A_ = nullptr;
+  SUNLinearSolver LS_ = nullptr;
+  OdeSystem* sys_ = nullptr;
+  ImplicitForm* form_ = nullptr;
+  int n_ = 0, nroots_ = 0;
+  double t_ = 0;
+  Eigen::MatrixXd J_;
+  std::vector<int> rootsfound_;
+  std::exception_ptr pending_;
+  std::string error_;
+  IntegratorStats base_;
+};
+
+}  // namespace
+
+namespace detail {
+std::unique_ptr<Integrator> make_ida(const IntegratorOptions& o) { return std::make_unique<Ida>(o); }
+}  // namespace detail
+
+}  // namespace pumasim

@@ -1,0 +1,225 @@
+// The plant's implicit form F(t, x, x') = 0 (PlantModel::residual) and IDA
+// on it (integrators/sundials_ida.cpp):
+//  - F vanishes at the ODE's own derivative, x' = f(t, x), to rounding;
+//  - F is affine in x' with the slope the form claims: the identity on every
+//    row but the speeds', H(q) there (inverse dynamics is linear in qdd), the
+//    identity on a joint the hybrid model holds;
+//  - it factors no mass matrix: the Cholesky factorisations this thread made
+//    (core/cholesky.hpp's counter) do not change over residual calls, where
+//    one right-hand side adds one;
+//  - its Newton matrix dF/dx + c dF/dx' agrees with central differences of F;
+//  - IDA through the driver on the 6-joint hybrid scene finds the same
+//    stick/slip events as CVODE's BDF and ends within the tolerances' reach
+//    of it;
+//  - the paper's rule is refused, with the reason, before the run and by
+//    the integrator.
+// The conformance suites (tests/test_conformance.cpp) run IDA on
+// Prothero-Robinson (F = x' - f) and on the smooth plant (this form).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "core/cholesky.hpp"
+#include "integrators/registry.hpp"
+#include "models/plant/plant.hpp"
+#include "models/scene/scene.hpp"
+#include "simulation/driver.hpp"
+#include "simulation/run.hpp"
+#include "tests/scene_paths.hpp"
+
+namespace pumasim {
+namespace {
+
+using test::scene_path;
+
+struct ResidualPoint {
+  std::vector<double> x, f, r;
+};
+
+// x(0) of the scene, moved off rest (speeds and the currents' equilibrium
+// perturbed) so that every term of F is at work; f there, and F(0, x, f).
+ResidualPoint point_of(Plant& plant) {
+  ResidualPoint p;
+  const int m = plant.size();
+  p.x.resize(m), p.f.resize(m), p.r.resize(m);
+  plant.initial_state(p.x.data());
+  const StateLayout& l = plant.layout();
+  for (int j = 0; j < l.n; ++j) {
+    p.x[l.qd + j] += 0.05 * (j + 1);
+    if (l.i >= 0) p.x[l.i + j] += 0.01 * (j + 1);
+  }
+  plant.rhs(0.0, p.x.data(), p.f.data());
+  plant.residual(0.0, p.x.data(), p.f.data(), p.r.data());
+  return p;
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0;
+  for (double e : v) m = std::max(m, std::abs(e));
+  return m;
+}
+
+// F(t, x, f(t, x)) = 0: the speeds' rows H f_qd + h - tau to rounding
+// relative to the joint torques' size, the others exactly as f's own
+// arithmetic (1e-12 of the largest rate, to allow a reordering).
+TEST(ImplicitForm, VanishesAtTheOdesDerivative) {
+  for (const char* name : {"paper_slow_viscous", "paper_slow_6dof_hybrid", "smooth_line_quintic"}) {
+    SCOPED_TRACE(name);
+    Plant plant(load_scene(scene_path(name)).plant);
+    const ResidualPoint p = point_of(plant);
+    const StateLayout& l = plant.layout();
+    std::vector<double> speeds, others;
+    for (int i = 0; i < plant.size(); ++i) {
+      (i >= l.qd && i < l.qd + l.n ? speeds : others).push_back(p.r[i]);
+    }
+    EXPECT_LT(max_abs(speeds), 1e-10 * std::max(1.0, max_abs(p.f)));
+    EXPECT_LE(max_abs(others), 1e-12 * max_abs(p.f));
+  }
+}
+
+// F(x, f + d) - F(x, f) = D d with D the identity but on the free joints'
+// speed rows, where it is H(q) (every column), and on a held joint's, where it
+// is the identity too.
+TEST(ImplicitForm, IsAffineInTheDerivativeWithTheMassMatrixOnTheSpeeds) {
+  for (const char* name : {"paper_slow_viscous", "paper_slow_6dof_hybrid"}) {
+    SCOPED_TRACE(name);
+    Plant plant(load_scene(scene_path(name)).plant);
+    const ResidualPoint p = point_of(plant);
+    const StateLayout& l = plant.layout();
+    const int m = plant.size(), n = l.n;
+    std::vector<double> d(m), xp(m), r(m);
+    for (int i = 0; i < m; ++i) d[i] = 0.3 * std::sin(1.7 * i + 0.2), xp[i] = p.f[i] + d[i];
+    plant.residual(0.0, p.x.data(), xp.data(), r.data());
+    Eigen::MatrixXd H(n, n);
+    plant.mass_matrix(p.x.data() + l.q, H);
+    int held = 0;
+    for (int i = 0; i < m; ++i) {
+      double expected = d[i];
+      const int j = i - l.qd;
+      const bool speed = j >= 0 && j < n;
+      if (speed && plant.slip_mode(j) == SlipMode::kStuck && plant.joint_has_modes(j) && plant.has_mode_events()) {
+        ++held;
+      } else if (speed) {
+        expected = 0;
+        for (int k = 0; k < n; ++k) expected += H(j, k) * d[l.qd + k];
+      }
+      EXPECT_NEAR(r[i] - p.r[i], expected, 1e-9 * std::max(1.0, std::abs(expected))) << plant.layout().names[i];
+    }
+    if (std::string(name) == "paper_slow_6dof_hybrid") EXPECT_GT(held, 0) << "no joint held at the start";
+  }
+}
+
+// The residual factors no mass matrix; one right-hand side factors one (the
+// counter sees the back-end's factorisation: the instrument works).
+TEST(ImplicitForm, FactorsNoMassMatrix) {
+  for (const char* name : {"paper_slow_viscous", "paper_slow_6dof_hybrid"}) {
+    SCOPED_TRACE(name);
+    Plant plant(load_scene(scene_path(name)).plant);
+    ResidualPoint p = point_of(plant);
+    const long before = cholesky_factorisations();
+    for (int k = 0; k < 100; ++k) plant.residual(1e-3 * k, p.x.data(), p.f.data(), p.r.data());
+    EXPECT_EQ(cholesky_factorisations(), before);
+    plant.rhs(0.0, p.x.data(), p.f.data());
+    EXPECT_GE(cholesky_factorisations(), before + 1);
+  }
+}
+
+// dF/dx + c dF/dx' at (x, f(x)) against central differences of F (steps
+// 1e-6 max(1, |x_i|)): within 1e-6 of the largest entry of its row.
+TEST(ImplicitForm, NewtonMatrixAgreesWithDifferencesOfTheResidual) {
+  for (const char* name : {"paper_slow_viscous", "paper_slow_6dof_hybrid"}) {
+    SCOPED_TRACE(name);
+    Plant plant(load_scene(scene_path(name)).plant);
+    const ResidualPoint p = point_of(plant);
+    const int m = plant.size();
+    const double c = 250.0;
+    Eigen::MatrixXd N(m, m);
+    plant.residual_newton_matrix(0.0, p.x.data(), c, N);
+    Eigen::MatrixXd D(m, m);
+    std::vector<double> rp(m), rm(m);
+    for (int k = 0; k < m; ++k) {
+      const double h = 1e-6 * std::max(1.0, std::abs(p.x[k]));
+      std::vector<double> xp = p.x, xm = p.x, fp = p.f, fm = p.f;
+      xp[k] += h, xm[k] -= h;
+      plant.residual(0.0, xp.data(), p.f.data(), rp.data());
+      plant.residual(0.0, xm.data(), p.f.data(), rm.data());
+      for (int i = 0; i < m; ++i) D(i, k) = (rp[i] - rm[i]) / (2 * h);
+      const double g = 1e-6 * std::max(1.0, std::abs(p.f[k]));
+      fp[k] += g, fm[k] -= g;
+      plant.residual(0.0, p.x.data(), fp.data(), rp.data());
+      plant.residual(0.0, p.x.data(), fm.data(), rm.data());
+      for (int i = 0; i < m; ++i) D(i, k) += c * (rp[i] - rm[i]) / (2 * g);
+    }
+    for (int i = 0; i < m; ++i) {
+      const double scale = std::max(1.0, N.row(i).cwiseAbs().maxCoeff());
+      EXPECT_LT((N.row(i) - D.row(i)).cwiseAbs().maxCoeff(), 1e-6 * scale) << plant.layout().names[i];
+    }
+  }
+}
+
+struct DriverRun {
+  std::vector<double> x;  // at the end
+  long root_events = 0;
+  bool ok = false;
+};
+
+DriverRun run_hybrid(const std::string& method, double t_end) {
+  Plant plant(load_scene(scene_path("paper_slow_6dof_hybrid")).plant);
+  IntegratorOptions o;
+  o.rtol = 1e-8, o.atol = 1e-11;
+  auto integ = make_integrator(method, o);
+  DriverRun d;
+  const RunResult r =
+      run_plant(plant, *integ, {.t_end = t_end, .output_interval = t_end, .observe = [&](double, const double* s) {
+                                  d.x.assign(s, s + plant.size());
+                                }});
+  d.ok = r.ok;
+  d.root_events = r.root_events;
+  for (std::size_t i = 0; i < d.x.size(); ++i) d.x[i] /= plant.tolerance_scale(static_cast<int>(i));
+  return d;
+}
+
+// IDA on the implicit form with the hybrid model's events, against CVODE's
+// BDF on the ODE, both at rtol 1e-8 over 3 s: the same number of stick/slip
+// events, and the end states within 1e-4 of each other per unit of each
+// state's scale (each method's own error is of the order of 1e-6 there).
+TEST(ImplicitForm, IdaFindsTheHybridEventsThatCvodeFinds) {
+  const DriverRun ida = run_hybrid("ida", 3.0), bdf = run_hybrid("cvode-bdf", 3.0);
+  ASSERT_TRUE(ida.ok);
+  ASSERT_TRUE(bdf.ok);
+  EXPECT_GT(bdf.root_events, 0);
+  EXPECT_EQ(ida.root_events, bdf.root_events);
+  double worst = 0;
+  for (std::size_t i = 0; i < ida.x.size(); ++i) worst = std::max(worst, std::abs(ida.x[i] - bdf.x[i]));
+  EXPECT_LT(worst, 1e-4);
+}
+
+// The paper's rule has no residual form: refused before the run, naming the
+// joint and the law, and by the integrator on the plant.
+TEST(ImplicitForm, ThePapersRuleIsRefusedWithItsReason) {
+  const Scene sc = load_scene(scene_path("paper_slow"));
+  RunOptions a;
+  a.integrator = "ida";
+  try {
+    plan_run(sc, a);
+    ADD_FAILURE() << "ida accepted the paper's rule";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 1's friction law (friction.model = \"paper\") switches at rest"),
+              std::string::npos)
+        << e.what();
+  }
+  Plant plant(sc.plant);
+  PlantSystem sys(plant);
+  std::vector<double> x(static_cast<std::size_t>(plant.size()));
+  plant.initial_state(x.data());
+  IntegratorOptions o;
+  auto integ = make_integrator("ida", o);
+  EXPECT_THROW(integ->reset(sys, 0.0, x.data()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace pumasim
