@@ -541,7 +541,9 @@ def header(minutes, omit_findings):
                "`experiments/planning_findings.toml`) that this report checks against the table's rows when it is "
                "written: a table that contradicts one fails the report."), "",
             "Other results: `paper/README.md` (the paper's experiment), `dynamics_backends.md` (the dynamics "
-            "back-ends' cost).", ""]
+            "back-ends' cost), `energy_long_time/energy_growth.md` (the lossless arm's energy error over 10^4 s, the "
+            "symplectic midpoint against the others), `implicit_form/README.md` (IDA on the implicit form against "
+            "CVODE's BDF on the ODE).", ""]
 
 
 def main():
