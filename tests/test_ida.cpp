@@ -8,8 +8,8 @@
 //    (core/cholesky.hpp's counter) do not change over residual calls, where
 //    one right-hand side adds one;
 //  - its Newton matrix dF/dx + c dF/dx' agrees with central differences of F;
-//  - IDA through the driver on the 6-joint hybrid scene finds the same
-//    stick/slip events as CVODE's BDF and ends within the tolerances' reach
+//  - IDA through the driver on the 6-joint hybrid scene finds the stick/slip
+//    mode changes of a reference run, at its times, and ends within 100 rtol
 //    of it;
 //  - the paper's rule is refused, with the reason, before the run and by
 //    the integrator.
@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -129,7 +130,10 @@ TEST(ImplicitForm, FactorsNoMassMatrix) {
 }
 
 // dF/dx + c dF/dx' at (x, f(x)) against central differences of F (steps
-// 1e-6 max(1, |x_i|)): within 1e-6 of the largest entry of its row.
+// 1e-6 max(1, |x_i|)): within 1e-6 of the largest entry of its row. At the
+// consistent point the matrix is exact by construction; off it (x' != f) it
+// misses (dH/dq)(x'_qd - f_qd) in the speeds' rows, which this test does
+// not see (Newton's iteration only needs an approximation).
 TEST(ImplicitForm, NewtonMatrixAgreesWithDifferencesOfTheResidual) {
   for (const char* name : {"paper_slow_viscous", "paper_slow_6dof_hybrid"}) {
     SCOPED_TRACE(name);
@@ -162,15 +166,15 @@ TEST(ImplicitForm, NewtonMatrixAgreesWithDifferencesOfTheResidual) {
 }
 
 struct DriverRun {
-  std::vector<double> x;  // at the end
-  long root_events = 0;
+  std::vector<double> x;  // at the end, per unit of each state's scale
+  std::vector<ModeChange> changes;
   bool ok = false;
 };
 
-DriverRun run_hybrid(const std::string& method, double t_end) {
+DriverRun run_hybrid(const std::string& method, double rtol, double atol, double t_end) {
   Plant plant(load_scene(scene_path("paper_slow_6dof_hybrid")).plant);
   IntegratorOptions o;
-  o.rtol = 1e-8, o.atol = 1e-11;
+  o.rtol = rtol, o.atol = atol;
   auto integ = make_integrator(method, o);
   DriverRun d;
   const RunResult r =
@@ -178,24 +182,38 @@ DriverRun run_hybrid(const std::string& method, double t_end) {
                                   d.x.assign(s, s + plant.size());
                                 }});
   d.ok = r.ok;
-  d.root_events = r.root_events;
+  d.changes = plant.mode_changes();
   for (std::size_t i = 0; i < d.x.size(); ++i) d.x[i] /= plant.tolerance_scale(static_cast<int>(i));
   return d;
 }
 
-// IDA on the implicit form with the hybrid model's events, against CVODE's
-// BDF on the ODE, both at rtol 1e-8 over 3 s: the same number of stick/slip
-// events, and the end states within 1e-4 of each other per unit of each
-// state's scale (each method's own error is of the order of 1e-6 there).
-TEST(ImplicitForm, IdaFindsTheHybridEventsThatCvodeFinds) {
-  const DriverRun ida = run_hybrid("ida", 3.0), bdf = run_hybrid("cvode-bdf", 3.0);
+// IDA on the implicit form with the hybrid model's events, at rtol 1e-8
+// over 3 s, against a reference run (CVODE's BDF on the ODE at rtol 1e-12):
+// the same stick/slip mode changes, joint by joint and in order, each at a
+// time within 1e-6 s of the reference's (located to the root finder's
+// tolerance, with the state's error of about rtol shifting the crossing),
+// and the end state within 100 rtol of the reference per unit of each
+// state's scale (the conformance suite's bound).
+TEST(ImplicitForm, IdaFindsTheHybridEventsOfTheReference) {
+  const double rtol = 1e-8;
+  const DriverRun ida = run_hybrid("ida", rtol, 1e-3 * rtol, 3.0), ref = run_hybrid("cvode-bdf", 1e-12, 1e-15, 3.0);
   ASSERT_TRUE(ida.ok);
-  ASSERT_TRUE(bdf.ok);
-  EXPECT_GT(bdf.root_events, 0);
-  EXPECT_EQ(ida.root_events, bdf.root_events);
+  ASSERT_TRUE(ref.ok);
+  ASSERT_GT(ref.changes.size(), 6u);  // the start's modes and at least one change after
+  ASSERT_EQ(ida.changes.size(), ref.changes.size());
+  double worst_t = 0;
+  for (std::size_t k = 0; k < ref.changes.size(); ++k) {
+    EXPECT_EQ(ida.changes[k].joint, ref.changes[k].joint) << "change " << k;
+    EXPECT_EQ(ida.changes[k].mode, ref.changes[k].mode) << "change " << k;
+    worst_t = std::max(worst_t, std::abs(ida.changes[k].t - ref.changes[k].t));
+  }
+  EXPECT_LT(worst_t, 1e-6);
   double worst = 0;
-  for (std::size_t i = 0; i < ida.x.size(); ++i) worst = std::max(worst, std::abs(ida.x[i] - bdf.x[i]));
-  EXPECT_LT(worst, 1e-4);
+  for (std::size_t i = 0; i < ida.x.size(); ++i) worst = std::max(worst, std::abs(ida.x[i] - ref.x[i]));
+  EXPECT_LT(worst, 100 * rtol);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3e s, %.3e", worst_t, worst);
+  RecordProperty("event_time_and_end_state_differences", buf);
 }
 
 // The paper's rule has no residual form: refused before the run, naming the

@@ -159,18 +159,24 @@ Eigen::VectorXd canonical_start(Plant& plant, ConservativeMechanics& m) {
 // mechanical_energy), by central differences (step 1e-5: truncation about
 // 1e-10 times L's third derivative, rounding about 1e-16 |L| / 1e-5).
 TEST(SymplecticMidpoint, ItsForceIsTheGradientOfThePlantsLagrangian) {
-  for (const char* joints : {"scene.joints=2", "scene.joints=6"}) {
-    SCOPED_TRACE(joints);
-    Plant plant(load_scene(scene_path("energy_long_time"), {joints}).plant);
-    PlantSystem sys(plant);
-    ConservativeMechanics& m = mechanics_of(sys);
-    const int n = m.dof();
+  // The PUMA (2 and 6 joints), the Stanford arm (a prismatic joint) and the
+  // Panda (7 joints); Plant::lagrangian_gradient needs no lossless scene.
+  const std::vector<std::pair<std::string, std::string>> cases = {{"energy_long_time", "scene.joints=2"},
+                                                                  {"energy_long_time", "scene.joints=6"},
+                                                                  {"stanford_passive", ""},
+                                                                  {"panda_passive", ""}};
+  for (const auto& [scene, set] : cases) {
+    SCOPED_TRACE(scene + " " + set);
+    std::vector<std::string> overrides;
+    if (!set.empty()) overrides.push_back(set);
+    Plant plant(load_scene(scene_path(scene), overrides).plant);
+    const StateLayout& l = plant.layout();
+    const int n = l.n;
     std::vector<double> x(static_cast<std::size_t>(plant.size()));
     plant.initial_state(x.data());
-    for (int j = 0; j < n; ++j) x[m.position(j)] += 0.2 * (j + 1) - 0.5, x[m.velocity(j)] = 0.7 - 0.3 * j;
-    std::vector<double> q(n), qd(n), g(n);
-    for (int j = 0; j < n; ++j) q[j] = x[m.position(j)], qd[j] = x[m.velocity(j)];
-    m.lagrangian_gradient(q.data(), qd.data(), g.data());
+    for (int j = 0; j < n; ++j) x[l.q + j] += 0.02 * (j + 1) - 0.05, x[l.qd + j] = 0.7 - 0.3 * j;
+    std::vector<double> g(n);
+    plant.lagrangian_gradient(x.data() + l.q, x.data() + l.qd, g.data());
     const auto lagrangian = [&](std::vector<double> xs) {
       double kinetic = 0;
       const double energy = plant.mechanical_energy(xs.data(), &kinetic);
@@ -181,7 +187,7 @@ TEST(SymplecticMidpoint, ItsForceIsTheGradientOfThePlantsLagrangian) {
     for (int i = 0; i < n; ++i) {
       const double d = 1e-5;
       std::vector<double> xp = x, xm = x;
-      xp[m.position(i)] += d, xm[m.position(i)] -= d;
+      xp[l.q + i] += d, xm[l.q + i] -= d;
       const double fd = (lagrangian(xp) - lagrangian(xm)) / (2 * d);
       EXPECT_NEAR(g[i], fd, 1e-7 * std::max(1.0, scale)) << "joint " << i + 1;
     }
