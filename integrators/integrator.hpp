@@ -68,6 +68,10 @@ class ImplicitForm {
   virtual void residual(double t, const double* x, const double* xp, double* r) = 0;
   // The Newton matrix dF/dx + c dF/dxp at (t, x, xp) into J (size() x size()).
   virtual void newton_matrix(double t, const double* x, const double* xp, double c, Eigen::MatrixXd& J) = 0;
+  // The Newton matrix for a new c from the derivatives of the last
+  // newton_matrix call (as CVODE reuses its Jacobian over steps, re-forming
+  // only I - gamma J), if the form keeps them; false if it does not.
+  virtual bool newton_matrix_again(double /*c*/, Eigen::MatrixXd& /*J*/) { return false; }
 };
 
 class OdeSystem {

@@ -7,6 +7,15 @@
 // quotients of F. Roots are IDA's (IDARootInit). A system that refuses a
 // residual form (implicit_form's reason) is refused here.
 //
+// IDA forms its Newton matrix at every linear-solver set-up (whenever c has
+// moved by a quarter, or Newton's iteration failed), where CVODE keeps its
+// Jacobian over steps and re-forms only I - gamma J. With a form that keeps
+// its derivatives (ImplicitForm::newton_matrix_again) this adapter does the
+// same: a set-up re-forms the matrix for the new c from the last Jacobian
+// unless that Jacobian is 51 steps old (CVODE's default limit), or a Newton
+// iteration failed to converge since the last set-up, or IDA restarted;
+// jacobian_evaluations counts the Jacobians evaluated.
+//
 // The C callbacks catch every exception: a non-finite residual is reported as
 // recoverable (IDA shrinks the step), anything else as fatal and rethrown
 // after IDASolve returns. A failure names IDA's flag, the time, and the
@@ -70,6 +79,7 @@ class Ida final : public Integrator {
       consistent_derivative(t0);
       check(IDAReInit(mem_, t0, y_, yp_), "IDAReInit");
       base_ = {};  // the re-initialisation restarts SUNDIALS' counters
+      jacobians_since_reinit_ = 0, jacobian_valid_ = false;
       ++stats_.restarts;
     }
     t_ = t0;
@@ -128,7 +138,8 @@ class Ida final : public Integrator {
     A_ = detail::make_dense_matrix(ctx_, n_);
     LS_ = detail::make_dense_lu(ctx_, n_);
     check(IDASetLinearSolver(mem_, LS_, A_), "IDASetLinearSolver");
-    if (opt_.exact_jacobian && (form_ || sys.has_exact_jacobian())) {
+    own_jacobian_ = opt_.exact_jacobian && (form_ || sys.has_exact_jacobian());
+    if (own_jacobian_) {
       check(IDASetJacFn(mem_, &Ida::jac), "IDASetJacFn");
       J_.resize(n_, n_);
     }
@@ -136,6 +147,7 @@ class Ida final : public Integrator {
     if (nroots_ > 0) check(IDARootInit(mem_, nroots_, &Ida::rootfn), "IDARootInit");
     rootsfound_.assign(static_cast<std::size_t>(std::max(nroots_, 1)), 0);
     base_ = {};
+    jacobians_since_reinit_ = 0, jacobian_valid_ = false;
   }
 
   // x'(t0) = f(t0, x0): consistent with F for a form equivalent to the ODE.
@@ -168,8 +180,20 @@ class Ida final : public Integrator {
     try {
       const double* x = N_VGetArrayPointer(y);
       if (me->form_) {
-        me->form_->newton_matrix(t, x, N_VGetArrayPointer(yp), cj, me->J_);
+        long steps = 0, convergence_failures = 0;
+        IDAGetNumSteps(me->mem_, &steps);
+        IDAGetNumNonlinSolvConvFails(me->mem_, &convergence_failures);
+        const bool reuse = me->jacobian_valid_ && steps - me->jacobian_step_ < kJacobianAge &&
+                           convergence_failures == me->convergence_failures_ &&
+                           me->form_->newton_matrix_again(cj, me->J_);
+        if (!reuse) {
+          me->form_->newton_matrix(t, x, N_VGetArrayPointer(yp), cj, me->J_);
+          me->jacobian_valid_ = true, me->jacobian_step_ = steps;
+          ++me->jacobians_since_reinit_;
+        }
+        me->convergence_failures_ = convergence_failures;
       } else {
+        ++me->jacobians_since_reinit_;
         me->sys_->jacobian(t, x, me->J_);
         me->J_ *= -1.0;
         me->J_.diagonal().array() += cj;
@@ -222,7 +246,8 @@ class Ida final : public Integrator {
     now.steps = get(IDAGetNumSteps);
     // Residual evaluations (each one f-sized evaluation), with the difference quotients'.
     now.rhs_evaluations = get(IDAGetNumResEvals) + get(IDAGetNumLinResEvals);
-    now.jacobian_evaluations = get(IDAGetNumJacEvals);
+    // Evaluated, not re-formed (see the top); IDA's difference quotients: its count.
+    now.jacobian_evaluations = own_jacobian_ ? jacobians_since_reinit_ : get(IDAGetNumJacEvals);
     now.linear_solves = get(IDAGetNumLinSolvSetups);
     now.rejected_steps = get(IDAGetNumErrTestFails);
     now.nonlinear_iterations = get(IDAGetNumNonlinSolvIters);
@@ -251,6 +276,13 @@ class Ida final : public Integrator {
   int n_ = 0, nroots_ = 0;
   double t_ = 0;
   Eigen::MatrixXd J_;
+  // The Jacobian's reuse (see the top): whether the form holds one, the step
+  // count (since IDA's last start) it was evaluated at, IDA's Newton
+  // convergence failures at the last set-up; Jacobians evaluated since the start.
+  static constexpr long kJacobianAge = 51;
+  bool own_jacobian_ = false;  // IDASetJacFn: the system's (else IDA's difference quotients)
+  bool jacobian_valid_ = false;
+  long jacobian_step_ = 0, convergence_failures_ = 0, jacobians_since_reinit_ = 0;
   std::vector<int> rootsfound_;
   std::exception_ptr pending_;
   std::string error_;

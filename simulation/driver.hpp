@@ -75,6 +75,7 @@ class PlantSystem final : public OdeSystem {
     void newton_matrix(double t, const double* x, const double*, double c, Eigen::MatrixXd& J) override {
       p_.residual_newton_matrix(t, x, c, J);
     }
+    bool newton_matrix_again(double c, Eigen::MatrixXd& J) override { return p_.residual_newton_matrix_again(c, J); }
 
    private:
     Plant& p_;

@@ -82,17 +82,28 @@ void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
 }
 
 void Plant::residual_newton_matrix(double t, const double* x, double c, Eigen::MatrixXd& J) {
-  const int m = size(), n = layout().n, qd = layout().qd;
-  jacobian_exact(t, x, J);
-  J *= -1.0;
-  J.diagonal().array() += c;
-  if (newton_H_.rows() != n) newton_H_.resize(n, n), newton_rows_.resize(n, m);
+  const int m = size(), n = layout().n;
+  if (newton_H_.rows() != n) {
+    newton_Jf_.resize(m, m), newton_H_.resize(n, n), newton_rows_.resize(n, m);
+    newton_held_.assign(static_cast<std::size_t>(n), 0);
+  }
+  jacobian_exact(t, x, newton_Jf_);
   mass_matrix(x + layout().q, newton_H_);
+  for (int j = 0; j < n; ++j) newton_held_[static_cast<std::size_t>(j)] = model_->friction().stuck(j, context_.modes);
+  residual_newton_matrix_again(c, J);
+}
+
+bool Plant::residual_newton_matrix_again(double c, Eigen::MatrixXd& J) {
+  const int n = layout().n, qd = layout().qd;
+  if (newton_H_.rows() != n) return false;
+  J = -newton_Jf_;
+  J.diagonal().array() += c;
   newton_rows_.noalias() = newton_H_ * J.middleRows(qd, n);
   for (int j = 0; j < n; ++j) {
-    if (model_->friction().stuck(j, context_.modes)) continue;  // its row stays c e
+    if (newton_held_[static_cast<std::size_t>(j)]) continue;  // a held joint's row stays c e
     J.row(qd + j) = newton_rows_.row(j);
   }
+  return true;
 }
 
 void Plant::mass_matrix(const double* q, Eigen::MatrixXd& M) {

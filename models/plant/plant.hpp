@@ -167,6 +167,9 @@ class Plant {
   // the rows of joints the hybrid model holds stay c e. Allocation-free
   // after the first call.
   void residual_newton_matrix(double t, const double* x, double c, Eigen::MatrixXd& J);
+  // The same for a new c from the last call's df/dx and H (and its held
+  // joints); false before any call. Allocation-free.
+  bool residual_newton_matrix_again(double c, Eigen::MatrixXd& J);
 
   // The lossless, unforced arm's mechanics (why_not_conservative(config())
   // empty; ConservativeMechanics, integrators/integrator.hpp): M(q), the
@@ -210,7 +213,9 @@ class Plant {
   std::vector<double> ft_[2];         // time_derivative scratch
   std::vector<Dual> jx_, jf_;         // jacobian_per_column's x and f
   std::vector<Tangent> tx_, tf_;      // jacobian's x and f
-  Eigen::MatrixXd newton_H_, newton_rows_;  // residual_newton_matrix's scratch
+  // residual_newton_matrix's df/dx and H at its last point, which joints were held there, and scratch.
+  Eigen::MatrixXd newton_Jf_, newton_H_, newton_rows_;
+  std::vector<char> newton_held_;
 };
 
 }  // namespace pumasim
