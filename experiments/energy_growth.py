@@ -28,8 +28,6 @@ build/energy_growth/), with a private copy of the pumasim binary. --reduced:
 import argparse
 import math
 import os
-import subprocess
-import sys
 
 import numpy as np
 
@@ -57,13 +55,7 @@ def run(work, integ, option, value, t_end):
            "--out", out, "--force"]
     if option == "--rtol":
         cmd += ["--atol", repr(1e-3 * value)]  # the energy sweep's atol_factor
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode != 0:
-        sys.exit(f"energy_growth: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
-    try:
-        r = pumasim_io.load_run(out)
-    except pumasim_io.RunFolderError as e:
-        sys.exit(f"energy_growth: {' '.join(cmd)}: {e}")
+    r = pumasim_io.run_or_exit(cmd, out, "energy_growth")
     return r.stats, r.meta, r.trajectory["t"], r.trajectory["ledger_residual"]
 
 
@@ -150,12 +142,7 @@ def main():
     ap.add_argument("--work", default=None)
     ap.add_argument("--reduced", action="store_true")
     args = ap.parse_args()
-    name = "energy_growth-reduced" if args.reduced else "energy_growth"
-    out = args.out or (os.path.join(ROOT, "build", name) if args.reduced
-                       else os.path.join(ROOT, "results", "energy_long_time"))
-    work = args.work or os.path.join(ROOT, "build", name, "runs")
-    os.makedirs(out, exist_ok=True)
-    os.makedirs(work, exist_ok=True)
+    out, work = pumasim_io.script_folders(args, "energy_growth", "energy_long_time")
     global PUMASIM
     PUMASIM = pumasim_io.private_copy(PUMASIM, work)
     t_end = 100.0 if args.reduced else 1e4

@@ -50,13 +50,7 @@ def run(work, scene, integ, options, t_end):
     out = os.path.join(work, tag)
     cmd = [PUMASIM, "run", os.path.join(ROOT, "experiments", "scenes", scene + ".toml"), "--integrator", integ,
            "--out", out, "--force"] + options + (["--t-end", repr(t_end)] if t_end else [])
-    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
-    if p.returncode != 0:
-        sys.exit(f"implicit_form: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
-    try:
-        return pumasim_io.load_run(out)
-    except pumasim_io.RunFolderError as e:
-        sys.exit(f"implicit_form: {' '.join(cmd)}: {e}")
+    return pumasim_io.run_or_exit(cmd, out, "implicit_form")
 
 
 def end_distance(r, ref):
@@ -144,12 +138,7 @@ def main():
     ap.add_argument("--work", default=None)
     ap.add_argument("--reduced", action="store_true")
     args = ap.parse_args()
-    name = "implicit_form-reduced" if args.reduced else "implicit_form"
-    out = args.out or (os.path.join(ROOT, "build", name) if args.reduced
-                       else os.path.join(ROOT, "results", "implicit_form"))
-    work = args.work or os.path.join(ROOT, "build", name, "runs")
-    os.makedirs(out, exist_ok=True)
-    os.makedirs(work, exist_ok=True)
+    out, work = pumasim_io.script_folders(args, "implicit_form", "implicit_form")
     global PUMASIM
     bench_src = os.path.join(os.path.dirname(PUMASIM), "bench_plant")
     bench = os.path.join(work, "bench_plant")

@@ -246,18 +246,8 @@ class Arkode final : public Integrator {
   }
 
   std::string failure(int flag) {
-    std::string msg = std::string(name()) + " failed with flag " + std::to_string(flag) + " (" +
-                      detail::flag_name(ARKStepGetReturnFlagName(flag)) + ") at t = " + std::to_string(t_) + " s";
-    if (!error_.empty()) msg += ": " + error_;
-    N_Vector ele = N_VClone(y_), w = N_VClone(y_);
-    if (ARKStepGetEstLocalErrors(mem_, ele) == ARK_SUCCESS && ARKStepGetErrWeights(mem_, w) == ARK_SUCCESS) {
-      msg += detail::largest_weighted_errors(*sys_, ele, w);
-    }
-    N_VDestroy(ele);
-    N_VDestroy(w);
-    const std::string bad = non_finite_components(*sys_, t_, N_VGetArrayPointer(y_));
-    if (!bad.empty()) msg.append("; ").append(bad);
-    return msg;
+    return detail::failure_message(name(), flag, ARKStepGetReturnFlagName(flag), t_, error_, *sys_, mem_, y_,
+                                   ARKStepGetEstLocalErrors, ARKStepGetErrWeights);
   }
 
   void collect_stats() {

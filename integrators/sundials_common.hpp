@@ -57,6 +57,27 @@ inline std::string flag_name(char* name) {
   return s;
 }
 
+// "<method> failed with flag F (NAME) at t = T s: <SUNDIALS' message>;
+// largest weighted local errors: ...; non-finite ...": a failed step's report,
+// from the integrator's local error estimates and weights (its
+// Get*EstLocalErrors / Get*ErrWeights) at mem; flag_name_malloced from its
+// Get*ReturnFlagName (freed here).
+using GetVector = int (*)(void*, N_Vector);
+inline std::string failure_message(const char* method, int flag, char* flag_name_malloced, double t,
+                                   const std::string& error, const OdeSystem& sys, void* mem, N_Vector y,
+                                   GetVector local_errors, GetVector weights) {
+  std::string msg = std::string(method) + " failed with flag " + std::to_string(flag) + " (" +
+                    flag_name(flag_name_malloced) + ") at t = " + std::to_string(t) + " s";
+  if (!error.empty()) msg += ": " + error;
+  N_Vector ele = N_VClone(y), w = N_VClone(y);
+  if (local_errors(mem, ele) == 0 && weights(mem, w) == 0) msg += largest_weighted_errors(sys, ele, w);
+  N_VDestroy(ele);
+  N_VDestroy(w);
+  const std::string bad = non_finite_components(sys, t, N_VGetArrayPointer(y));
+  if (!bad.empty()) msg.append("; ").append(bad);
+  return msg;
+}
+
 inline int first_root_found(const std::vector<int>& rootsfound) {
   return static_cast<int>(std::find_if(rootsfound.begin(), rootsfound.end(), [](int r) { return r != 0; }) -
                           rootsfound.begin());

@@ -38,14 +38,10 @@ MidpointSolve midpoint_step(ConservativeMechanics& m, double h, const double* q0
   for (int it = 1; it <= max_iterations; ++it) {
     r.iterations = it;
     for (int j = 0; j < n; ++j) s.qm[j] = 0.5 * (q0[j] + q1[j]), s.pm[j] = 0.5 * (p0[j] + p1[j]);
-    m.mass_matrix(s.qm.data(), s.M);
-    s.llt.compute(s.M);
-    if (s.llt.info() != Eigen::Success) {
+    if (!midpoint_velocity(m, s.qm.data(), s.pm.data(), s.vm.data(), s)) {
       r.failure = "the mass matrix is not positive definite at the step's midpoint";
       return r;
     }
-    s.vm = s.pm;
-    s.llt.solveInPlace(s.vm);
     m.lagrangian_gradient(s.qm.data(), s.vm.data(), s.g.data());
     double p_scale = 0;
     for (int j = 0; j < n; ++j) {
@@ -98,7 +94,7 @@ bool midpoint_velocity(ConservativeMechanics& m, const double* q, const double* 
   m.mass_matrix(q, s.M);
   s.llt.compute(s.M);
   if (s.llt.info() != Eigen::Success) return false;
-  for (int j = 0; j < n; ++j) s.vm[j] = p[j];
+  for (int j = 0; j < n; ++j) s.vm[j] = p[j];  // qd may be s.vm itself
   s.llt.solveInPlace(s.vm);
   for (int j = 0; j < n; ++j) qd[j] = s.vm[j];
   return true;

@@ -27,6 +27,8 @@ import csv
 import io
 import math
 import os
+import subprocess
+import sys
 
 import numpy as np
 
@@ -310,3 +312,27 @@ def fnum(x):
         return float(x)
     except (TypeError, ValueError):
         return math.nan
+
+
+def script_folders(args, name, results_dir):
+    """(out, work) of an experiment script with --out, --work and --reduced:
+    out defaults to results/<results_dir> (--reduced: build/<name>-reduced),
+    work to build/<name>[-reduced]/runs; both are made."""
+    tag = name + "-reduced" if args.reduced else name
+    out = args.out or (os.path.join(ROOT, "build", tag) if args.reduced else os.path.join(ROOT, "results", results_dir))
+    work = args.work or os.path.join(ROOT, "build", tag, "runs")
+    os.makedirs(out, exist_ok=True)
+    os.makedirs(work, exist_ok=True)
+    return out, work
+
+
+def run_or_exit(cmd, out, who):
+    """Runs `pumasim run` as cmd (its folder out) and loads the run; exits
+    naming the command when it fails or leaves no readable folder."""
+    p = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT)
+    if p.returncode != 0:
+        sys.exit(f"{who}: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
+    try:
+        return load_run(out)
+    except RunFolderError as e:
+        sys.exit(f"{who}: {' '.join(cmd)}: {e}")

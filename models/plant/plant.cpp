@@ -66,13 +66,18 @@ void Plant::jacobian(FrictionPart part, double t, const double* x, Eigen::Matrix
   }
 }
 
-void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
-  const int m = size();
+PlantWorkspace<Dual>& Plant::dual_evaluator() {
   if (!dual_evaluator_) {
     dual_evaluator_ = model_->make_workspace<Dual>();
-    jx_.resize(static_cast<std::size_t>(m));
-    jf_.resize(static_cast<std::size_t>(m));
+    jx_.resize(static_cast<std::size_t>(size()));
+    jf_.resize(static_cast<std::size_t>(size()));
   }
+  return *dual_evaluator_;
+}
+
+void Plant::jacobian_per_column(double t, const double* x, Eigen::MatrixXd& J) {
+  const int m = size();
+  dual_evaluator();
   J.resize(m, m);
   for (int k = 0; k < m; ++k) {
     for (int i = 0; i < m; ++i) jx_[i] = Dual(x[i], i == k ? 1.0 : 0.0);
@@ -115,12 +120,7 @@ void Plant::mass_matrix(const double* q, Eigen::MatrixXd& M) {
 
 void Plant::lagrangian_gradient(const double* q, const double* qd, double* dLdq) {
   const int n = layout().n;
-  if (!dual_evaluator_) {
-    dual_evaluator_ = model_->make_workspace<Dual>();
-    jx_.resize(static_cast<std::size_t>(size()));
-    jf_.resize(static_cast<std::size_t>(size()));
-  }
-  PlantWorkspace<Dual>& wd = *dual_evaluator_;
+  PlantWorkspace<Dual>& wd = dual_evaluator();
   for (int j = 0; j < n; ++j) wd.q[j] = Dual(q[j], qd[j]);
   wd.backend->mass_matrix(wd.q, wd.H);  // H and, in the tangents, Mdot
   PlantWorkspace<double>& w = *evaluator_;

@@ -201,6 +201,7 @@ class Plant {
  private:
   using Tangent = PlantModel::Tangent;
   void jacobian(FrictionPart part, double t, const double* x, Eigen::MatrixXd& J);
+  PlantWorkspace<Dual>& dual_evaluator();  // made at its first use, with jx_ and jf_
 
   std::shared_ptr<const PlantModel> model_;
   PlantContext context_;

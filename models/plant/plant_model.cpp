@@ -294,15 +294,31 @@ void PlantModel::drive(const S* x, S* xdot, PlantWorkspace<S>& w) const {
   }
 }
 
-// Friction, the joint torques and the accelerations (constrained where the
-// hybrid model holds a joint).
+// f's blocks in their order: the joints, the controller, the drive, the
+// friction and joint torques, then `accelerations(need_bias)` (which sets
+// w.qdd: f's forward dynamics, or the residual's given qdd), then the rows
+// that store them, the ledger and the controller's rates into xdot.
+template <class S, class Accelerations>
+void PlantModel::derivatives(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, double t, const S* x,
+                             S* xdot, Accelerations&& accelerations) const {
+  body_.load(layout_, x, w);
+  controller_output(c, w, t, x);
+  ledger_.reset(w);
+  drive(x, xdot, w);
+  accelerations(friction_torques(c, w, part, x, xdot));
+  body_.store(layout_, w, xdot);
+  ledger_.store(layout_, w, xdot);
+  if (cfg_.controller == ControllerMode::kContinuous) {
+    PUMASIM_PROFILE_PART(kController);
+    std::visit([&](const auto& law) { law.rates(reference(c, w, t), x, layout_, w, xdot); }, controller_);
+  }
+}
+
+// The accelerations of f (constrained where the hybrid model holds a joint).
 template <class S>
-void PlantModel::friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
-                                            S* xdot) const {
-  const bool all = part == FrictionPart::kAll;
-  const bool need_bias = friction_torques(c, w, part, x, xdot);
+void PlantModel::accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, bool need_bias) const {
   PUMASIM_PROFILE_PART(kDynamics);
-  if (all && friction_.has_events()) {
+  if (part == FrictionPart::kAll && friction_.has_events()) {
     body_.constrained_accelerations(w, [&](int j) { return friction_.stuck(j, c.modes); });
   } else {
     body_.accelerations(w, need_bias);
@@ -356,23 +372,13 @@ bool PlantModel::friction_torques(const PlantContext& c, PlantWorkspace<S>& w, F
 void PlantModel::residual(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, const double* xp,
                           double* r) const {
   w.last_valid = false;
-  body_.load(layout_, x, w);
-  controller_output(c, w, t, x);
-  ledger_.reset(w);
-  drive(x, r, w);
-  friction_torques(c, w, FrictionPart::kAll, x, r);
   const int n = layout_.n;
-  for (int j = 0; j < n; ++j) w.qdd[j] = xp[layout_.qd + j];
-  {
+  // f's rows into r, with qdd = xp_qd and its inverse dynamics (the speeds' rows are replaced below).
+  derivatives(c, w, FrictionPart::kAll, t, x, r, [&](bool) {
+    for (int j = 0; j < n; ++j) w.qdd[j] = xp[layout_.qd + j];
     PUMASIM_PROFILE_PART(kDynamics);
     w.backend->inverse_dynamics(w.q, w.qd, w.qdd, w.id);
-  }
-  body_.store(layout_, w, r);  // q' = qd (the speeds' rows are replaced below)
-  ledger_.store(layout_, w, r);
-  if (cfg_.controller == ControllerMode::kContinuous) {
-    PUMASIM_PROFILE_PART(kController);
-    std::visit([&](const auto& law) { law.rates(reference(c, w, t), x, layout_, w, r); }, controller_);
-  }
+  });
   for (int i = 0; i < layout_.size; ++i) r[i] = xp[i] - r[i];
   const bool events = friction_.has_events();
   for (int j = 0; j < n; ++j) {
@@ -384,17 +390,7 @@ template <class S>
 void PlantModel::eval(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, double t, const S* x,
                       S* xdot) const {
   if constexpr (std::is_same_v<S, double>) w.last_valid = false;
-  body_.load(layout_, x, w);
-  controller_output(c, w, t, x);
-  ledger_.reset(w);
-  drive(x, xdot, w);
-  friction_and_accelerations(c, w, part, x, xdot);
-  body_.store(layout_, w, xdot);
-  ledger_.store(layout_, w, xdot);
-  if (cfg_.controller == ControllerMode::kContinuous) {
-    PUMASIM_PROFILE_PART(kController);
-    std::visit([&](const auto& law) { law.rates(reference(c, w, t), x, layout_, w, xdot); }, controller_);
-  }
+  derivatives(c, w, part, t, x, xdot, [&](bool need_bias) { accelerations(c, w, part, need_bias); });
   if constexpr (std::is_same_v<S, double>) {
     // Remembered for the root functions: f of the continued piece (a
     // difference in t) is not quite f at (t, x).

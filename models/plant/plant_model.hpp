@@ -264,9 +264,11 @@ class PlantModel {
   void controller_output(const PlantContext& c, PlantWorkspace<S>& w, double t, const S* x) const;
   template <class S>
   void drive(const S* x, S* xdot, PlantWorkspace<S>& w) const;
+  template <class S, class Accelerations>
+  void derivatives(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, double t, const S* x, S* xdot,
+                   Accelerations&& accelerations) const;
   template <class S>
-  void friction_and_accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x,
-                                  S* xdot) const;
+  void accelerations(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, bool need_bias) const;
   template <class S>
   bool friction_torques(const PlantContext& c, PlantWorkspace<S>& w, FrictionPart part, const S* x, S* xdot) const;
   void hold_gravity(PlantContext& c, PlantWorkspace<double>& w, const Eigen::VectorXd& q, double* x) const;
