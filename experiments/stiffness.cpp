@@ -132,6 +132,8 @@ void measure_step(const Scene& sc, double t_end, const Run& ref, StepBound& b) {
 
 StiffnessReport analyse_stiffness(const Scene& sc, double t_end, int samples, bool bisect) {
   if (samples < 1) throw std::invalid_argument("stiffness: expected at least one sample");
+  // An index-1 DAE's current rows hold residuals: df/dx's eigenvalues would be no ODE's.
+  if (const std::string why = why_no_ode_form(sc.plant); !why.empty()) throw std::invalid_argument("stiffness: " + why);
   StiffnessReport rep;
   std::vector<std::complex<double>> all;
   Eigen::MatrixXd J;

@@ -72,6 +72,10 @@ class ImplicitForm {
   // newton_matrix call (as CVODE reuses its Jacobian over steps, re-forming
   // only I - gamma J), if the form keeps them; false if it does not.
   virtual bool newton_matrix_again(double /*c*/, Eigen::MatrixXd& /*J*/) { return false; }
+  // State i is an algebraic unknown: no row of F reads its x'_i, and a
+  // consistent start solves for it (a semi-explicit index-1 DAE; the
+  // default, none: F is an ODE's).
+  virtual bool algebraic(int /*i*/) const { return false; }
 };
 
 class OdeSystem {
@@ -246,6 +250,8 @@ class Integrator {
   virtual const char* name() const = 0;
   virtual IntegratorCapabilities capabilities() const = 0;
   // (Re)start at (t0, x0): multistep history and step-size memory are dropped.
+  // state() is then x0 -- for a DAE (ImplicitForm::algebraic), x0 with its
+  // algebraic unknowns solved for, the consistent start.
   virtual void reset(OdeSystem& sys, double t0, const double* x0) = 0;
   // Advances to t (or to a root or failure before it) in steps of the method;
   // more than IntegratorOptions::max_steps steps in one call is a failure.

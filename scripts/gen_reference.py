@@ -152,7 +152,7 @@ SCENE_SECTIONS = [
                    "line; `rtol` given without `atol` sets `atol` as `--rtol` alone does."),
     ("amplifier", "The drive: `[amplifier]` and `[motor]` together, or neither (an arm without a drive, "
                   "commanded in joint torques)."),
-    ("motor", "With `[amplifier]`. All inductances zero: the reduced model, without current states."),
+    ("motor", "With `[amplifier]`. All inductances zero: the current is algebraic, eliminated (the reduced model, without current states) or kept as an unknown of an index-1 DAE (`current = \"algebraic\"`, for ida)."),
     ("friction", "On the motor shaft, motor side. `model` chooses the law (`models/plant/friction/`); the "
                  "other keys apply only to the laws that read them (each law's `kKeys`). The levels default "
                  "to the robot file's joint friction (damping / Z², friction / |Z|), where it gives them."),

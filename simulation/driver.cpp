@@ -320,6 +320,15 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
   return sys.state_name(worst) + buf;
 }
 
+namespace {
+// (Re)starts the integrator at (t, x) and reads its state back into x: a
+// DAE's start is made consistent there (Integrator::reset).
+void restart(Integrator& integrator, OdeSystem& sys, double t, std::vector<double>& x) {
+  integrator.reset(sys, t, x.data());
+  x.assign(integrator.state(), integrator.state() + x.size());
+}
+}  // namespace
+
 RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& spec) {
   const auto& [t_end, output_interval, observe, max_steps, stops, max_wall, progress, on_step] = spec;
   start_profile();
@@ -331,7 +340,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
   ChatterCount chatter(sys);
   std::vector<double> x(plant.size()), xo(plant.size());
   plant.initial_state(x.data());
-  integrator.reset(sys, 0.0, x.data());
+  restart(integrator, sys, 0.0, x);
   RunResult res;
   if (observe) observe(0.0, x.data());
   const bool stop_at_events = stops != Stops::kOutputsLateEvents;
@@ -387,7 +396,7 @@ RunResult run_plant(Plant& plant, Integrator& integrator, const PlantRunSpec& sp
     x.assign(xs, xs + plant.size());
     if (apply_events(plant, integrator, o, t, t_end, time_event_now, t_event, x.data(), res)) {
       PUMASIM_PROFILE_CONTEXT(kEvents);
-      integrator.reset(sys, t, x.data());
+      restart(integrator, sys, t, x);
     }
     if (output_now) {
       PUMASIM_PROFILE_CONTEXT(kOutput);

@@ -76,6 +76,7 @@ class PlantSystem final : public OdeSystem {
       p_.residual_newton_matrix(t, x, c, J);
     }
     bool newton_matrix_again(double c, Eigen::MatrixXd& J) override { return p_.residual_newton_matrix_again(c, J); }
+    bool algebraic(int i) const override { return p_.model().algebraic_state(i); }
 
    private:
     Plant& p_;

@@ -99,6 +99,11 @@ IntegratorOptions integrator_options(Scene& sc, const RunOptions& a, bool& adapt
     if (a.rtol && !a.atol) io.atol = sc.integrator.atol = kAtolPerRtol * *a.rtol;
   }
   if (a.jacobian) io.exact_jacobian = jacobian_choice(sc.integrator.name, info, *a.jacobian);
+  if (!info.residual_form) {
+    if (const std::string why = why_no_ode_form(sc.plant); !why.empty()) {
+      throw std::invalid_argument(sc.integrator.name + " integrates an ODE, and this scene is not one: " + why);
+    }
+  }
   if (info.residual_form) {
     if (const std::string why = why_no_implicit_form(sc.plant); !why.empty()) {
       throw std::invalid_argument(sc.integrator.name +

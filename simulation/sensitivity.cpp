@@ -248,6 +248,7 @@ void append_number(std::string& s, double v) {
 }  // namespace
 
 std::string sensitivity_refusal(const Scene& scene) {
+  if (std::string why = why_no_ode_form(scene.plant); !why.empty()) return why;  // CVODES integrates ODEs
   const std::string discrete = discrete_state(scene);
   if (!discrete.empty()) {
     return "its right-hand side has discrete state (" + discrete +

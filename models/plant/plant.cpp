@@ -108,6 +108,9 @@ bool Plant::residual_newton_matrix_again(double c, Eigen::MatrixXd& J) {
     if (newton_held_[static_cast<std::size_t>(j)]) continue;  // a held joint's row stays c e
     J.row(qd + j) = newton_rows_.row(j);
   }
+  if (model_->motor().algebraic()) {  // -(e_a - (R0 + R) i - K w_m): no xp, so no c
+    for (int j = 0; j < n; ++j) J(layout().i + j, layout().i + j) = -newton_Jf_(layout().i + j, layout().i + j);
+  }
   return true;
 }
 

@@ -164,8 +164,9 @@ class Plant {
   // Jacobian and D the identity but on the speeds' rows, where it is H(q)
   // (F_qd = H (xp_qd - f_qd): exact at xp = f, the consistent point, and
   // off it by (dH/dx)(xp_qd - f_qd), which Newton's iteration tolerates);
-  // the rows of joints the hybrid model holds stay c e. Allocation-free
-  // after the first call.
+  // the rows of joints the hybrid model holds stay c e, and algebraic
+  // currents' rows are -df/dx (f there is the residual, not a rate; no xp).
+  // Allocation-free after the first call.
   void residual_newton_matrix(double t, const double* x, double c, Eigen::MatrixXd& J);
   // The same for a new c from the last call's df/dx and H (and its held
   // joints); false before any call. Allocation-free.

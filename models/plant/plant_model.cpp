@@ -72,6 +72,10 @@ PlantConfig PlantModel::checked(PlantConfig c) {
   if (c.drive && (!sized(c.amplifier.size()) || !sized(c.motor.size()))) {
     throw std::invalid_argument("plant: one amplifier and motor per joint");
   }
+  if (c.algebraic_current && (!c.drive || std::any_of(c.motor.begin(), c.motor.end(),
+                                                      [](const MotorParams& m) { return m.inductance != 0; }))) {
+    throw std::invalid_argument("plant: algebraic currents need a drive with La = 0 for every joint");
+  }
   if (c.controller != ControllerMode::kNone) {
     if (!sized(controller_joints(c.controller_params))) {
       throw std::invalid_argument("plant: one set of controller parameters per joint");
@@ -115,6 +119,15 @@ std::string why_no_implicit_form(const PlantConfig& c) {
   return {};
 }
 
+std::string why_no_ode_form(const PlantConfig& c) {
+  if (c.drive && c.algebraic_current) {
+    return "motor.current = \"algebraic\" keeps the currents as algebraic unknowns (0 = e_a - (R0 + R) i - K w_m, "
+           "La = 0): the drive is an index-1 DAE, which only a residual-form method integrates. Expected "
+           "integrator.name = \"ida\", or motor.current = \"eliminated\" (the reduced ODE)";
+  }
+  return {};
+}
+
 std::string why_not_conservative(const PlantConfig& c) {
   if (c.controller != ControllerMode::kNone) {
     return "the arm is driven (a [controller] and its drive); expected a passive arm: no [controller], no [drive]";
@@ -132,7 +145,7 @@ void PlantModel::validate(const PlantConfig& config) {
   const PlantConfig c = checked(config);
   const std::string why = find_backend(c.backend).why_unsupported(simulated_robot(c.robot, c.n, c.q_held));
   if (!why.empty()) throw std::invalid_argument(why);
-  const MotorBlock motor(if_drive(c, c.motor), if_drive(c, c.amplifier));
+  const MotorBlock motor(if_drive(c, c.motor), if_drive(c, c.amplifier), c.drive && c.algebraic_current);
   const ControllerBlock controller = controller_block(c);
   (void)motor, (void)controller;
 }
@@ -147,7 +160,7 @@ PlantModel::PlantModel(PlantConfig config, const PlantModel* shared)
       backend_(find_backend(cfg_.backend)),
       body_(gear_ratios(cfg_)),
       amplifier_(if_drive(cfg_, cfg_.amplifier)),
-      motor_(if_drive(cfg_, cfg_.motor), if_drive(cfg_, cfg_.amplifier)),
+      motor_(if_drive(cfg_, cfg_.motor), if_drive(cfg_, cfg_.amplifier), cfg_.drive && cfg_.algebraic_current),
       friction_(cfg_.friction),
       controller_(controller_block(cfg_)),
       ledger_(cfg_.energy_ledger),
@@ -368,7 +381,8 @@ bool PlantModel::friction_torques(const PlantContext& c, PlantWorkspace<S>& w, F
 // F(t, x, xp) = xp - f(t, x) on every row but the speeds', where it is the
 // inverse dynamics ID(q, qd, qdd = xp_qd) - tau (one back-end call, no
 // factorisation of H), or qdd_j for a joint the hybrid model holds (its
-// friction is whatever holds it, which the other rows do not need).
+// friction is whatever holds it, which the other rows do not need), and but
+// algebraic currents' rows, -(e_a - (R0 + R) i - K w_m) (no xp).
 void PlantModel::residual(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, const double* xp,
                           double* r) const {
   w.last_valid = false;
@@ -379,7 +393,8 @@ void PlantModel::residual(const PlantContext& c, PlantWorkspace<double>& w, doub
     PUMASIM_PROFILE_PART(kDynamics);
     w.backend->inverse_dynamics(w.q, w.qd, w.qdd, w.id);
   });
-  for (int i = 0; i < layout_.size; ++i) r[i] = xp[i] - r[i];
+  const int a0 = motor_.algebraic() ? layout_.i : layout_.size, a1 = motor_.algebraic() ? layout_.i + n : 0;
+  for (int i = 0; i < layout_.size; ++i) r[i] = i >= a0 && i < a1 ? -r[i] : xp[i] - r[i];
   const bool events = friction_.has_events();
   for (int j = 0; j < n; ++j) {
     r[layout_.qd + j] = events && friction_.stuck(j, c.modes) ? xp[layout_.qd + j] : w.id[j] - w.tau[j];
@@ -410,7 +425,7 @@ bool PlantModel::depends_on_time() const {
 
 void PlantModel::linear_diagonal(double* lambda) const {
   std::fill(lambda, lambda + layout_.size, 0.0);
-  if (layout_.i < 0) return;
+  if (layout_.i < 0 || motor_.algebraic()) return;  // an algebraic row has no rate (no ODE method integrates it)
   for (int j = 0; j < layout_.n; ++j) {
     lambda[layout_.i + j] = -motor_.loop_resistance(j) / motor_.params(j).inductance;
   }

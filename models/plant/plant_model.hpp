@@ -25,7 +25,8 @@
 // parameters are const. The state is [q | qd | i | z | e] over the n
 // simulated joints:
 //   q, qd   rigid body, always (joints n+1..6 are held: their links ride on link n)
-//   i       motor currents, only with a drive whose La > 0 (La = 0: algebraic)
+//   i       motor currents, only with a drive whose La > 0 (La = 0: eliminated,
+//           or algebraic unknowns with PlantConfig::algebraic_current)
 //   z       the controller law's memory (the PIV integrals), only with a continuous controller
 //   e       the energy ledger, when asked for
 // An open-loop input (controller/open_loop.hpp) commands either the
@@ -84,6 +85,12 @@ struct PlantConfig {
   double setpoint_interval = 0.0;        // [s], reference held between updates; 0 = continuous
   std::vector<AmplifierParams> amplifier;  // one per simulated joint
   std::vector<MotorParams> motor;
+  // With La = 0 for every joint: false, the reduced model (the current
+  // eliminated, i = (e_a - K w_m) / (R0 + R): an ODE); true, the currents
+  // kept as algebraic unknowns i_motor1..n with 0 = e_a - (R0 + R) i - K w_m,
+  // the drive's index-1 DAE (the limit La -> 0 of the current states), which
+  // only a residual-form method integrates (why_no_ode_form).
+  bool algebraic_current = false;
   std::vector<FrictionParams> friction;
   ControllerParams controller_params;  // the law (controller/registry.hpp) and its parameters per joint
   std::shared_ptr<const Reference> reference;  // what a controller follows
@@ -125,6 +132,12 @@ Eigen::VectorXd start_pose(const PlantConfig& c);
 // naming the joint and the law (the paper's rule and Karnopp's switch inside
 // a speed band on the applied torque, without events).
 std::string why_no_implicit_form(const PlantConfig& c);
+
+// Empty when the plant is an ODE x' = f(t, x); else why not, naming the scene
+// key: algebraic currents (PlantConfig::algebraic_current) make it an
+// index-1 DAE, whose current rows have no rate (their f is the residual
+// e_a - (R0 + R) i - K w_m), so that only the residual form integrates it.
+std::string why_no_ode_form(const PlantConfig& c);
 
 // Empty when the configuration is a lossless, unforced arm -- passive (no
 // controller, hence no drive) and no joint with friction: Lagrange's
@@ -183,6 +196,8 @@ class PlantModel {
   double gear_ratio(int j) const { return body_.gear_ratio(j); }
   const FrictionBlock& friction() const { return friction_; }
   const MotorBlock& motor() const { return motor_; }
+  // State i is an algebraic unknown (a current with PlantConfig::algebraic_current), not a state with a rate.
+  bool algebraic_state(int i) const { return motor_.algebraic() && i >= layout_.i && i < layout_.i + layout_.n; }
   // The continuously followed reference's Chebyshev table (null: none).
   const ReferenceTable* reference_table() const { return ref_table_.get(); }
 
@@ -204,7 +219,8 @@ class PlantModel {
   // The implicit form F(t, x, xp) = 0 of f under c (why_no_implicit_form
   // empty): xp - f on every row but the speeds', there inverse dynamics
   // minus the joint torques, ID(q, qd, xp_qd) - tau (xp_qd for a joint the
-  // hybrid model holds). No factorisation of H. Allocation-free.
+  // hybrid model holds), and -(e_a - (R0 + R) i - K w_m) on algebraic
+  // currents' rows. No factorisation of H. Allocation-free.
   void residual(const PlantContext& c, PlantWorkspace<double>& w, double t, const double* x, const double* xp,
                 double* r) const;
   // The reference the controller uses at t under c (held set-point or at t).

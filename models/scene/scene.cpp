@@ -266,12 +266,23 @@ const std::vector<Entry<PlantConfig>> kAmplifierEntries = {
     {"voltage_limit", scene_io::per_joint(kPositive, PUMASIM_AT(s.amplifier[j].voltage_limit)), "V_max [V]"},
 };
 
+// La = 0 for every joint: the current is algebraic (motor.current says how it is kept).
+bool zero_inductance(const PlantConfig& pc) {
+  return std::all_of(pc.motor.begin(), pc.motor.end(), [](const MotorParams& m) { return m.inductance == 0; });
+}
+
 const std::vector<Entry<PlantConfig>> kMotorEntries = {
     {"inductance", scene_io::per_joint(kNonNegative, PUMASIM_AT(s.motor[j].inductance)),
-     "La [H]; all 0: the reduced model (no current states)", Need::kRequired},
+     "La [H]; all 0: the current algebraic (current: eliminated, or kept as an unknown)", Need::kRequired},
     {"resistance", scene_io::per_joint(kPositive, PUMASIM_AT(s.motor[j].resistance)), "R [ohm]", Need::kRequired},
     {"torque_constant", scene_io::per_joint(kPositive, PUMASIM_AT(s.motor[j].torque_constant)),
      "K [N m/A] = back-EMF constant [V s/rad]", Need::kRequired},
+    {"current",
+     scene_io::choice<bool>({{"eliminated", false}, {"algebraic", true}}, PUMASIM_AT(s.algebraic_current)),
+     "La = 0: eliminated (the reduced ODE) | algebraic (states i_motor, 0 = e_a - (R0 + R) i - K w_m: an index-1 "
+     "DAE for ida)",
+     Need::kOptional,
+     {zero_inductance, "inductance", "every inductance = 0"}},
 };
 
 // The drive: [amplifier] and [motor] together, or neither.
