@@ -374,6 +374,7 @@ class PyScene {
   // f(t, x), and its Jacobian: t and x finite, and so the result, or a
   // ValueError naming x (a state far beyond the plant's range overflows).
   Eigen::VectorXd rhs(const py::handle& t_in, const py::handle& x_in) {
+    refuse_dae("rhs");
     const double t = time_arg(t_in);
     const Eigen::VectorXd x = state_arg(x_in);
     warn_discontinuous();
@@ -386,6 +387,7 @@ class PyScene {
   }
 
   Eigen::MatrixXd jacobian(const py::handle& t_in, const py::handle& x_in, const py::handle& exact) {
+    refuse_dae("jacobian");
     const double t = time_arg(t_in);
     const bool exact_jacobian = flag_arg(exact, "exact");
     const Eigen::VectorXd x = state_arg(x_in);
@@ -468,6 +470,12 @@ class PyScene {
                   x[k]);
     throw std::invalid_argument(std::string("x: ") + what + " is not finite at this state (" + entry + buf +
                                 "): the state is beyond what the plant's arithmetic holds");
+  }
+
+  // f and its Jacobian are an ODE's: a DAE's algebraic rows hold residuals (why_no_ode_form).
+  void refuse_dae(const char* what) const {
+    if (const std::string why = why_no_ode_form(scene_.plant); !why.empty())
+      throw py::value_error(std::string(what) + ": " + why);
   }
 
   Eigen::VectorXd state_arg(const py::handle& x_in) const {

@@ -309,7 +309,10 @@ std::string fastest_scaled_component(OdeSystem& sys, double t, const double* x) 
   sys.rhs(t, x, f.data());
   int worst = 0;
   double rate = -1, worst_scale = 1;
+  std::string no_form;
+  const ImplicitForm* form = sys.implicit_form(no_form);  // a DAE's algebraic rows hold residuals, not rates
   for (int i = 0; i < n; ++i) {
+    if (form && form->algebraic(i)) continue;
     const double scale = sys.tolerance_scale(i) > 0 ? sys.tolerance_scale(i) : 1.0;
     const double r = std::abs(f[static_cast<std::size_t>(i)]) / scale;
     if (r > rate || !std::isfinite(r)) rate = r, worst = i, worst_scale = scale;

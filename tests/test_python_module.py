@@ -231,6 +231,18 @@ def test_a_scene_with_discrete_state_refuses_rhs():
             sampled.time_events(bad)
 
 
+def test_the_drives_dae_refuses_rhs_and_runs_with_ida():
+    # motor.current = "algebraic" (La = 0): an index-1 DAE, whose current rows hold residuals, not rates.
+    s = pumasim.Scene.load(DRIVEN, overrides={"motor.inductance": 0.0, "motor.current": "algebraic"})
+    x = s.initial_state()
+    for call in (lambda: s.rhs(0.0, x), lambda: s.jacobian(0.0, x)):
+        with pytest.raises(ValueError, match="index-1 DAE"):
+            call()
+    assert pumasim.run(s, integrator="ida", t_end=0.05).ok
+    with pytest.raises(ValueError, match="integrates an ODE"):
+        pumasim.run(s, integrator="cvode-bdf", t_end=0.05)
+
+
 def test_the_papers_rule_warns_an_ode_solver_and_an_adaptive_run():
     """paper_slow's friction rule is discontinuous in the state: rhs warns
     (scipy's BDF failed obscurely on it, issue 31), as does pumasim.run with

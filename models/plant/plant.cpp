@@ -171,6 +171,7 @@ int Plant::time_derivative(double t, const double* x, double* dfdt) {
 void Plant::on_time_event(double t, double* x, bool settle_modes) {
   PUMASIM_PROFILE_CONTEXT(kEvents);
   if (!model_->time_event(context_, *evaluator_, t, x)) return;  // no controller: nothing happens at a time event
+  model_->settle_currents(context_, *evaluator_, t, x);          // a tick's new output moves algebraic currents at once
   if (!settle_modes) return;
   stick_slip_.settle(context_, *evaluator_, t, x);
   stick_slip_.record(context_, *evaluator_, t);
@@ -181,6 +182,7 @@ void Plant::initial_state(double* x) {
   model_->start_state(context_, *evaluator_, x);
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
   model_->input_currents(context_, *evaluator_, x);
+  model_->settle_currents(context_, *evaluator_, 0.0, x);  // a consistent start for the DAE
   stick_slip_.settle(context_, *evaluator_, 0.0, x);  // hybrid joints start stuck unless already pushed past Fs
   stick_slip_.start_log(context_, *evaluator_, 0.0);  // the modes at t = 0, one entry per joint with events
 }

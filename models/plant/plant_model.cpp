@@ -122,8 +122,9 @@ std::string why_no_implicit_form(const PlantConfig& c) {
 std::string why_no_ode_form(const PlantConfig& c) {
   if (c.drive && c.algebraic_current) {
     return "motor.current = \"algebraic\" keeps the currents as algebraic unknowns (0 = e_a - (R0 + R) i - K w_m, "
-           "La = 0): the drive is an index-1 DAE, which only a residual-form method integrates. Expected "
-           "integrator.name = \"ida\", or motor.current = \"eliminated\" (the reduced ODE)";
+           "La = 0): the drive is an index-1 DAE, which only a residual-form method (ida) integrates and which "
+           "has no right-hand side f for ODE methods and analyses; motor.current = \"eliminated\" (the default) "
+           "is the same model as an ODE";
   }
   return {};
 }
@@ -476,6 +477,17 @@ void PlantModel::hold_gravity(PlantContext& c, PlantWorkspace<double>& w, const 
     if (layout_.i >= 0) x[layout_.i + j] = i;
     const double u = motor_.loop_resistance(j) * i / amplifier_.params(j).gain;
     std::visit([&](const auto& law) { law.hold(j, u, x, layout_, c.controller); }, controller_);
+  }
+}
+
+void PlantModel::settle_currents(const PlantContext& c, PlantWorkspace<double>& w, double t, double* x) const {
+  if (!motor_.algebraic()) return;
+  w.last_valid = false;
+  body_.load(layout_, x, w);
+  controller_output(c, w, t, x);
+  for (int j = 0; j < layout_.n; ++j) {
+    const double wm = body_.gear_ratio(j) * w.qd[j];
+    x[layout_.i + j] = motor_.current(j, amplifier_.output(j, w.u[j]), wm, x, static_cast<double*>(nullptr), -1);
   }
 }
 

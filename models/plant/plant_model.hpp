@@ -196,6 +196,13 @@ class PlantModel {
   double gear_ratio(int j) const { return body_.gear_ratio(j); }
   const FrictionBlock& friction() const { return friction_; }
   const MotorBlock& motor() const { return motor_; }
+  // Algebraic currents (PlantConfig::algebraic_current) set to the
+  // balance's solution at (t, x) under c, i = (e_a - K w_m) / (R0 + R) as
+  // the reduced model computes it; nothing without them. The plant calls it
+  // wherever the events change what the currents depend on (the start, a
+  // controller's tick, a joint stopped at a stick), before the friction modes
+  // are decided from the currents' torques.
+  void settle_currents(const PlantContext& c, PlantWorkspace<double>& w, double t, double* x) const;
   // State i is an algebraic unknown (a current with PlantConfig::algebraic_current), not a state with a rate.
   bool algebraic_state(int i) const { return motor_.algebraic() && i >= layout_.i && i < layout_.i + layout_.n; }
   // The continuously followed reference's Chebyshev table (null: none).

@@ -400,8 +400,9 @@ std::vector<std::string> StrictTable::keys() {
   return out;
 }
 
-void StrictTable::not_applicable(std::string_view key, std::string_view decider, std::string decider_value) {
-  not_applicable_.push_back({std::string(key), std::string(decider), std::move(decider_value)});
+void StrictTable::not_applicable(std::string_view key, std::string_view decider, std::string decider_value,
+                                 std::string_view when) {
+  not_applicable_.push_back({std::string(key), std::string(decider), std::move(decider_value), std::string(when)});
 }
 
 // " (friction.static_torque does not apply to friction.model = "viscous"
@@ -424,9 +425,11 @@ std::string StrictTable::why_not_applicable(const toml::key& k) const {
       if (const std::string o = override_of(c->first); !o.empty()) choices += " (" + o + ")";
     }
   }
+  const std::string applies = !choices.empty()    ? " does not apply to " + choices
+                              : !it->when.empty() ? " applies only when " + it->when
+                                                  : std::string(" does not apply to the values above it");
   if (const std::string o = override_of(k); !o.empty()) {
-    return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
-           "; drop " + o + ")";
+    return " (" + key_path(k.str()) + applies + "; drop " + o + ")";
   }
   std::string unsets;  // every key of the file here that does not apply
   for (const auto& [key, v] : *table_) {
@@ -434,8 +437,7 @@ std::string StrictTable::why_not_applicable(const toml::key& k) const {
     if (asked || find(key.str()) == not_applicable_.end() || !override_of(key).empty()) continue;
     unsets += " {{unset}} " + key_path(key.str());
   }
-  return " (" + key_path(k.str()) + " does not apply to " + (choices.empty() ? "the values above it" : choices) +
-         "; remove it from the file or with" + unsets + ")";
+  return " (" + key_path(k.str()) + applies + "; remove it from the file or with" + unsets + ")";
 }
 
 void StrictTable::finish() const {

@@ -80,7 +80,9 @@ class StrictTable {
   // remove the key.
   // The key does not apply here because of the key above it, `decider`, whose
   // value (as a message shows it) is decider_value; either may be empty.
-  void not_applicable(std::string_view key, std::string_view decider = {}, std::string decider_value = {});
+  // when: the condition in words, named where decider_value is empty (a per-joint decider).
+  void not_applicable(std::string_view key, std::string_view decider = {}, std::string decider_value = {},
+                      std::string_view when = {});
 
   // Rejects every key that no accessor asked for.
   void finish() const;
@@ -115,7 +117,7 @@ class StrictTable {
   std::vector<std::string> asked_;
   // Keys that do not apply, each with how many keys had been asked before it.
   struct NotApplicable {
-    std::string key, decider, decider_value;
+    std::string key, decider, decider_value, when;
   };
   std::vector<NotApplicable> not_applicable_;
   std::string why_not_applicable(const toml::key& k) const;

@@ -112,7 +112,8 @@ void read_entries(StrictTable& t, const std::vector<Entry<T>>& entries, T& obj, 
   for (const Entry<T>& e : entries) {
     if (e.applies.fn && !e.applies.fn(obj)) {
       // finish() says why, should the key be there
-      t.not_applicable(e.key, e.applies.decided_by, decider_value(t, entries, e.applies.decided_by, obj, n));
+      t.not_applicable(e.key, e.applies.decided_by, decider_value(t, entries, e.applies.decided_by, obj, n),
+                       e.applies.when);
       continue;
     }
     if (e.need == Need::kRequired || t.node(e.key)) e.codec.read(t, e.key, obj, n);

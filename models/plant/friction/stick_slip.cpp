@@ -50,9 +50,11 @@ void StickSlip::on_root(PlantContext& c, PlantWorkspace<double>& w, int j, doubl
   w.last_valid = false;
   if (c.modes[j] != SlipMode::kStuck) {  // the speed reached zero: stick (the solve may release it)
     x[m_.layout().qd + j] = 0.0;
+    m_.settle_currents(c, w, t, x);  // algebraic currents lose the joint's back-EMF at once
     c.modes[j] = SlipMode::kStuck;
     solve_modes(c, w, t, x, -1);
   } else {  // break-away: |applied| reached Fs; it slips, in the direction the solve finds
+    m_.settle_currents(c, w, t, x);  // algebraic currents on the balance at the root (no-op for an ODE)
     solve_modes(c, w, t, x, j);
   }
   record(c, w, t);
