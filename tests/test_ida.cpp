@@ -30,6 +30,7 @@
 #include "models/scene/scene.hpp"
 #include "simulation/driver.hpp"
 #include "simulation/run.hpp"
+#include "tests/residual_checks.hpp"
 #include "tests/scene_paths.hpp"
 
 namespace pumasim {
@@ -139,29 +140,7 @@ TEST(ImplicitForm, NewtonMatrixAgreesWithDifferencesOfTheResidual) {
     SCOPED_TRACE(name);
     Plant plant(load_scene(scene_path(name)).plant);
     const ResidualPoint p = point_of(plant);
-    const int m = plant.size();
-    const double c = 250.0;
-    Eigen::MatrixXd N(m, m);
-    plant.residual_newton_matrix(0.0, p.x.data(), c, N);
-    Eigen::MatrixXd D(m, m);
-    std::vector<double> rp(m), rm(m);
-    for (int k = 0; k < m; ++k) {
-      const double h = 1e-6 * std::max(1.0, std::abs(p.x[k]));
-      std::vector<double> xp = p.x, xm = p.x, fp = p.f, fm = p.f;
-      xp[k] += h, xm[k] -= h;
-      plant.residual(0.0, xp.data(), p.f.data(), rp.data());
-      plant.residual(0.0, xm.data(), p.f.data(), rm.data());
-      for (int i = 0; i < m; ++i) D(i, k) = (rp[i] - rm[i]) / (2 * h);
-      const double g = 1e-6 * std::max(1.0, std::abs(p.f[k]));
-      fp[k] += g, fm[k] -= g;
-      plant.residual(0.0, p.x.data(), fp.data(), rp.data());
-      plant.residual(0.0, p.x.data(), fm.data(), rm.data());
-      for (int i = 0; i < m; ++i) D(i, k) += c * (rp[i] - rm[i]) / (2 * g);
-    }
-    for (int i = 0; i < m; ++i) {
-      const double scale = std::max(1.0, N.row(i).cwiseAbs().maxCoeff());
-      EXPECT_LT((N.row(i) - D.row(i)).cwiseAbs().maxCoeff(), 1e-6 * scale) << plant.layout().names[i];
-    }
+    testing::expect_newton_matrix_matches_differences(plant, p.x, p.f, 250.0);
   }
 }
 
