@@ -181,8 +181,7 @@ void Plant::initial_state(double* x) {
   stick_slip_.clear_log();
   model_->start_state(context_, *evaluator_, x);
   on_time_event(0.0, x);  // first set-point and controller sample (e = 0 on the reference)
-  model_->input_currents(context_, *evaluator_, x);
-  model_->settle_currents(context_, *evaluator_, 0.0, x);  // a consistent start for the DAE
+  model_->input_currents(context_, *evaluator_, x);   // (algebraic currents: settled by on_time_event)
   stick_slip_.settle(context_, *evaluator_, 0.0, x);  // hybrid joints start stuck unless already pushed past Fs
   stick_slip_.start_log(context_, *evaluator_, 0.0);  // the modes at t = 0, one entry per joint with events
 }

@@ -481,7 +481,11 @@ void PlantModel::hold_gravity(PlantContext& c, PlantWorkspace<double>& w, const 
 }
 
 void PlantModel::settle_currents(const PlantContext& c, PlantWorkspace<double>& w, double t, double* x) const {
-  if (!motor_.algebraic()) return;
+  if (motor_.algebraic()) balance_currents(c, w, t, x);
+}
+
+// The current slice set to the balance's solution at (t, x) under c, i = (e_a - K w_m) / (R0 + R).
+void PlantModel::balance_currents(const PlantContext& c, PlantWorkspace<double>& w, double t, double* x) const {
   w.last_valid = false;
   body_.load(layout_, x, w);
   controller_output(c, w, t, x);
@@ -496,12 +500,7 @@ void PlantModel::settle_currents(const PlantContext& c, PlantWorkspace<double>& 
 // algebraic current is that already).
 void PlantModel::input_currents(const PlantContext& c, PlantWorkspace<double>& w, double* x) const {
   if (!(cfg_.drive && law_input_) || layout_.i < 0) return;
-  w.last_valid = false;
-  body_.load(layout_, x, w);
-  controller_output(c, w, 0.0, x);
-  for (int j = 0; j < layout_.n; ++j) {
-    x[layout_.i + j] = amplifier_.output(j, w.u[j]) / motor_.loop_resistance(j);
-  }
+  balance_currents(c, w, 0.0, x);  // w_m = 0 at rest: i = e_a / (R0 + R)
 }
 
 // The discrete state at t = 0: no held output or integral, every joint with

@@ -255,6 +255,8 @@ class PlantModel {
   // An open-loop input on the drive: the currents its output at t = 0 drives
   // at rest (after the first time event; nothing otherwise).
   void input_currents(const PlantContext& c, PlantWorkspace<double>& w, double* x) const;
+  // The current slice on the balance's solution at (t, x) (settle_currents, input_currents).
+  void balance_currents(const PlantContext& c, PlantWorkspace<double>& w, double t, double* x) const;
 
   // Controller output, amplifier output voltage and motor current of every
   // simulated joint at (t, x) under c: the controller and the drive of f's
